@@ -1,0 +1,77 @@
+use super::{Point3, Vector3};
+
+/// An axis-aligned box. An empty box has `min > max` and grows to fit what is added.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Point3,
+    pub max: Point3,
+}
+
+impl Aabb {
+    /// The empty box: contains nothing, and `grow` of any point makes it that point.
+    pub fn empty() -> Self {
+        Self {
+            min: Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
+            max: Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY),
+        }
+    }
+
+    /// The smallest box around `points` (empty for no points).
+    pub fn from_points<'a>(points: impl IntoIterator<Item = &'a Point3>) -> Self {
+        let mut b = Self::empty();
+        for p in points {
+            b.grow(p);
+        }
+        b
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+
+    pub fn grow(&mut self, p: &Point3) {
+        self.min = self.min.inf(p);
+        self.max = self.max.sup(p);
+    }
+
+    pub fn merge(&self, other: &Aabb) -> Aabb {
+        Aabb { min: self.min.inf(&other.min), max: self.max.sup(&other.max) }
+    }
+
+    pub fn extent(&self) -> Vector3 {
+        if self.is_empty() { Vector3::zeros() } else { self.max - self.min }
+    }
+
+    pub fn diagonal(&self) -> f64 {
+        self.extent().norm()
+    }
+
+    pub fn center(&self) -> Point3 {
+        nalgebra::center(&self.min, &self.max)
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    pub fn distance_squared(&self, p: &Point3) -> f64 {
+        let mut d = 0.0;
+        for i in 0..3 {
+            let e = (self.min[i] - p[i]).max(0.0).max(p[i] - self.max[i]);
+            d += e * e;
+        }
+        d
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distance_to_box_matches_hand_values() {
+        let b = Aabb::from_points(&[Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 2.0, 3.0)]);
+        assert_eq!(b.distance_squared(&Point3::new(0.5, 1.0, 1.0)), 0.0);
+        assert_eq!(b.distance_squared(&Point3::new(2.0, 1.0, 1.0)), 1.0);
+        assert_eq!(b.distance_squared(&Point3::new(-1.0, 4.0, 5.0)), 1.0 + 4.0 + 4.0);
+        assert!(Aabb::empty().is_empty());
+        assert_eq!(b.diagonal(), 14f64.sqrt());
+    }
+}

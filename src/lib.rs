@@ -1,0 +1,22 @@
+//! wavemill plans 5-axis CNC toolpaths for impellers, blisks and turbine blades.
+//!
+//! The pipeline, one module per stage (DESIGN.md §2), data flowing one way:
+//!
+//! ```text
+//! mesh ─► collide / access ─► orient ─► path ─► verify ─► post
+//!   ▲                                                       │
+//! sample (generated parts)              job (job file + the pipeline that wires the stages)
+//! ```
+//!
+//! Every stage takes plain data and returns plain data; the CLI (`wavemill`) is a thin shell
+//! over [`job::plan`] and friends.
+
+#![forbid(unsafe_code)]
+
+pub mod access;
+pub mod collide;
+pub mod geom;
+pub mod mesh;
+pub mod orient;
+pub mod path;
+pub mod tool;

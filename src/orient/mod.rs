@@ -1,0 +1,179 @@
+//! Tool-axis choice at a contact point (DESIGN.md §3.6; seed 004 fig. 1.4 for lead and tilt).
+//!
+//! The preferred axis is the surface normal turned by the lead angle toward the feed direction
+//! and by the tilt angle across it. Candidates are cones of directions around it, ordered by
+//! how far they turn from the preferred axis and from the previous point's axis (smoothness).
+//! The first candidate that the machine can reach, whose axis ray escapes the part, and whose
+//! shank and holder clear the part exactly, wins. Visibility maps (issue 5) will replace the
+//! ray screening; the exact body test stays the last word.
+
+use crate::access::RayScene;
+use crate::collide::PartCollider;
+use crate::collide::Margins;
+use crate::geom::{Direction, Point3, Vector3, angle_between, orthonormal_frame};
+use crate::path::ToolPose;
+use crate::tool::ToolAssembly;
+
+/// How axes are searched.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisOptions {
+    /// Lead angle, degrees: the axis leans toward the feed direction (positive) or away.
+    pub lead_deg: f64,
+    /// Tilt angle, degrees: the axis leans to the left of the feed direction.
+    pub tilt_deg: f64,
+    /// Largest angle, degrees, the axis may turn away from the preferred one.
+    pub max_deviation_deg: f64,
+    /// Angular spacing of the candidate cones, degrees.
+    pub step_deg: f64,
+    /// Weight of turning away from the previous point's axis, against turning away from the
+    /// preferred one.
+    pub smoothness_weight: f64,
+    /// At most this many candidates get the exact (expensive) body test per point.
+    pub max_exact_tests: usize,
+}
+
+impl Default for AxisOptions {
+    fn default() -> Self {
+        Self { lead_deg: 10.0, tilt_deg: 0.0, max_deviation_deg: 70.0, step_deg: 5.0, smoothness_weight: 1.0, max_exact_tests: 48 }
+    }
+}
+
+/// Candidate offsets around a preferred axis: `(angle from it, unit vector in a frame whose
+/// z is the preferred axis)`, cone by cone.
+pub struct AxisChooser {
+    cones: Vec<(f64, Vector3)>,
+    options: AxisOptions,
+}
+
+/// Why no axis was found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoAxis {
+    /// Every candidate was outside the machine's reach.
+    MachineLimits,
+    /// Every reachable candidate's axis ray hits the part.
+    Occluded,
+    /// Candidates passed the ray test but the shank or holder collides.
+    Collision,
+}
+
+/// The preferred axis at a contact point (unit normal `normal`, feed direction `feed`).
+pub fn preferred_axis(normal: &Vector3, feed: &Vector3, lead_deg: f64, tilt_deg: f64) -> Vector3 {
+    let f = feed - normal * normal.dot(feed);
+    let f = if f.norm() > 1e-12 { f.normalize() } else { orthonormal_frame(normal).0 };
+    let side = normal.cross(&f);
+    let (l, t) = (lead_deg.to_radians(), tilt_deg.to_radians());
+    (normal * (l.cos() * t.cos()) + f * l.sin() + side * (l.cos() * t.sin())).normalize()
+}
+
+impl AxisChooser {
+    pub fn new(options: AxisOptions) -> Self {
+        let mut cones = vec![(0.0, Vector3::z())];
+        let step = options.step_deg.max(0.5);
+        let mut angle = step;
+        while angle <= options.max_deviation_deg + 1e-9 {
+            let a = angle.to_radians();
+            let count = ((2.0 * std::f64::consts::PI * a.sin()) / step.to_radians()).round().max(6.0) as usize;
+            for k in 0..count {
+                let phi = 2.0 * std::f64::consts::PI * k as f64 / count as f64;
+                cones.push((a, Vector3::new(a.sin() * phi.cos(), a.sin() * phi.sin(), a.cos())));
+            }
+            angle += step;
+        }
+        Self { cones, options }
+    }
+
+    pub fn options(&self) -> &AxisOptions {
+        &self.options
+    }
+
+    /// Chooses the axis for a ball centred at `centre` touching the part at a point with unit
+    /// normal `normal`, moving along `feed`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn choose(
+        &self,
+        part: &PartCollider,
+        rays: &RayScene,
+        tool: &ToolAssembly,
+        margins: &Margins,
+        centre: &Point3,
+        normal: &Vector3,
+        feed: &Vector3,
+        previous: Option<&Vector3>,
+        reachable: &dyn Fn(&Vector3) -> bool,
+    ) -> Result<Direction, NoAxis> {
+        let preferred = preferred_axis(normal, feed, self.options.lead_deg, self.options.tilt_deg);
+        let (u, v) = orthonormal_frame(&preferred);
+        let mut candidates: Vec<(f64, usize, Vector3)> = self
+            .cones
+            .iter()
+            .enumerate()
+            .map(|(i, (angle, local))| {
+                let axis = (u * local.x + v * local.y + preferred * local.z).normalize();
+                let turn = previous.map_or(0.0, |p| angle_between(p, &axis));
+                (angle + self.options.smoothness_weight * turn, i, axis)
+            })
+            .collect();
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let r = tool.ball_radius();
+        let reach = tool.total_length() + 2.0 * tool.max_radius();
+        let mut why = NoAxis::MachineLimits;
+        let mut exact_tests = 0;
+        for (_, _, axis) in candidates {
+            if !reachable(&axis) {
+                continue;
+            }
+            // The ray starts a hair off the ball surface so it does not see the touched face.
+            if !rays.escapes(&(centre + axis * (r * 0.5)), &axis, reach) {
+                if why == NoAxis::MachineLimits {
+                    why = NoAxis::Occluded;
+                }
+                continue;
+            }
+            let pose = ToolPose { tip: centre - axis * r, axis: Direction::new_unchecked(axis) };
+            exact_tests += 1;
+            if part.check_bodies(tool, &pose, margins, 0.0).is_ok() {
+                return Ok(pose.axis);
+            }
+            why = NoAxis::Collision;
+            if exact_tests >= self.options.max_exact_tests {
+                break;
+            }
+        }
+        Err(why)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn preferred_axis_leans_by_the_lead_angle_toward_the_feed() {
+        let n = Vector3::z();
+        let f = Vector3::x();
+        let a = preferred_axis(&n, &f, 10.0, 0.0);
+        assert!((angle_between(&a, &n).to_degrees() - 10.0).abs() < 1e-9);
+        assert!(a.x > 0.0 && a.y.abs() < 1e-12);
+        let b = preferred_axis(&n, &f, 0.0, 15.0);
+        assert!((angle_between(&b, &n).to_degrees() - 15.0).abs() < 1e-9);
+        assert!(b.y > 0.0 && b.x.abs() < 1e-12, "tilt leans to the left of the feed");
+        // A feed direction not in the tangent plane is projected into it first.
+        let c = preferred_axis(&n, &Vector3::new(1.0, 0.0, 5.0), 10.0, 0.0);
+        assert!((c - a).norm() < 1e-12);
+    }
+
+    #[test]
+    fn cones_cover_the_deviation_evenly() {
+        let ch = AxisChooser::new(AxisOptions { step_deg: 5.0, max_deviation_deg: 30.0, ..Default::default() });
+        // Every direction within 30° has a candidate within about one step.
+        let mut worst: f64 = 0.0;
+        for i in 0..200 {
+            let th = (i as f64 / 200.0 * 30.0).to_radians();
+            let ph = i as f64 * 2.399963;
+            let d = Vector3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+            let best = ch.cones.iter().map(|(_, c)| angle_between(c, &d)).fold(f64::INFINITY, f64::min);
+            worst = worst.max(best.to_degrees());
+        }
+        assert!(worst < 5.0, "worst gap {worst}°");
+    }
+}

@@ -1,0 +1,85 @@
+//! Linking cut segments into one toolpath: retract along the tool axis to a safe plane, move
+//! there, plunge along the next axis.
+//!
+//! The safe plane is perpendicular to the tool axis at `safe_distance` from the machine's pivot
+//! (where the rotary axes meet). For a machine whose tool points along machine +Z that is the
+//! plane machine Z = `safe_distance`, whatever the rotary angles: with `safe_distance` larger
+//! than the part's reach from the pivot, the tool is clear of the part there for every rotary
+//! position, so the positioning moves between segments are safe however the controller
+//! interpolates them. The moves along the axis (retract and plunge) are checked exactly: the
+//! tool's bodies extended along the axis up to the safe plane must clear the part; segment ends
+//! that fail are trimmed.
+
+use serde::Serialize;
+
+use super::toolpath::{Move, MoveKind, ToolPose, Toolpath};
+use super::CutSegment;
+use crate::collide::PartCollider;
+use crate::collide::Margins;
+use crate::geom::Point3;
+use crate::tool::ToolAssembly;
+
+/// Where and how fast to link.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinkOptions {
+    /// The pivot of the rotary axes in the part frame.
+    pub pivot: Point3,
+    /// Distance of the safe plane from the pivot along the tool axis, mm.
+    pub safe_distance: f64,
+    /// Rapid down to this far above the entry point (along the axis), then feed in, mm.
+    pub clearance: f64,
+    pub cut_feed: f64,
+    pub approach_feed: f64,
+    pub retract_feed: f64,
+    pub rapid_feed: f64,
+}
+
+/// What linking changed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LinkReport {
+    pub segments: usize,
+    /// Cut poses removed from segment ends because the tool could not retract or plunge there.
+    pub trimmed_poses: usize,
+    /// Segments left with fewer than two poses after trimming.
+    pub dropped_segments: usize,
+}
+
+/// Links `segments` in order into one toolpath for `tool`.
+pub fn link(segments: &[CutSegment], part: &PartCollider, tool: &ToolAssembly, margins: &Margins, options: &LinkOptions) -> (Toolpath, LinkReport) {
+    let mut path = Toolpath { tool_id: tool.id, moves: Vec::new() };
+    let mut report = LinkReport::default();
+    let along = |pose: &ToolPose, distance: f64| ToolPose { tip: pose.tip + pose.axis.into_inner() * distance, axis: pose.axis };
+    let to_safe = |pose: &ToolPose| (options.safe_distance - (pose.tip - options.pivot).dot(&pose.axis)).max(0.0);
+    let can_leave = |pose: &ToolPose| {
+        let sweep = to_safe(pose);
+        part.check_ball_sweep(tool, pose, sweep).is_ok() && part.check_bodies(tool, pose, margins, sweep).is_ok()
+    };
+    for segment in segments {
+        let poses = &segment.poses;
+        let mut start = 0;
+        while start < poses.len() && !can_leave(&poses[start]) {
+            start += 1;
+        }
+        let mut end = poses.len();
+        while end > start && !can_leave(&poses[end - 1]) {
+            end -= 1;
+        }
+        report.trimmed_poses += poses.len() - (end - start);
+        if end - start < 2 {
+            report.dropped_segments += 1;
+            continue;
+        }
+        report.segments += 1;
+        let (entry, exit) = (poses[start], poses[end - 1]);
+        let mv = |pose, kind, feed| Move { pose, kind, feed };
+        path.moves.push(mv(along(&entry, to_safe(&entry)), MoveKind::Rapid, options.rapid_feed));
+        path.moves.push(mv(along(&entry, options.clearance.min(to_safe(&entry))), MoveKind::Rapid, options.rapid_feed));
+        path.moves.push(mv(entry, MoveKind::Approach, options.approach_feed));
+        for pose in &poses[start + 1..end] {
+            path.moves.push(mv(*pose, MoveKind::Cut, options.cut_feed));
+        }
+        path.moves.push(mv(along(&exit, options.clearance.min(to_safe(&exit))), MoveKind::Retract, options.retract_feed));
+        path.moves.push(mv(along(&exit, to_safe(&exit)), MoveKind::Rapid, options.rapid_feed));
+    }
+    (path, report)
+}

@@ -1,0 +1,256 @@
+//! Toolpaths: drive curves, cutter-location points and linking.
+//!
+//! The finishing strategy here (the walking skeleton's) drives a ball-end mill along plane
+//! sections of the part: parallel planes whose spacing comes from the scallop-height target
+//! (seed 000 §5: valid coverage within δ). Each drive point becomes a ball centre that is
+//! pushed out until it is at least the ball radius from the part (exact f64), then gets a tool
+//! axis (`orient`). Between consecutive poses the chord is checked: where the straight move
+//! would bring the ball closer to the part than the tolerance, or the axis would turn too much,
+//! points are inserted; where that does not converge, the pass is split and linked.
+
+mod contact;
+mod link;
+mod section;
+mod toolpath;
+
+pub use contact::place_ball;
+pub use link::{LinkOptions, LinkReport, link};
+pub use section::{DrivePoint, SectionCurve, plane_section};
+pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
+
+use rayon::prelude::*;
+
+use crate::access::RayScene;
+use crate::collide::PartCollider;
+use crate::collide::Margins;
+use crate::geom::{Direction, Point3, Vector3, angle_between};
+use crate::mesh::Mesh;
+use crate::orient::{AxisChooser, NoAxis};
+use crate::tool::ToolAssembly;
+
+/// Options of the plane-section finishing strategy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FinishingOptions {
+    /// Normal of the drive planes (need not be unit).
+    pub drive_normal: Vector3,
+    /// Target scallop height, mm; sets the spacing of the planes.
+    pub scallop_height: f64,
+    /// Chord tolerance, mm: how much closer than the ball radius a straight move between two
+    /// poses may bring the ball to the part.
+    pub tolerance: f64,
+    /// Longest step between drive points before chord refinement, mm.
+    pub max_step: f64,
+    /// Largest axis turn between consecutive poses, degrees.
+    pub max_axis_turn_deg: f64,
+}
+
+impl Default for FinishingOptions {
+    fn default() -> Self {
+        Self { drive_normal: Vector3::x(), scallop_height: 0.01, tolerance: 0.01, max_step: 1.0, max_axis_turn_deg: 5.0 }
+    }
+}
+
+/// The distance between passes of a ball of radius `r` that leaves cusps `h` high on a flat
+/// surface: 2·√(h(2r − h)).
+pub fn stepover_for_scallop(radius: f64, scallop: f64) -> f64 {
+    let h = scallop.clamp(0.0, radius);
+    2.0 * (h * (2.0 * radius - h)).sqrt()
+}
+
+/// A run of consecutive cut poses the tool can follow without lifting.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CutSegment {
+    pub poses: Vec<ToolPose>,
+}
+
+/// Why a drive point could not be machined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Unreachable {
+    /// The ball cannot be placed there without gouging (a slot narrower than the ball).
+    BallDoesNotFit,
+    /// No axis within the machine's limits.
+    MachineLimits,
+    /// Every axis ray hits the part.
+    Occluded,
+    /// Shank or holder would collide for every candidate axis.
+    Collision,
+}
+
+impl From<NoAxis> for Unreachable {
+    fn from(n: NoAxis) -> Self {
+        match n {
+            NoAxis::MachineLimits => Unreachable::MachineLimits,
+            NoAxis::Occluded => Unreachable::Occluded,
+            NoAxis::Collision => Unreachable::Collision,
+        }
+    }
+}
+
+/// The result of [`finishing_passes`].
+#[derive(Clone, Debug, Default)]
+pub struct Finishing {
+    pub segments: Vec<CutSegment>,
+    /// Drive points that could not be machined, with the reason.
+    pub unreachable: Vec<(Point3, Unreachable)>,
+    pub drive_points: usize,
+    pub planes: usize,
+    /// Poses inserted by chord and axis-turn refinement.
+    pub inserted_poses: usize,
+}
+
+/// Everything the per-point work needs, borrowed.
+pub struct FinishingContext<'a> {
+    pub part: &'a PartCollider,
+    pub rays: &'a RayScene,
+    pub tool: &'a ToolAssembly,
+    pub margins: Margins,
+    pub chooser: &'a AxisChooser,
+    pub reachable: &'a (dyn Fn(&Vector3) -> bool + Sync),
+}
+
+/// Plans ball-end finishing passes over the whole part along parallel plane sections.
+/// Planes run in parallel; each plane's result depends only on the plane, so the output is the
+/// same for any number of threads.
+pub fn finishing_passes(mesh: &Mesh, ctx: &FinishingContext, options: &FinishingOptions, progress: &(dyn Fn() + Sync)) -> Finishing {
+    let normal = options.drive_normal.normalize();
+    let face_normals: Vec<Vector3> = (0..mesh.triangles.len()).map(|t| mesh.face_normal(t)).collect();
+    let (lo, hi) = mesh.positions.iter().map(|p| normal.dot(&p.coords)).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    let spacing = stepover_for_scallop(ctx.tool.ball_radius(), options.scallop_height).max(1e-3);
+    let count = ((hi - lo) / spacing).ceil().max(1.0) as usize;
+    let first = lo + 0.5 * ((hi - lo) - (count as f64 - 1.0) * spacing);
+    let planes: Vec<Finishing> = (0..count)
+        .into_par_iter()
+        .map(|k| {
+            let offset = first + k as f64 * spacing;
+            let mut result = Finishing { planes: 1, ..Default::default() };
+            for curve in plane_section(mesh, &face_normals, &normal, offset) {
+                let mut points = curve.resampled(options.max_step);
+                if k % 2 == 1 {
+                    points.reverse(); // zig-zag: every other plane runs the other way
+                }
+                drive_curve(&points, ctx, options, &mut result);
+            }
+            progress();
+            result
+        })
+        .collect();
+    let mut out = Finishing::default();
+    for p in planes {
+        out.segments.extend(p.segments);
+        out.unreachable.extend(p.unreachable);
+        out.drive_points += p.drive_points;
+        out.planes += p.planes;
+        out.inserted_poses += p.inserted_poses;
+    }
+    out
+}
+
+/// One placed pose with the drive point it came from.
+#[derive(Clone, Copy)]
+struct Placed {
+    drive: DrivePoint,
+    centre: Point3,
+    axis: Direction,
+}
+
+fn feed_direction(points: &[DrivePoint], i: usize) -> Vector3 {
+    let prev = points[i.saturating_sub(1)].point;
+    let next = points[(i + 1).min(points.len() - 1)].point;
+    let d = next - prev;
+    if d.norm() > 1e-12 { d.normalize() } else { Vector3::zeros() }
+}
+
+fn drive_curve(points: &[DrivePoint], ctx: &FinishingContext, options: &FinishingOptions, out: &mut Finishing) {
+    let r = ctx.tool.ball_radius();
+    let mut current: Vec<ToolPose> = Vec::new();
+    let mut last: Option<Placed> = None;
+    let flush = |current: &mut Vec<ToolPose>, out: &mut Finishing| {
+        if current.len() >= 2 {
+            out.segments.push(CutSegment { poses: std::mem::take(current) });
+        }
+        current.clear();
+    };
+    for i in 0..points.len() {
+        out.drive_points += 1;
+        let drive = points[i];
+        let feed = feed_direction(points, i);
+        let placed = place(ctx, &drive, &feed, last.map(|l| l.axis.into_inner()).as_ref());
+        let placed = match placed {
+            Ok(p) => p,
+            Err(why) => {
+                out.unreachable.push((drive.point, why));
+                flush(&mut current, out);
+                last = None;
+                continue;
+            }
+        };
+        if let Some(prev) = last {
+            match refine(ctx, options, &prev, &placed, &feed, 0) {
+                Some(inner) => {
+                    out.inserted_poses += inner.len();
+                    current.extend(inner.iter().map(|p| pose_of(p, r)));
+                }
+                None => flush(&mut current, out),
+            }
+        }
+        if current.is_empty() {
+            current.push(pose_of(&placed, r));
+        } else {
+            current.push(pose_of(&placed, r));
+        }
+        last = Some(placed);
+    }
+    flush(&mut current, out);
+}
+
+fn pose_of(p: &Placed, r: f64) -> ToolPose {
+    ToolPose { tip: p.centre - p.axis.into_inner() * r, axis: p.axis }
+}
+
+fn place(ctx: &FinishingContext, drive: &DrivePoint, feed: &Vector3, previous: Option<&Vector3>) -> Result<Placed, Unreachable> {
+    let r = ctx.tool.ball_radius();
+    let centre = place_ball(ctx.part.surface(), drive, r).ok_or(Unreachable::BallDoesNotFit)?;
+    let axis = ctx
+        .chooser
+        .choose(ctx.part, ctx.rays, ctx.tool, &ctx.margins, &centre, &drive.normal, feed, previous, ctx.reachable)?;
+    Ok(Placed { drive: *drive, centre, axis })
+}
+
+/// Poses to insert between `a` and `b` so that every straight move keeps the ball within the
+/// tolerance and turns the axis at most the allowed angle; `None` when that needs more than
+/// the depth allows (the caller splits the pass there).
+fn refine(ctx: &FinishingContext, options: &FinishingOptions, a: &Placed, b: &Placed, feed: &Vector3, depth: u32) -> Option<Vec<Placed>> {
+    let r = ctx.tool.ball_radius();
+    let mid_centre = nalgebra::center(&a.centre, &b.centre);
+    let chord_ok = ctx.part.check_ball(&mid_centre, r, options.tolerance).is_ok();
+    let turn_ok = angle_between(&a.axis, &b.axis).to_degrees() <= options.max_axis_turn_deg;
+    if chord_ok && turn_ok {
+        return Some(Vec::new());
+    }
+    if depth >= 8 || (a.drive.point - b.drive.point).norm() + (a.drive.normal - b.drive.normal).norm() < 1e-9 {
+        return None;
+    }
+    let normal = (a.drive.normal + b.drive.normal).try_normalize(1e-12)?;
+    let drive = DrivePoint { point: nalgebra::center(&a.drive.point, &b.drive.point), normal };
+    let m = place(ctx, &drive, feed, Some(&a.axis.into_inner())).ok()?;
+    let mut left = refine(ctx, options, a, &m, feed, depth + 1)?;
+    let right = refine(ctx, options, &m, b, feed, depth + 1)?;
+    left.push(m);
+    left.extend(right);
+    Some(left)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stepover_matches_the_flat_surface_formula() {
+        // r = 3, h = 0.01: 2·√(0.01·5.99) = 0.48949...
+        assert!((stepover_for_scallop(3.0, 0.01) - 2.0 * (0.0599f64).sqrt()).abs() < 1e-12);
+        assert_eq!(stepover_for_scallop(3.0, 0.0), 0.0);
+        // A cusp as high as the radius: passes one diameter apart.
+        assert!((stepover_for_scallop(3.0, 3.0) - 6.0).abs() < 1e-12);
+    }
+}
