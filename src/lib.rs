@@ -13,10 +13,18 @@
 
 #![forbid(unsafe_code)]
 
+pub use error::{Error, Result};
+
 pub mod access;
+pub mod cli;
 pub mod collide;
+pub mod error;
 pub mod geom;
+pub mod job;
 pub mod mesh;
 pub mod orient;
 pub mod path;
+pub mod post;
+pub mod sample;
 pub mod tool;
+pub mod verify;

@@ -29,12 +29,28 @@ impl RayScene {
         let tris: Vec<Triangle> = (0..mesh.triangles.len())
             .map(|t| {
                 let [a, b, c] = mesh.corners(t).map(|p| to_f32a(&(p - origin)));
-                Triangle { v0: a, v1: b, v2: c }
+                Triangle {
+                    v0: a,
+                    v1: b,
+                    v2: c,
+                }
             })
             .collect();
-        let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut std::time::Duration::default());
-        let leaf_triangles = bvh.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
-        Self { bvh, leaf_triangles, origin }
+        let bvh = build_cwbvh_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut std::time::Duration::default(),
+        );
+        let leaf_triangles = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| tris[i as usize])
+            .collect();
+        Self {
+            bvh,
+            leaf_triangles,
+            origin,
+        }
     }
 
     /// True when the ray from `from` along unit `direction` meets no triangle within
@@ -43,7 +59,8 @@ impl RayScene {
         // `+ Vec3A::ZERO` turns -0.0 into +0.0: obvhs misses everything otherwise (CRATES.md §8.1).
         let d = to_f32a(direction) + Vec3A::ZERO;
         let ray = Ray::new(to_f32a(&(from - self.origin)), d, 0.0, max_distance as f32);
-        self.bvh.ray_traverse_miss(ray, |r, id| self.leaf_triangles[id].intersect(r))
+        self.bvh
+            .ray_traverse_miss(ray, |r, id| self.leaf_triangles[id].intersect(r))
     }
 }
 
@@ -61,8 +78,14 @@ mod tests {
         let scene = RayScene::new(&cuboid(10.0, 10.0, 10.0));
         let above = Point3::new(5.0, 5.0, 11.0);
         assert!(scene.escapes(&above, &Vector3::z(), 100.0));
-        assert!(!scene.escapes(&above, &-Vector3::z(), 100.0), "straight down (-0.0 components) must hit");
-        assert!(scene.escapes(&above, &-Vector3::z(), 0.5), "the box is 1 mm away");
+        assert!(
+            !scene.escapes(&above, &-Vector3::z(), 100.0),
+            "straight down (-0.0 components) must hit"
+        );
+        assert!(
+            scene.escapes(&above, &-Vector3::z(), 0.5),
+            "the box is 1 mm away"
+        );
         let side = Point3::new(-1.0, 5.0, 5.0);
         assert!(!scene.escapes(&side, &Vector3::x(), 100.0));
         assert!(scene.escapes(&side, &Vector3::new(-1.0, 0.0, 0.0), 100.0));

@@ -5,7 +5,9 @@
 //! guarantees wavemill gives (no gouge to 1e-6 mm) need f64 and a real inside test, so the
 //! queries that decide them are done here.
 
-use crate::geom::{Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle, triangle_normal};
+use crate::geom::{
+    Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle, triangle_normal,
+};
 use crate::mesh::Mesh;
 use crate::mesh::topology::edges;
 
@@ -97,18 +99,33 @@ impl SurfaceDistance {
 
     /// Builds the subtree over `order[start..end]` and returns its node index.
     fn build(&mut self, start: usize, end: usize, centroids: &[Point3]) -> u32 {
-        let aabb = self.order[start..end].iter().fold(Aabb::empty(), |b, &t| b.merge(&self.triangle_aabb(t)));
+        let aabb = self.order[start..end]
+            .iter()
+            .fold(Aabb::empty(), |b, &t| b.merge(&self.triangle_aabb(t)));
         let index = self.nodes.len() as u32;
-        self.nodes.push(Node { aabb, left: 0, right: 0, start: start as u32, count: (end - start) as u32 });
+        self.nodes.push(Node {
+            aabb,
+            left: 0,
+            right: 0,
+            start: start as u32,
+            count: (end - start) as u32,
+        });
         if end - start <= LEAF_SIZE {
             return index;
         }
-        let spread = Aabb::from_points(self.order[start..end].iter().map(|&t| &centroids[t as usize])).extent();
+        let spread = Aabb::from_points(
+            self.order[start..end]
+                .iter()
+                .map(|&t| &centroids[t as usize]),
+        )
+        .extent();
         let axis = spread.imax();
         let mid = (start + end) / 2;
         // Median split; ties broken by triangle index so the tree is deterministic.
         self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
-            centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
+            centroids[a as usize][axis]
+                .total_cmp(&centroids[b as usize][axis])
+                .then(a.cmp(&b))
         });
         let left = self.build(start, mid, centroids);
         let right = self.build(mid, end, centroids);
@@ -143,12 +160,20 @@ impl SurfaceDistance {
                     };
                     if better {
                         best_d2 = qd2;
-                        best = Some(Closest { point: q, distance: qd2.sqrt(), triangle: t, feature });
+                        best = Some(Closest {
+                            point: q,
+                            distance: qd2.sqrt(),
+                            triangle: t,
+                            feature,
+                        });
                     }
                 }
             } else {
                 let (l, r) = (node.left, node.right);
-                let (dl, dr) = (self.nodes[l as usize].aabb.distance_squared(p), self.nodes[r as usize].aabb.distance_squared(p));
+                let (dl, dr) = (
+                    self.nodes[l as usize].aabb.distance_squared(p),
+                    self.nodes[r as usize].aabb.distance_squared(p),
+                );
                 // Nearer child last, so it is popped first.
                 if dl <= dr {
                     stack.push((dr, r));
@@ -169,14 +194,20 @@ impl SurfaceDistance {
         match c.feature {
             ClosestFeature::Face => self.face_normals[t],
             ClosestFeature::Edge(k) => self.edge_normals[t][k as usize],
-            ClosestFeature::Vertex(k) => self.vertex_normals[self.triangles[t][k as usize] as usize],
+            ClosestFeature::Vertex(k) => {
+                self.vertex_normals[self.triangles[t][k as usize] as usize]
+            }
         }
     }
 
     /// Signed distance: negative inside the solid. Meaningful for watertight meshes.
     pub fn signed_distance(&self, p: &Point3) -> Option<(f64, Closest)> {
         let c = self.closest(p, f64::INFINITY)?;
-        let sign = if (p - c.point).dot(&self.pseudo_normal(&c)) < 0.0 { -1.0 } else { 1.0 };
+        let sign = if (p - c.point).dot(&self.pseudo_normal(&c)) < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
         Some((sign * c.distance, c))
     }
 
@@ -219,7 +250,9 @@ mod tests {
             s ^= s << 17;
             (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 * half - half
         };
-        (0..n).map(|_| Point3::new(next(), next(), next())).collect()
+        (0..n)
+            .map(|_| Point3::new(next(), next(), next()))
+            .collect()
     }
 
     #[test]
@@ -262,7 +295,8 @@ mod tests {
         // Exactly on vertices and edges the sign must not flip to "inside" for points lifted
         // along the pseudo-normal.
         for (i, v) in m.positions.iter().enumerate().step_by(37) {
-            let out = v + (v.coords - Vector3::new(v.x, v.y, 0.0).normalize() * big).normalize() * 1e-9;
+            let out =
+                v + (v.coords - Vector3::new(v.x, v.y, 0.0).normalize() * big).normalize() * 1e-9;
             let (d, _) = s.signed_distance(&out).unwrap();
             assert!(d > 0.0, "vertex {i}");
         }

@@ -54,9 +54,18 @@ impl PartCollider {
     /// Builds the exact f64 structure and the parry3d BVH. Fails only on a mesh parry refuses.
     pub fn new(mesh: &Mesh) -> Result<Self, String> {
         let origin = mesh.aabb().center();
-        let vertices: Vec<Vec3> = mesh.positions.iter().map(|p| to_f32(&(p - origin))).collect();
-        let trimesh = TriMesh::new(vertices, mesh.triangles.clone()).map_err(|e| format!("collision mesh: {e:?}"))?;
-        Ok(Self { surface: SurfaceDistance::new(mesh), trimesh, origin })
+        let vertices: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|p| to_f32(&(p - origin)))
+            .collect();
+        let trimesh = TriMesh::new(vertices, mesh.triangles.clone())
+            .map_err(|e| format!("collision mesh: {e:?}"))?;
+        Ok(Self {
+            surface: SurfaceDistance::new(mesh),
+            trimesh,
+            origin,
+        })
     }
 
     pub fn surface(&self) -> &SurfaceDistance {
@@ -69,33 +78,54 @@ impl PartCollider {
 
     /// Ball-centre test, exact in f64: the centre must be outside the part and at least
     /// `radius - tolerance` from it.
-    pub fn check_ball(&self, centre: &Point3, radius: f64, tolerance: f64) -> Result<f64, Collision> {
-        let (d, _) = self.surface.signed_distance(centre).ok_or(Collision::Gouge { depth: radius })?;
-        if d < radius - tolerance { Err(Collision::Gouge { depth: radius - d }) } else { Ok(d - radius) }
+    pub fn check_ball(
+        &self,
+        centre: &Point3,
+        radius: f64,
+        tolerance: f64,
+    ) -> Result<f64, Collision> {
+        let (d, _) = self
+            .surface
+            .signed_distance(centre)
+            .ok_or(Collision::Gouge { depth: radius })?;
+        if d < radius - tolerance {
+            Err(Collision::Gouge { depth: radius - d })
+        } else {
+            Ok(d - radius)
+        }
     }
 
     /// The whole tool at `pose`: ball exact, flutes without touching, shank and holder at least
     /// their margins away.
-    pub fn check_pose(&self, tool: &ToolAssembly, pose: &ToolPose, margins: &Margins, tolerance: f64) -> Result<(), Collision> {
-        let r = tool.ball_radius();
-        self.check_ball(&(pose.tip + pose.axis.into_inner() * r), r, tolerance)?;
-        self.check_bodies(tool, pose, margins, 0.0)
+    pub fn check_pose(&self, tool: &PreparedTool, pose: &ToolPose) -> Result<(), Collision> {
+        let r = tool.ball_radius;
+        self.check_ball(&(pose.tip + pose.axis.into_inner() * r), r, 0.0)?;
+        self.check_bodies(tool, pose)
     }
 
-    /// The bodies above the ball, each extended `sweep` mm further along the axis: that covers
-    /// every position of the tool while it moves `sweep` mm along its own axis away from `pose`.
-    pub fn check_bodies(&self, tool: &ToolAssembly, pose: &ToolPose, margins: &Margins, sweep: f64) -> Result<(), Collision> {
-        for body in tool.bodies() {
-            let grow = match body.role {
-                BodyRole::Flutes => -F32_SLACK,
-                BodyRole::Shank => margins.shank + F32_SLACK,
-                BodyRole::Holder => margins.holder + F32_SLACK,
-            };
-            let (shape, at) = self.body_shape(&body, pose, grow, sweep);
-            let hit = query::intersection_test(&at, shape.as_ref(), &Pose::IDENTITY, &self.trimesh)
-                .map(|i| i.intersecting)
-                .unwrap_or(true);
-            if hit {
+    /// The bodies above the ball at `pose`: flutes must not touch, shank and holder must stay
+    /// their margins away.
+    pub fn check_bodies(&self, tool: &PreparedTool, pose: &ToolPose) -> Result<(), Collision> {
+        for body in &tool.bodies {
+            if self.intersects(body.check.as_ref(), &body.place(pose, self)) {
+                return Err(Collision::Body { role: body.role });
+            }
+        }
+        Ok(())
+    }
+
+    /// The bodies above the ball, each extended `sweep` mm further along the axis, with their
+    /// margins: that covers every position of the tool while it moves `sweep` mm along its own
+    /// axis away from `pose` (retract and plunge).
+    pub fn check_bodies_swept(
+        &self,
+        tool: &PreparedTool,
+        pose: &ToolPose,
+        sweep: f64,
+    ) -> Result<(), Collision> {
+        for body in &tool.bodies {
+            let grown = body.geometry.grown(body.check_grow).swept(sweep);
+            if self.intersects(grown.shape(true).as_ref(), &grown.place(pose, self)) {
                 return Err(Collision::Body { role: body.role });
             }
         }
@@ -103,66 +133,237 @@ impl PartCollider {
     }
 
     /// The ball swept `sweep` mm along the axis from `pose` (a capsule), tested without touching.
-    pub fn check_ball_sweep(&self, tool: &ToolAssembly, pose: &ToolPose, sweep: f64) -> Result<(), Collision> {
-        let r = tool.ball_radius();
+    pub fn check_ball_sweep(
+        &self,
+        tool: &PreparedTool,
+        pose: &ToolPose,
+        sweep: f64,
+    ) -> Result<(), Collision> {
+        let r = tool.ball_radius;
         let c = pose.tip + pose.axis.into_inner() * r;
-        let capsule = Capsule::new(self.local(&c), self.local(&(c + pose.axis.into_inner() * sweep)), (r - F32_SLACK) as f32);
-        let hit = query::intersection_test(&Pose::IDENTITY, &capsule, &Pose::IDENTITY, &self.trimesh)
-            .map(|i| i.intersecting)
-            .unwrap_or(true);
-        if hit { Err(Collision::Gouge { depth: 0.0 }) } else { Ok(()) }
+        let capsule = Capsule::new(
+            self.local(&c),
+            self.local(&(c + pose.axis.into_inner() * sweep)),
+            (r - F32_SLACK) as f32,
+        );
+        if self.intersects(&capsule, &Pose::IDENTITY) {
+            Err(Collision::Gouge { depth: 0.0 })
+        } else {
+            Ok(())
+        }
     }
 
-    /// How far each kind of body is from the part at `pose`, up to `search` mm (values at or
-    /// beyond `search` mean "at least that"). Zero when touching or intersecting.
-    pub fn clearances(&self, tool: &ToolAssembly, pose: &ToolPose, search: f64) -> BodyClearance {
-        let mut c = BodyClearance { flutes: search, shank: search, holder: search };
-        for body in tool.bodies() {
-            let (shape, at) = self.body_shape(&body, pose, 0.0, 0.0);
-            let d = match query::closest_points(&at, shape.as_ref(), &Pose::IDENTITY, &self.trimesh, search as f32) {
-                Ok(ClosestPoints::WithinMargin(a, b)) => (a.distance(b) as f64).min(search),
-                Ok(ClosestPoints::Disjoint) => search,
-                Ok(ClosestPoints::Intersecting) | Err(_) => 0.0,
-            };
+    /// How far each kind of body is from the part at `pose`, looking only up to the distances
+    /// in `upto` (a body farther than its limit keeps the limit), measured in f32.
+    ///
+    /// The flutes share the ball's equator, so a ball touching a wall with its side has its
+    /// flutes touching too: they are tested shrunk by [`F32_SLACK`] (as during planning), and a
+    /// negative flute clearance means they cut into the part. parry's `closest_points` reports
+    /// "intersecting" for bodies within its GJK tolerance of the part; where `intersection_test`
+    /// says they do not intersect, that counts as touching (0).
+    pub fn clearances(
+        &self,
+        tool: &PreparedTool,
+        pose: &ToolPose,
+        upto: &BodyClearance,
+    ) -> BodyClearance {
+        let mut c = *upto;
+        for body in &tool.bodies {
             let slot = match body.role {
                 BodyRole::Flutes => &mut c.flutes,
                 BodyRole::Shank => &mut c.shank,
                 BodyRole::Holder => &mut c.holder,
+            };
+            let limit = *slot;
+            if limit <= 0.0 {
+                continue;
+            }
+            let at = body.place(pose, self);
+            let shrink = if body.role == BodyRole::Flutes {
+                F32_SLACK
+            } else {
+                0.0
+            };
+            let d = match query::closest_points(
+                &at,
+                body.exact.as_ref(),
+                &Pose::IDENTITY,
+                &self.trimesh,
+                limit as f32,
+            ) {
+                Ok(ClosestPoints::WithinMargin(a, b)) => (a.distance(b) as f64 + shrink).min(limit),
+                Ok(ClosestPoints::Disjoint) => limit,
+                Ok(ClosestPoints::Intersecting) | Err(_) => {
+                    if self.intersects(body.exact.as_ref(), &at) {
+                        // Flutes: inside by at least the slack; other bodies: touching.
+                        if shrink > 0.0 { -shrink } else { 0.0 }
+                    } else {
+                        0.0
+                    }
+                }
             };
             *slot = slot.min(d);
         }
         c
     }
 
-    /// The parry shape of `body` grown radially by `grow` (and lengthwise by `grow` at both ends
-    /// when positive), extended by `sweep` along the axis, placed at `pose`.
-    fn body_shape(&self, body: &Body, pose: &ToolPose, grow: f64, sweep: f64) -> (Box<dyn Shape>, Pose) {
-        let axis = pose.axis.into_inner();
-        let end_grow = grow.max(0.0);
-        let (from, to) = (body.from - end_grow, body.to + sweep + end_grow);
-        let centre = pose.tip + axis * (0.5 * (from + to));
-        let half = (0.5 * (to - from)) as f32;
-        let rotation = Quat::from_rotation_arc(Vec3::Y, to_f32(&axis).normalize());
-        let at = Pose::from_parts(self.local(&centre), rotation);
-        let (r0, r1) = ((body.radius_from + grow).max(1e-3), (body.radius_to + grow).max(1e-3));
-        // Swept along the axis, a frustum covers the cylinder of its larger radius above it.
-        let r1 = if sweep > 0.0 { r0.max(r1) } else { r1 };
-        if (r0 - r1).abs() < 1e-9 {
-            return (Box::new(Cylinder::new(half, r0 as f32)), at);
+    fn intersects(&self, shape: &dyn Shape, at: &Pose) -> bool {
+        query::intersection_test(at, shape, &Pose::IDENTITY, &self.trimesh)
+            .map(|i| i.intersecting)
+            .unwrap_or(true)
+    }
+}
+
+/// A body of revolution along the tool axis: heights from the tip, radii at both ends.
+#[derive(Clone, Copy, Debug)]
+struct Revolved {
+    from: f64,
+    to: f64,
+    radius_from: f64,
+    radius_to: f64,
+}
+
+impl Revolved {
+    fn of(body: &Body) -> Self {
+        Self {
+            from: body.from,
+            to: body.to,
+            radius_from: body.radius_from,
+            radius_to: body.radius_to,
         }
-        // A circumscribed 32-gon prism frustum: it contains the true cone frustum.
+    }
+
+    /// Grown radially by `grow`, and lengthwise at both ends when `grow` is positive (a
+    /// conservative stand-in for the Minkowski sum with a ball).
+    fn grown(self, grow: f64) -> Self {
+        let end = grow.max(0.0);
+        Self {
+            from: self.from - end,
+            to: self.to + end,
+            radius_from: (self.radius_from + grow).max(1e-3),
+            radius_to: (self.radius_to + grow).max(1e-3),
+        }
+    }
+
+    /// Extended `sweep` mm toward the spindle; a frustum swept along its axis is covered by its
+    /// larger radius all the way.
+    fn swept(self, sweep: f64) -> Self {
+        if sweep <= 0.0 {
+            return self;
+        }
+        let r = self.radius_from.max(self.radius_to);
+        Self {
+            to: self.to + sweep,
+            radius_from: r,
+            radius_to: r,
+            ..self
+        }
+    }
+
+    /// The parry shape, centred on its own origin with its axis along +Y. `exact_cylinder`
+    /// asks for parry's true cylinder (used for the flutes, whose side may touch the part);
+    /// otherwise a circumscribed 32-gon prism or frustum, which contains the true body and makes
+    /// parry's queries several times faster (CRATES.md §2).
+    fn shape(&self, exact_cylinder: bool) -> Box<dyn Shape> {
+        let half = 0.5 * (self.to - self.from);
+        if exact_cylinder {
+            return Box::new(Cylinder::new(
+                half as f32,
+                self.radius_from.max(self.radius_to) as f32,
+            ));
+        }
         const SIDES: usize = 32;
         let scale = 1.0 / (std::f64::consts::PI / SIDES as f64).cos();
         let mut pts = Vec::with_capacity(2 * SIDES);
-        for (y, r) in [(-half as f64, r0), (half as f64, r1)] {
+        for (y, r) in [(-half, self.radius_from), (half, self.radius_to)] {
             for k in 0..SIDES {
                 let a = 2.0 * std::f64::consts::PI * k as f64 / SIDES as f64;
-                pts.push(Vec3::new((r * scale * a.cos()) as f32, y as f32, (r * scale * a.sin()) as f32));
+                pts.push(Vec3::new(
+                    (r * scale * a.cos()) as f32,
+                    y as f32,
+                    (r * scale * a.sin()) as f32,
+                ));
             }
         }
         match ConvexPolyhedron::from_convex_hull(&pts) {
-            Some(hull) => (Box::new(hull), at),
-            None => (Box::new(Cylinder::new(half, r0.max(r1) as f32)), at),
+            Some(hull) => Box::new(hull),
+            None => Box::new(Cylinder::new(
+                half as f32,
+                (scale * self.radius_from.max(self.radius_to)) as f32,
+            )),
+        }
+    }
+
+    /// Where the shape from [`Revolved::shape`] sits for a tool at `pose`.
+    fn place(&self, pose: &ToolPose, part: &PartCollider) -> Pose {
+        let axis = pose.axis.into_inner();
+        let centre = pose.tip + axis * (0.5 * (self.from + self.to));
+        let rotation = Quat::from_rotation_arc(Vec3::Y, to_f32(&axis).normalize());
+        Pose::from_parts(part.local(&centre), rotation)
+    }
+}
+
+struct PreparedBody {
+    role: BodyRole,
+    geometry: Revolved,
+    /// Radial growth of the planning test: the margin, or −[`F32_SLACK`] for the flutes.
+    check_grow: f64,
+    check: Box<dyn Shape>,
+    /// The body itself (flutes shrunk by the slack), for clearance measurements.
+    exact: Box<dyn Shape>,
+}
+
+impl PreparedBody {
+    /// Where `check` and `exact` sit at `pose`: growth is symmetric along the axis, so all
+    /// variants of the body share its centre.
+    fn place(&self, pose: &ToolPose, part: &PartCollider) -> Pose {
+        self.geometry.place(pose, part)
+    }
+}
+
+/// A tool assembly turned into parry shapes once, for many poses.
+pub struct PreparedTool {
+    pub ball_radius: f64,
+    /// How far from the tip along the axis anything of the tool can be, plus its widest radius
+    /// twice: rays that screen axis candidates run this far.
+    pub reach: f64,
+    bodies: Vec<PreparedBody>,
+}
+
+impl PreparedTool {
+    pub fn new(tool: &ToolAssembly, margins: &Margins) -> Self {
+        let bodies = tool
+            .bodies()
+            .iter()
+            .map(|b| {
+                let geometry = Revolved::of(b);
+                let flutes = b.role == BodyRole::Flutes;
+                let check_grow = match b.role {
+                    BodyRole::Flutes => -F32_SLACK,
+                    BodyRole::Shank => margins.shank + F32_SLACK,
+                    BodyRole::Holder => margins.holder + F32_SLACK,
+                };
+                let exact_geometry = if flutes {
+                    geometry.grown(-F32_SLACK)
+                } else {
+                    geometry
+                };
+                // Clearances are measured on the true cylinder where the body is one; frustums
+                // use the circumscribed prism (at most 0.5 % of the radius conservative).
+                let cylinder = (b.radius_from - b.radius_to).abs() < 1e-12;
+                PreparedBody {
+                    role: b.role,
+                    geometry,
+                    check_grow,
+                    check: geometry.grown(check_grow).shape(flutes),
+                    exact: exact_geometry.shape(flutes || cylinder),
+                }
+            })
+            .collect();
+        Self {
+            ball_radius: tool.ball_radius(),
+            reach: tool.total_length() + 2.0 * tool.max_radius(),
+            bodies,
         }
     }
 }
@@ -181,7 +382,10 @@ mod tests {
     fn tool() -> ToolAssembly {
         ToolAssembly {
             id: 1,
-            cutter: Cutter::Ball { diameter: 6.0, flute_length: 12.0 },
+            cutter: Cutter::Ball {
+                diameter: 6.0,
+                flute_length: 12.0,
+            },
             shank_diameter: 6.0,
             stickout: 30.0,
             holder: vec![Section::cylinder(30.0, 20.0)],
@@ -189,7 +393,10 @@ mod tests {
     }
 
     fn pose(tip: [f64; 3], axis: [f64; 3]) -> ToolPose {
-        ToolPose { tip: Point3::from(tip), axis: Direction::new_normalize(Vector3::from(axis)) }
+        ToolPose {
+            tip: Point3::from(tip),
+            axis: Direction::new_normalize(Vector3::from(axis)),
+        }
     }
 
     /// A 100 × 100 × 20 plate, top at z = 20.
@@ -202,19 +409,37 @@ mod tests {
         PartCollider::new(&m).unwrap()
     }
 
-    const M: Margins = Margins { shank: 0.5, holder: 2.0 };
+    const M: Margins = Margins {
+        shank: 0.5,
+        holder: 2.0,
+    };
+
+    fn prepared() -> PreparedTool {
+        PreparedTool::new(&tool(), &M)
+    }
+
+    fn far() -> BodyClearance {
+        BodyClearance {
+            flutes: 50.0,
+            shank: 50.0,
+            holder: 50.0,
+        }
+    }
 
     #[test]
     fn vertical_tool_touching_the_top_is_clear_and_lower_gouges() {
         let part = plate();
-        assert!(part.check_pose(&tool(), &pose([0.0, 0.0, 20.0], [0.0, 0.0, 1.0]), &M, 1e-6).is_ok());
-        match part.check_pose(&tool(), &pose([0.0, 0.0, 19.9], [0.0, 0.0, 1.0]), &M, 1e-6) {
+        assert!(
+            part.check_pose(&prepared(), &pose([0.0, 0.0, 20.0], [0.0, 0.0, 1.0]))
+                .is_ok()
+        );
+        match part.check_pose(&prepared(), &pose([0.0, 0.0, 19.9], [0.0, 0.0, 1.0])) {
             Err(Collision::Gouge { depth }) => assert!((depth - 0.1).abs() < 1e-9),
             other => panic!("{other:?}"),
         }
         // Deep inside: parry's hollow mesh would see nothing; the signed distance does.
         assert!(matches!(
-            part.check_pose(&tool(), &pose([0.0, 0.0, 5.0], [0.0, 0.0, 1.0]), &M, 1e-6),
+            part.check_pose(&prepared(), &pose([0.0, 0.0, 5.0], [0.0, 0.0, 1.0])),
             Err(Collision::Gouge { .. })
         ));
     }
@@ -226,8 +451,13 @@ mod tests {
         let mut m = cuboid(100.0, 100.0, 20.0);
         let wall = cuboid(10.0, 100.0, 60.0);
         let base = m.positions.len() as u32;
-        m.positions.extend(wall.positions.iter().map(|p| Point3::new(p.x + 120.0, p.y, p.z)));
-        m.triangles.extend(wall.triangles.iter().map(|t| t.map(|i| i + base)));
+        m.positions.extend(
+            wall.positions
+                .iter()
+                .map(|p| Point3::new(p.x + 120.0, p.y, p.z)),
+        );
+        m.triangles
+            .extend(wall.triangles.iter().map(|t| t.map(|i| i + base)));
         let part = PartCollider::new(&m).unwrap();
         // The ball (r = 3) rests on the plate at x = 95; the tip moves with the axis.
         let on_ball = |axis: [f64; 3]| {
@@ -235,12 +465,20 @@ mod tests {
             let tip = Point3::new(95.0, 50.0, 23.0) - a * 3.0;
             pose(tip.into(), axis)
         };
-        assert!(part.check_pose(&tool(), &on_ball([0.0, 0.0, 1.0]), &M, 1e-6).is_ok());
-        assert_eq!(
-            part.check_pose(&tool(), &on_ball([0.6, 0.0, 0.8]), &M, 1e-6),
-            Err(Collision::Body { role: BodyRole::Holder })
+        assert!(
+            part.check_pose(&prepared(), &on_ball([0.0, 0.0, 1.0]))
+                .is_ok()
         );
-        assert!(part.check_pose(&tool(), &on_ball([-0.6, 0.0, 0.8]), &M, 1e-6).is_ok());
+        assert_eq!(
+            part.check_pose(&prepared(), &on_ball([0.6, 0.0, 0.8])),
+            Err(Collision::Body {
+                role: BodyRole::Holder
+            })
+        );
+        assert!(
+            part.check_pose(&prepared(), &on_ball([-0.6, 0.0, 0.8]))
+                .is_ok()
+        );
     }
 
     #[test]
@@ -248,14 +486,26 @@ mod tests {
         let part = plate();
         // Tool hovering 5 mm above the plate, vertical: flutes start at the ball centre, so
         // their lowest point is 5 + 3 above the plate; shank starts at 12 + 5; holder at 30 + 5.
-        let c = part.clearances(&tool(), &pose([0.0, 0.0, 25.0], [0.0, 0.0, 1.0]), 50.0);
-        assert!((c.flutes - 8.0).abs() < 1e-3, "{c:?}");
-        assert!((c.shank - 17.0).abs() < 1e-3, "{c:?}");
-        assert!((c.holder - 35.0).abs() < 1e-3, "{c:?}");
+        let c = part.clearances(
+            &prepared(),
+            &pose([0.0, 0.0, 25.0], [0.0, 0.0, 1.0]),
+            &far(),
+        );
+        // f32 GJK distances: a few µm.
+        assert!((c.flutes - 8.0).abs() < 5e-3, "{c:?}");
+        assert!((c.shank - 17.0).abs() < 5e-3, "{c:?}");
+        assert!((c.holder - 35.0).abs() < 5e-3, "{c:?}");
         // Horizontal tool lying 1 mm above the plate (tip side): every body's lowest line.
-        let c = part.clearances(&tool(), &pose([-40.0, 0.0, 24.0], [1.0, 0.0, 0.0]), 50.0);
-        assert!((c.flutes - 1.0).abs() < 1e-3, "{c:?}");
-        assert!((c.holder - (24.0 - 15.0 - 20.0)).abs() < 1e-3 || c.holder == 0.0, "{c:?}");
+        let c = part.clearances(
+            &prepared(),
+            &pose([-40.0, 0.0, 24.0], [1.0, 0.0, 0.0]),
+            &far(),
+        );
+        assert!((c.flutes - 1.0).abs() < 5e-3, "{c:?}");
+        assert!(
+            (c.holder - (24.0 - 15.0 - 20.0)).abs() < 1e-3 || c.holder == 0.0,
+            "{c:?}"
+        );
     }
 
     #[test]
@@ -265,14 +515,19 @@ mod tests {
         let mut m = cuboid(100.0, 100.0, 20.0);
         let roof = cuboid(100.0, 100.0, 5.0);
         let base = m.positions.len() as u32;
-        m.positions.extend(roof.positions.iter().map(|p| Point3::new(p.x, p.y, p.z + 100.0)));
-        m.triangles.extend(roof.triangles.iter().map(|t| t.map(|i| i + base)));
+        m.positions.extend(
+            roof.positions
+                .iter()
+                .map(|p| Point3::new(p.x, p.y, p.z + 100.0)),
+        );
+        m.triangles
+            .extend(roof.triangles.iter().map(|t| t.map(|i| i + base)));
         let part = PartCollider::new(&m).unwrap();
         let p = pose([50.0, 50.0, 20.0], [0.0, 0.0, 1.0]);
-        assert!(part.check_pose(&tool(), &p, &M, 1e-6).is_ok());
-        assert!(part.check_bodies(&tool(), &p, &M, 10.0).is_ok());
-        assert!(part.check_bodies(&tool(), &p, &M, 60.0).is_err());
-        assert!(part.check_ball_sweep(&tool(), &p, 60.0).is_ok());
-        assert!(part.check_ball_sweep(&tool(), &p, 90.0).is_err());
+        assert!(part.check_pose(&prepared(), &p).is_ok());
+        assert!(part.check_bodies_swept(&prepared(), &p, 10.0).is_ok());
+        assert!(part.check_bodies_swept(&prepared(), &p, 60.0).is_err());
+        assert!(part.check_ball_sweep(&prepared(), &p, 60.0).is_ok());
+        assert!(part.check_ball_sweep(&prepared(), &p, 90.0).is_err());
     }
 }

@@ -35,11 +35,18 @@ impl Aabb {
     }
 
     pub fn merge(&self, other: &Aabb) -> Aabb {
-        Aabb { min: self.min.inf(&other.min), max: self.max.sup(&other.max) }
+        Aabb {
+            min: self.min.inf(&other.min),
+            max: self.max.sup(&other.max),
+        }
     }
 
     pub fn extent(&self) -> Vector3 {
-        if self.is_empty() { Vector3::zeros() } else { self.max - self.min }
+        if self.is_empty() {
+            Vector3::zeros()
+        } else {
+            self.max - self.min
+        }
     }
 
     pub fn diagonal(&self) -> f64 {
@@ -70,7 +77,10 @@ mod tests {
         let b = Aabb::from_points(&[Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 2.0, 3.0)]);
         assert_eq!(b.distance_squared(&Point3::new(0.5, 1.0, 1.0)), 0.0);
         assert_eq!(b.distance_squared(&Point3::new(2.0, 1.0, 1.0)), 1.0);
-        assert_eq!(b.distance_squared(&Point3::new(-1.0, 4.0, 5.0)), 1.0 + 4.0 + 4.0);
+        assert_eq!(
+            b.distance_squared(&Point3::new(-1.0, 4.0, 5.0)),
+            1.0 + 4.0 + 4.0
+        );
         assert!(Aabb::empty().is_empty());
         assert_eq!(b.diagonal(), 14f64.sqrt());
     }

@@ -14,7 +14,12 @@ pub enum ClosestFeature {
 
 /// The point of triangle `abc` closest to `p`, and the feature it lies on.
 /// Ericson, *Real-Time Collision Detection* §5.1.5, in f64; exact up to rounding.
-pub fn closest_point_on_triangle(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -> (Point3, ClosestFeature) {
+pub fn closest_point_on_triangle(
+    p: &Point3,
+    a: &Point3,
+    b: &Point3,
+    c: &Point3,
+) -> (Point3, ClosestFeature) {
     let ab = b - a;
     let ac = c - a;
     let ap = p - a;
@@ -97,8 +102,14 @@ mod tests {
                     best = best.min((q - s).norm());
                 }
             }
-            assert!(best >= exact_d - 1e-12, "sampling beat the exact answer at {q:?}");
-            assert!(best - exact_d < 0.02, "exact answer too far at {q:?}: {exact_d} vs {best}");
+            assert!(
+                best >= exact_d - 1e-12,
+                "sampling beat the exact answer at {q:?}"
+            );
+            assert!(
+                best - exact_d < 0.02,
+                "exact answer too far at {q:?}: {exact_d} vs {best}"
+            );
         }
     }
 

@@ -30,7 +30,11 @@ impl Mesh {
     /// The three corners of triangle `t`.
     pub fn corners(&self, t: usize) -> [Point3; 3] {
         let [a, b, c] = self.triangles[t];
-        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
     }
 
     /// Unit normal of triangle `t` (zero for a degenerate triangle).
@@ -68,13 +72,23 @@ impl Mesh {
 
     /// Every index in range and every coordinate finite: what the rest of the planner assumes.
     pub fn check_indices_and_coordinates(&self) -> Result<(), String> {
-        if let Some((i, p)) = self.positions.iter().enumerate().find(|(_, p)| !p.iter().all(|c| c.is_finite())) {
-            return Err(format!("vertex {i} has a non-finite coordinate ({}, {}, {})", p.x, p.y, p.z));
+        if let Some((i, p)) = self
+            .positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(format!(
+                "vertex {i} has a non-finite coordinate ({}, {}, {})",
+                p.x, p.y, p.z
+            ));
         }
         let n = self.positions.len();
         for (t, tri) in self.triangles.iter().enumerate() {
             if let Some(&i) = tri.iter().find(|&&i| i as usize >= n) {
-                return Err(format!("triangle {t} refers to vertex {i}, but there are only {n} vertices"));
+                return Err(format!(
+                    "triangle {t} refers to vertex {i}, but there are only {n} vertices"
+                ));
             }
         }
         Ok(())
@@ -98,9 +112,22 @@ pub(crate) mod fixtures {
                 )
             })
             .collect();
-        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let triangles = quads.iter().flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]]).collect();
-        Mesh { positions, triangles }
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+            .collect();
+        Mesh {
+            positions,
+            triangles,
+        }
     }
 
     /// A UV sphere of radius `r` around the origin, outward.
@@ -110,7 +137,11 @@ pub(crate) mod fixtures {
             let phi = std::f64::consts::PI * i as f64 / stacks as f64;
             for j in 0..slices {
                 let th = 2.0 * std::f64::consts::PI * j as f64 / slices as f64;
-                positions.push(Point3::new(r * phi.sin() * th.cos(), r * phi.sin() * th.sin(), r * phi.cos()));
+                positions.push(Point3::new(
+                    r * phi.sin() * th.cos(),
+                    r * phi.sin() * th.sin(),
+                    r * phi.cos(),
+                ));
             }
         }
         positions.push(Point3::new(0.0, 0.0, -r));
@@ -123,12 +154,20 @@ pub(crate) mod fixtures {
         }
         for i in 1..stacks - 1 {
             for j in 0..slices {
-                let (a, b, c, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
+                let (a, b, c, d) = (
+                    ring(i, j),
+                    ring(i, j + 1),
+                    ring(i + 1, j),
+                    ring(i + 1, j + 1),
+                );
                 triangles.push([a, c, d]);
                 triangles.push([a, d, b]);
             }
         }
-        Mesh { positions, triangles }
+        Mesh {
+            positions,
+            triangles,
+        }
     }
 
     /// A torus (genus 1) around the Z axis, outward.
@@ -151,7 +190,10 @@ pub(crate) mod fixtures {
                 triangles.push([a, c, d]);
             }
         }
-        Mesh { positions, triangles }
+        Mesh {
+            positions,
+            triangles,
+        }
     }
 }
 
@@ -178,6 +220,10 @@ mod tests {
     fn bad_index_is_reported() {
         let mut m = cuboid(1.0, 1.0, 1.0);
         m.triangles.push([0, 1, 99]);
-        assert!(m.check_indices_and_coordinates().unwrap_err().contains("vertex 99"));
+        assert!(
+            m.check_indices_and_coordinates()
+                .unwrap_err()
+                .contains("vertex 99")
+        );
     }
 }

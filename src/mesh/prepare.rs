@@ -21,7 +21,10 @@ pub struct PrepareOptions {
 
 impl Default for PrepareOptions {
     fn default() -> Self {
-        Self { weld_tolerance: 1e-7, min_area: 1e-12 }
+        Self {
+            weld_tolerance: 1e-7,
+            min_area: 1e-12,
+        }
     }
 }
 
@@ -61,10 +64,16 @@ impl MeshReport {
     pub fn problems(&self) -> Vec<String> {
         let mut p = Vec::new();
         if self.non_manifold_edges > 0 {
-            p.push(format!("{} non-manifold edges (used by more than two faces)", self.non_manifold_edges));
+            p.push(format!(
+                "{} non-manifold edges (used by more than two faces)",
+                self.non_manifold_edges
+            ));
         }
         if self.non_manifold_vertices > 0 {
-            p.push(format!("{} non-manifold vertices (faces meet only at a point)", self.non_manifold_vertices));
+            p.push(format!(
+                "{} non-manifold vertices (faces meet only at a point)",
+                self.non_manifold_vertices
+            ));
         }
         if self.boundary_edges > 0 {
             p.push(format!(
@@ -79,13 +88,22 @@ impl MeshReport {
             ));
         }
         if self.non_orientable_components > 0 {
-            p.push(format!("{} components cannot be oriented", self.non_orientable_components));
+            p.push(format!(
+                "{} components cannot be oriented",
+                self.non_orientable_components
+            ));
         }
         if self.dropped_zero_area_faces > 0 {
-            p.push(format!("{} zero-area faces dropped", self.dropped_zero_area_faces));
+            p.push(format!(
+                "{} zero-area faces dropped",
+                self.dropped_zero_area_faces
+            ));
         }
         if self.dropped_duplicate_faces > 0 {
-            p.push(format!("{} duplicate faces dropped", self.dropped_duplicate_faces));
+            p.push(format!(
+                "{} duplicate faces dropped",
+                self.dropped_duplicate_faces
+            ));
         }
         if self.components > 1 {
             p.push(format!("{} separate pieces", self.components));
@@ -178,7 +196,10 @@ pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport
     };
     let orientation = topology::orient(&mut triangles, &topo, outward);
     let genus = topology::component_genus(&triangles, &topo, positions.len());
-    let mesh = Mesh { positions, triangles };
+    let mesh = Mesh {
+        positions,
+        triangles,
+    };
     let watertight = topo.is_closed_manifold() && orientation.non_orientable_components == 0;
     let aabb = mesh.aabb();
     let report = MeshReport {
@@ -250,7 +271,10 @@ mod tests {
     #[test]
     fn units_guess_follows_size() {
         assert_eq!(UnitsGuess::from_diagonal(0.09), UnitsGuess::Metres);
-        assert_eq!(UnitsGuess::from_diagonal(12.0), UnitsGuess::MillimetresOrInches);
+        assert_eq!(
+            UnitsGuess::from_diagonal(12.0),
+            UnitsGuess::MillimetresOrInches
+        );
         assert_eq!(UnitsGuess::from_diagonal(120.0), UnitsGuess::Millimetres);
     }
 
@@ -258,7 +282,15 @@ mod tests {
     fn errors_name_the_problem() {
         let mut m = uv_sphere(1.0, 4, 6);
         m.positions[2].x = f64::NAN;
-        assert!(prepare(&m, &PrepareOptions::default()).unwrap_err().contains("non-finite"));
-        assert!(prepare(&Mesh::default(), &PrepareOptions::default()).unwrap_err().contains("no triangles"));
+        assert!(
+            prepare(&m, &PrepareOptions::default())
+                .unwrap_err()
+                .contains("non-finite")
+        );
+        assert!(
+            prepare(&Mesh::default(), &PrepareOptions::default())
+                .unwrap_err()
+                .contains("no triangles")
+        );
     }
 }

@@ -24,7 +24,10 @@ pub fn edges(triangles: &[[u32; 3]]) -> Vec<Edge> {
     for (a, b, f, fwd) in half {
         match out.last_mut() {
             Some(e) if e.vertices == [a, b] => e.faces.push((f, fwd)),
-            _ => out.push(Edge { vertices: [a, b], faces: vec![(f, fwd)] }),
+            _ => out.push(Edge {
+                vertices: [a, b],
+                faces: vec![(f, fwd)],
+            }),
         }
     }
     out
@@ -37,7 +40,9 @@ pub(crate) struct DisjointSets {
 
 impl DisjointSets {
     pub fn new(n: usize) -> Self {
-        Self { parent: (0..n as u32).collect() }
+        Self {
+            parent: (0..n as u32).collect(),
+        }
     }
     pub fn find(&mut self, mut x: u32) -> u32 {
         while self.parent[x as usize] != x {
@@ -86,7 +91,10 @@ impl Topology {
         let mut faces = DisjointSets::new(triangles.len());
         let mut boundary_vertices = DisjointSets::new(vertex_count);
         let mut is_boundary_vertex = vec![false; vertex_count];
-        let mut topo = Topology { edge_count: edges.len(), ..Default::default() };
+        let mut topo = Topology {
+            edge_count: edges.len(),
+            ..Default::default()
+        };
         for e in &edges {
             for w in e.faces.windows(2) {
                 faces.union(w[0].0, w[1].0);
@@ -249,7 +257,10 @@ pub fn orient(
                 }
             }
             // Keep the majority's orientation.
-            let flipped = piece.iter().filter(|&&f| flip[f as usize] == Some(true)).count();
+            let flipped = piece
+                .iter()
+                .filter(|&&f| flip[f as usize] == Some(true))
+                .count();
             if 2 * flipped > piece.len() {
                 for &f in &piece {
                     flip[f as usize] = flip[f as usize].map(|x| !x);
@@ -297,7 +308,11 @@ pub fn closed_components(triangles: &[[u32; 3]], topo: &Topology) -> Vec<bool> {
 /// Genus of each component that is a manifold orientable surface, from its Euler
 /// characteristic χ = V − E + F = 2 − 2g − b (b = boundary loops). `None` for components where
 /// the formula does not apply.
-pub fn component_genus(triangles: &[[u32; 3]], topo: &Topology, vertex_count: usize) -> Vec<Option<i64>> {
+pub fn component_genus(
+    triangles: &[[u32; 3]],
+    topo: &Topology,
+    vertex_count: usize,
+) -> Vec<Option<i64>> {
     let n = topo.component_count;
     let mut v = vec![0i64; n];
     let mut e = vec![0i64; n];
@@ -351,12 +366,19 @@ mod tests {
 
     #[test]
     fn closed_shapes_have_the_right_genus() {
-        for (m, g) in [(cuboid(1.0, 1.0, 1.0), 0), (uv_sphere(1.0, 8, 12), 0), (torus(5.0, 1.0, 24, 12), 1)] {
+        for (m, g) in [
+            (cuboid(1.0, 1.0, 1.0), 0),
+            (uv_sphere(1.0, 8, 12), 0),
+            (torus(5.0, 1.0, 24, 12), 1),
+        ] {
             let t = Topology::analyse(&m.triangles, m.positions.len());
             assert!(t.is_closed_manifold());
             assert_eq!(t.component_count, 1);
             assert_eq!(t.inconsistent_edges, 0);
-            assert_eq!(component_genus(&m.triangles, &t, m.positions.len()), vec![Some(g)]);
+            assert_eq!(
+                component_genus(&m.triangles, &t, m.positions.len()),
+                vec![Some(g)]
+            );
         }
     }
 
@@ -408,9 +430,20 @@ mod tests {
     #[test]
     fn bowtie_vertex_and_fin_edge_are_non_manifold() {
         // Two tetrahedra sharing one vertex: a non-manifold vertex, manifold edges.
-        let tet = |o: u32| vec![[o, o + 2, o + 1], [o, o + 1, 3], [o + 1, o + 2, 3], [o + 2, o, 3]];
+        let tet = |o: u32| {
+            vec![
+                [o, o + 2, o + 1],
+                [o, o + 1, 3],
+                [o + 1, o + 2, 3],
+                [o + 2, o, 3],
+            ]
+        };
         let mut tris = tet(0);
-        tris.extend(tet(4).into_iter().map(|t| t.map(|i| if i == 7 { 3 } else { i })));
+        tris.extend(
+            tet(4)
+                .into_iter()
+                .map(|t| t.map(|i| if i == 7 { 3 } else { i })),
+        );
         let t = Topology::analyse(&tris, 8);
         assert_eq!(t.non_manifold_vertices, 1);
         assert_eq!(t.non_manifold_edges, 0);

@@ -23,9 +23,17 @@ pub struct Welded {
 /// kept vertex wins (ties: the earlier one). Triangles keep their order; they may become
 /// degenerate (two equal indices), which [`super::prepare`] removes and counts.
 pub fn weld(mesh: &Mesh, tolerance: f64) -> Welded {
-    let cell = if tolerance > 0.0 { tolerance } else { f64::MIN_POSITIVE };
+    let cell = if tolerance > 0.0 {
+        tolerance
+    } else {
+        f64::MIN_POSITIVE
+    };
     let key = |p: &Point3| {
-        [(p.x / cell).floor() as i64, (p.y / cell).floor() as i64, (p.z / cell).floor() as i64]
+        [
+            (p.x / cell).floor() as i64,
+            (p.y / cell).floor() as i64,
+            (p.z / cell).floor() as i64,
+        ]
     };
     let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(mesh.positions.len());
     let mut kept: Vec<Point3> = Vec::new();
@@ -37,10 +45,13 @@ pub fn weld(mesh: &Mesh, tolerance: f64) -> Welded {
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else { continue };
+                    let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                        continue;
+                    };
                     for &i in list {
                         let d2 = (kept[i as usize] - p).norm_squared();
-                        if d2 <= tol2 && best.is_none_or(|(bd, bi)| d2 < bd || (d2 == bd && i < bi)) {
+                        if d2 <= tol2 && best.is_none_or(|(bd, bi)| d2 < bd || (d2 == bd && i < bi))
+                        {
                             best = Some((d2, i));
                         }
                     }
@@ -58,8 +69,18 @@ pub fn weld(mesh: &Mesh, tolerance: f64) -> Welded {
         };
         vertex_map.push(index);
     }
-    let triangles = mesh.triangles.iter().map(|t| t.map(|i| vertex_map[i as usize])).collect();
-    Welded { mesh: Mesh { positions: kept, triangles }, vertex_map }
+    let triangles = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| vertex_map[i as usize]))
+        .collect();
+    Welded {
+        mesh: Mesh {
+            positions: kept,
+            triangles,
+        },
+        vertex_map,
+    }
 }
 
 #[cfg(test)]
@@ -77,7 +98,8 @@ mod tests {
             let base = soup.positions.len() as u32;
             for (k, &i) in tri.iter().enumerate() {
                 let jitter = 1e-7 * ((t * 3 + k) % 5) as f64;
-                soup.positions.push(m.positions[i as usize] + crate::geom::Vector3::repeat(jitter));
+                soup.positions
+                    .push(m.positions[i as usize] + crate::geom::Vector3::repeat(jitter));
             }
             soup.triangles.push([base, base + 1, base + 2]);
         }

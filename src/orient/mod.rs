@@ -8,11 +8,9 @@
 //! ray screening; the exact body test stays the last word.
 
 use crate::access::RayScene;
-use crate::collide::PartCollider;
-use crate::collide::Margins;
+use crate::collide::{PartCollider, PreparedTool};
 use crate::geom::{Direction, Point3, Vector3, angle_between, orthonormal_frame};
 use crate::path::ToolPose;
-use crate::tool::ToolAssembly;
 
 /// How axes are searched.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,7 +32,14 @@ pub struct AxisOptions {
 
 impl Default for AxisOptions {
     fn default() -> Self {
-        Self { lead_deg: 10.0, tilt_deg: 0.0, max_deviation_deg: 70.0, step_deg: 5.0, smoothness_weight: 1.0, max_exact_tests: 48 }
+        Self {
+            lead_deg: 10.0,
+            tilt_deg: 0.0,
+            max_deviation_deg: 70.0,
+            step_deg: 5.0,
+            smoothness_weight: 1.0,
+            max_exact_tests: 48,
+        }
     }
 }
 
@@ -59,10 +64,42 @@ pub enum NoAxis {
 /// The preferred axis at a contact point (unit normal `normal`, feed direction `feed`).
 pub fn preferred_axis(normal: &Vector3, feed: &Vector3, lead_deg: f64, tilt_deg: f64) -> Vector3 {
     let f = feed - normal * normal.dot(feed);
-    let f = if f.norm() > 1e-12 { f.normalize() } else { orthonormal_frame(normal).0 };
+    let f = if f.norm() > 1e-12 {
+        f.normalize()
+    } else {
+        orthonormal_frame(normal).0
+    };
     let side = normal.cross(&f);
     let (l, t) = (lead_deg.to_radians(), tilt_deg.to_radians());
     (normal * (l.cos() * t.cos()) + f * l.sin() + side * (l.cos() * t.sin())).normalize()
+}
+
+/// Whether a ball-end tool with its ball centred at `centre` can stand along unit `axis`: the
+/// machine reaches the axis, the axis ray escapes the part (cheap, screens most candidates),
+/// and the flutes, shank and holder clear the part (exact test, the last word).
+pub fn axis_is_valid(
+    part: &PartCollider,
+    rays: &RayScene,
+    tool: &PreparedTool,
+    centre: &Point3,
+    axis: &Vector3,
+    reachable: &dyn Fn(&Vector3) -> bool,
+) -> Result<(), NoAxis> {
+    if !reachable(axis) {
+        return Err(NoAxis::MachineLimits);
+    }
+    let r = tool.ball_radius;
+    // The ray starts inside the ball, half a radius up the axis, so it does not see the face
+    // the ball touches; it runs as far as the tool reaches.
+    if !rays.escapes(&(centre + axis * (0.5 * r)), axis, tool.reach) {
+        return Err(NoAxis::Occluded);
+    }
+    let pose = ToolPose {
+        tip: centre - axis * r,
+        axis: Direction::new_unchecked(*axis),
+    };
+    part.check_bodies(tool, &pose)
+        .map_err(|_| NoAxis::Collision)
 }
 
 impl AxisChooser {
@@ -72,10 +109,15 @@ impl AxisChooser {
         let mut angle = step;
         while angle <= options.max_deviation_deg + 1e-9 {
             let a = angle.to_radians();
-            let count = ((2.0 * std::f64::consts::PI * a.sin()) / step.to_radians()).round().max(6.0) as usize;
+            let count = ((2.0 * std::f64::consts::PI * a.sin()) / step.to_radians())
+                .round()
+                .max(6.0) as usize;
             for k in 0..count {
                 let phi = 2.0 * std::f64::consts::PI * k as f64 / count as f64;
-                cones.push((a, Vector3::new(a.sin() * phi.cos(), a.sin() * phi.sin(), a.cos())));
+                cones.push((
+                    a,
+                    Vector3::new(a.sin() * phi.cos(), a.sin() * phi.sin(), a.cos()),
+                ));
             }
             angle += step;
         }
@@ -93,8 +135,7 @@ impl AxisChooser {
         &self,
         part: &PartCollider,
         rays: &RayScene,
-        tool: &ToolAssembly,
-        margins: &Margins,
+        tool: &PreparedTool,
         centre: &Point3,
         normal: &Vector3,
         feed: &Vector3,
@@ -114,29 +155,24 @@ impl AxisChooser {
             })
             .collect();
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let r = tool.ball_radius();
-        let reach = tool.total_length() + 2.0 * tool.max_radius();
         let mut why = NoAxis::MachineLimits;
         let mut exact_tests = 0;
         for (_, _, axis) in candidates {
-            if !reachable(&axis) {
-                continue;
-            }
-            // The ray starts a hair off the ball surface so it does not see the touched face.
-            if !rays.escapes(&(centre + axis * (r * 0.5)), &axis, reach) {
-                if why == NoAxis::MachineLimits {
-                    why = NoAxis::Occluded;
+            match axis_is_valid(part, rays, tool, centre, &axis, reachable) {
+                Ok(()) => return Ok(Direction::new_unchecked(axis)),
+                Err(NoAxis::MachineLimits) => {}
+                Err(NoAxis::Occluded) => {
+                    if why == NoAxis::MachineLimits {
+                        why = NoAxis::Occluded;
+                    }
                 }
-                continue;
-            }
-            let pose = ToolPose { tip: centre - axis * r, axis: Direction::new_unchecked(axis) };
-            exact_tests += 1;
-            if part.check_bodies(tool, &pose, margins, 0.0).is_ok() {
-                return Ok(pose.axis);
-            }
-            why = NoAxis::Collision;
-            if exact_tests >= self.options.max_exact_tests {
-                break;
+                Err(NoAxis::Collision) => {
+                    why = NoAxis::Collision;
+                    exact_tests += 1;
+                    if exact_tests >= self.options.max_exact_tests {
+                        break;
+                    }
+                }
             }
         }
         Err(why)
@@ -156,7 +192,10 @@ mod tests {
         assert!(a.x > 0.0 && a.y.abs() < 1e-12);
         let b = preferred_axis(&n, &f, 0.0, 15.0);
         assert!((angle_between(&b, &n).to_degrees() - 15.0).abs() < 1e-9);
-        assert!(b.y > 0.0 && b.x.abs() < 1e-12, "tilt leans to the left of the feed");
+        assert!(
+            b.y > 0.0 && b.x.abs() < 1e-12,
+            "tilt leans to the left of the feed"
+        );
         // A feed direction not in the tangent plane is projected into it first.
         let c = preferred_axis(&n, &Vector3::new(1.0, 0.0, 5.0), 10.0, 0.0);
         assert!((c - a).norm() < 1e-12);
@@ -164,14 +203,22 @@ mod tests {
 
     #[test]
     fn cones_cover_the_deviation_evenly() {
-        let ch = AxisChooser::new(AxisOptions { step_deg: 5.0, max_deviation_deg: 30.0, ..Default::default() });
+        let ch = AxisChooser::new(AxisOptions {
+            step_deg: 5.0,
+            max_deviation_deg: 30.0,
+            ..Default::default()
+        });
         // Every direction within 30° has a candidate within about one step.
         let mut worst: f64 = 0.0;
         for i in 0..200 {
             let th = (i as f64 / 200.0 * 30.0).to_radians();
             let ph = i as f64 * 2.399963;
             let d = Vector3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
-            let best = ch.cones.iter().map(|(_, c)| angle_between(c, &d)).fold(f64::INFINITY, f64::min);
+            let best = ch
+                .cones
+                .iter()
+                .map(|(_, c)| angle_between(c, &d))
+                .fold(f64::INFINITY, f64::min);
             worst = worst.max(best.to_degrees());
         }
         assert!(worst < 5.0, "worst gap {worst}°");

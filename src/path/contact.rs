@@ -21,7 +21,11 @@ pub fn place_ball(surface: &SurfaceDistance, drive: &DrivePoint, radius: f64) ->
         if d >= radius {
             return Some(centre);
         }
-        let away = if d > 1e-12 { (centre - closest.point) / d } else { surface.pseudo_normal(&closest).try_normalize(1e-300)? };
+        let away = if d > 1e-12 {
+            (centre - closest.point) / d
+        } else {
+            surface.pseudo_normal(&closest).try_normalize(1e-300)?
+        };
         centre = closest.point + away * (radius + PLACEMENT_SLACK);
         // Pushing out of one face can push into another; drifting far from the drive point
         // means the ball is now machining something else entirely.
@@ -50,8 +54,13 @@ mod tests {
         // two boxes touch on a face, which is enough for distance queries.
         let w = cuboid(10.0, 10.0, 20.0);
         let base = m.positions.len() as u32;
-        m.positions.extend(w.positions.iter().map(|p| Point3::new(p.x + 20.0, p.y, p.z)));
-        m.triangles.extend(w.triangles.iter().map(|t| t.map(|i| i + base)));
+        m.positions.extend(
+            w.positions
+                .iter()
+                .map(|p| Point3::new(p.x + 20.0, p.y, p.z)),
+        );
+        m.triangles
+            .extend(w.triangles.iter().map(|t| t.map(|i| i + base)));
         m
     }
 
@@ -59,7 +68,10 @@ mod tests {
     fn flat_floor_keeps_the_straight_offset() {
         let m = corner();
         let s = SurfaceDistance::new(&m);
-        let d = DrivePoint { point: Point3::new(5.0, 5.0, 0.0), normal: Vector3::z() };
+        let d = DrivePoint {
+            point: Point3::new(5.0, 5.0, 0.0),
+            normal: Vector3::z(),
+        };
         let c = place_ball(&s, &d, 3.0).unwrap();
         assert!((c - Point3::new(5.0, 5.0, 3.0)).norm() < 1e-8);
     }
@@ -69,11 +81,17 @@ mod tests {
         let m = corner();
         let s = SurfaceDistance::new(&m);
         // Drive point on the floor 1 mm from the wall: the ball (r = 3) would dig into the wall.
-        let d = DrivePoint { point: Point3::new(19.0, 5.0, 0.0), normal: Vector3::z() };
+        let d = DrivePoint {
+            point: Point3::new(19.0, 5.0, 0.0),
+            normal: Vector3::z(),
+        };
         let c = place_ball(&s, &d, 3.0).unwrap();
         let (dist, _) = s.signed_distance(&c).unwrap();
-        assert!(dist >= 3.0 && dist < 3.0 + 1e-6, "{dist}");
-        assert!((c.x - 17.0).abs() < 1e-6 && (c.z - 3.0).abs() < 1e-6, "{c:?}");
+        assert!((3.0..3.0 + 1e-6).contains(&dist), "{dist}");
+        assert!(
+            (c.x - 17.0).abs() < 1e-6 && (c.z - 3.0).abs() < 1e-6,
+            "{c:?}"
+        );
     }
 
     #[test]
@@ -86,11 +104,16 @@ mod tests {
         for (x0, width) in [(0.0, 18.0), (22.0, 18.0)] {
             let w = cuboid(width, 10.0, 20.0);
             let base = slot.positions.len() as u32;
-            slot.positions.extend(w.positions.iter().map(|p| Point3::new(p.x + x0, p.y, p.z)));
-            slot.triangles.extend(w.triangles.iter().map(|t| t.map(|i| i + base)));
+            slot.positions
+                .extend(w.positions.iter().map(|p| Point3::new(p.x + x0, p.y, p.z)));
+            slot.triangles
+                .extend(w.triangles.iter().map(|t| t.map(|i| i + base)));
         }
         let s = SurfaceDistance::new(&slot);
-        let d = DrivePoint { point: Point3::new(20.0, 5.0, 0.0), normal: Vector3::z() };
+        let d = DrivePoint {
+            point: Point3::new(20.0, 5.0, 0.0),
+            normal: Vector3::z(),
+        };
         match place_ball(&s, &d, 3.0) {
             None => {}
             Some(c) => {

@@ -10,14 +10,13 @@
 //! tool's bodies extended along the axis up to the safe plane must clear the part; segment ends
 //! that fail are trimmed.
 
+use rayon::prelude::*;
 use serde::Serialize;
 
-use super::toolpath::{Move, MoveKind, ToolPose, Toolpath};
 use super::CutSegment;
-use crate::collide::PartCollider;
-use crate::collide::Margins;
+use super::toolpath::{Move, MoveKind, ToolPose, Toolpath};
+use crate::collide::{PartCollider, PreparedTool};
 use crate::geom::Point3;
-use crate::tool::ToolAssembly;
 
 /// Where and how fast to link.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,25 +44,45 @@ pub struct LinkReport {
 }
 
 /// Links `segments` in order into one toolpath for `tool`.
-pub fn link(segments: &[CutSegment], part: &PartCollider, tool: &ToolAssembly, margins: &Margins, options: &LinkOptions) -> (Toolpath, LinkReport) {
-    let mut path = Toolpath { tool_id: tool.id, moves: Vec::new() };
+pub fn link(
+    segments: &[CutSegment],
+    part: &PartCollider,
+    tool: &PreparedTool,
+    tool_id: u32,
+    options: &LinkOptions,
+) -> (Toolpath, LinkReport) {
+    let mut path = Toolpath {
+        tool_id,
+        moves: Vec::new(),
+    };
     let mut report = LinkReport::default();
-    let along = |pose: &ToolPose, distance: f64| ToolPose { tip: pose.tip + pose.axis.into_inner() * distance, axis: pose.axis };
-    let to_safe = |pose: &ToolPose| (options.safe_distance - (pose.tip - options.pivot).dot(&pose.axis)).max(0.0);
+    let along = |pose: &ToolPose, distance: f64| ToolPose {
+        tip: pose.tip + pose.axis.into_inner() * distance,
+        axis: pose.axis,
+    };
+    let to_safe = |pose: &ToolPose| {
+        (options.safe_distance - (pose.tip - options.pivot).dot(&pose.axis)).max(0.0)
+    };
     let can_leave = |pose: &ToolPose| {
         let sweep = to_safe(pose);
-        part.check_ball_sweep(tool, pose, sweep).is_ok() && part.check_bodies(tool, pose, margins, sweep).is_ok()
+        part.check_ball_sweep(tool, pose, sweep).is_ok()
+            && part.check_bodies_swept(tool, pose, sweep).is_ok()
     };
-    for segment in segments {
+    // Trimming is the expensive part (long swept bodies); segments are independent.
+    let kept: Vec<(usize, usize)> = segments
+        .par_iter()
+        .map(|segment| {
+            let poses = &segment.poses;
+            let start = poses.iter().position(&can_leave).unwrap_or(poses.len());
+            let end = poses
+                .iter()
+                .rposition(&can_leave)
+                .map_or(start, |i| (i + 1).max(start));
+            (start, end)
+        })
+        .collect();
+    for (segment, &(start, end)) in segments.iter().zip(&kept) {
         let poses = &segment.poses;
-        let mut start = 0;
-        while start < poses.len() && !can_leave(&poses[start]) {
-            start += 1;
-        }
-        let mut end = poses.len();
-        while end > start && !can_leave(&poses[end - 1]) {
-            end -= 1;
-        }
         report.trimmed_poses += poses.len() - (end - start);
         if end - start < 2 {
             report.dropped_segments += 1;
@@ -72,14 +91,31 @@ pub fn link(segments: &[CutSegment], part: &PartCollider, tool: &ToolAssembly, m
         report.segments += 1;
         let (entry, exit) = (poses[start], poses[end - 1]);
         let mv = |pose, kind, feed| Move { pose, kind, feed };
-        path.moves.push(mv(along(&entry, to_safe(&entry)), MoveKind::Rapid, options.rapid_feed));
-        path.moves.push(mv(along(&entry, options.clearance.min(to_safe(&entry))), MoveKind::Rapid, options.rapid_feed));
-        path.moves.push(mv(entry, MoveKind::Approach, options.approach_feed));
+        path.moves.push(mv(
+            along(&entry, to_safe(&entry)),
+            MoveKind::Rapid,
+            options.rapid_feed,
+        ));
+        path.moves.push(mv(
+            along(&entry, options.clearance.min(to_safe(&entry))),
+            MoveKind::Rapid,
+            options.rapid_feed,
+        ));
+        path.moves
+            .push(mv(entry, MoveKind::Approach, options.approach_feed));
         for pose in &poses[start + 1..end] {
             path.moves.push(mv(*pose, MoveKind::Cut, options.cut_feed));
         }
-        path.moves.push(mv(along(&exit, options.clearance.min(to_safe(&exit))), MoveKind::Retract, options.retract_feed));
-        path.moves.push(mv(along(&exit, to_safe(&exit)), MoveKind::Rapid, options.rapid_feed));
+        path.moves.push(mv(
+            along(&exit, options.clearance.min(to_safe(&exit))),
+            MoveKind::Retract,
+            options.retract_feed,
+        ));
+        path.moves.push(mv(
+            along(&exit, to_safe(&exit)),
+            MoveKind::Rapid,
+            options.rapid_feed,
+        ));
     }
     (path, report)
 }

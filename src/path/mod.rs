@@ -21,12 +21,10 @@ pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
 use rayon::prelude::*;
 
 use crate::access::RayScene;
-use crate::collide::PartCollider;
-use crate::collide::Margins;
-use crate::geom::{Direction, Point3, Vector3, angle_between};
+use crate::collide::{PartCollider, PreparedTool};
+use crate::geom::{Direction, Point3, Vector3, angle_between, slerp};
 use crate::mesh::Mesh;
-use crate::orient::{AxisChooser, NoAxis};
-use crate::tool::ToolAssembly;
+use crate::orient::{AxisChooser, NoAxis, axis_is_valid};
 
 /// Options of the plane-section finishing strategy.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,7 +44,13 @@ pub struct FinishingOptions {
 
 impl Default for FinishingOptions {
     fn default() -> Self {
-        Self { drive_normal: Vector3::x(), scallop_height: 0.01, tolerance: 0.01, max_step: 1.0, max_axis_turn_deg: 5.0 }
+        Self {
+            drive_normal: Vector3::x(),
+            scallop_height: 0.01,
+            tolerance: 0.01,
+            max_step: 1.0,
+            max_axis_turn_deg: 5.0,
+        }
     }
 }
 
@@ -97,14 +101,17 @@ pub struct Finishing {
     pub planes: usize,
     /// Poses inserted by chord and axis-turn refinement.
     pub inserted_poses: usize,
+    /// Passes split because a drive point was unreachable.
+    pub splits_at_unreachable: usize,
+    /// Passes split because refinement could not make a move safe or smooth enough.
+    pub splits_at_refinement: usize,
 }
 
 /// Everything the per-point work needs, borrowed.
 pub struct FinishingContext<'a> {
     pub part: &'a PartCollider,
     pub rays: &'a RayScene,
-    pub tool: &'a ToolAssembly,
-    pub margins: Margins,
+    pub tool: &'a PreparedTool,
     pub chooser: &'a AxisChooser,
     pub reachable: &'a (dyn Fn(&Vector3) -> bool + Sync),
 }
@@ -112,18 +119,34 @@ pub struct FinishingContext<'a> {
 /// Plans ball-end finishing passes over the whole part along parallel plane sections.
 /// Planes run in parallel; each plane's result depends only on the plane, so the output is the
 /// same for any number of threads.
-pub fn finishing_passes(mesh: &Mesh, ctx: &FinishingContext, options: &FinishingOptions, progress: &(dyn Fn() + Sync)) -> Finishing {
+pub fn finishing_passes(
+    mesh: &Mesh,
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Finishing {
     let normal = options.drive_normal.normalize();
-    let face_normals: Vec<Vector3> = (0..mesh.triangles.len()).map(|t| mesh.face_normal(t)).collect();
-    let (lo, hi) = mesh.positions.iter().map(|p| normal.dot(&p.coords)).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
-    let spacing = stepover_for_scallop(ctx.tool.ball_radius(), options.scallop_height).max(1e-3);
+    let face_normals: Vec<Vector3> = (0..mesh.triangles.len())
+        .map(|t| mesh.face_normal(t))
+        .collect();
+    let (lo, hi) = mesh
+        .positions
+        .iter()
+        .map(|p| normal.dot(&p.coords))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    let spacing = stepover_for_scallop(ctx.tool.ball_radius, options.scallop_height).max(1e-3);
     let count = ((hi - lo) / spacing).ceil().max(1.0) as usize;
     let first = lo + 0.5 * ((hi - lo) - (count as f64 - 1.0) * spacing);
     let planes: Vec<Finishing> = (0..count)
         .into_par_iter()
         .map(|k| {
             let offset = first + k as f64 * spacing;
-            let mut result = Finishing { planes: 1, ..Default::default() };
+            let mut result = Finishing {
+                planes: 1,
+                ..Default::default()
+            };
             for curve in plane_section(mesh, &face_normals, &normal, offset) {
                 let mut points = curve.resampled(options.max_step);
                 if k % 2 == 1 {
@@ -142,6 +165,8 @@ pub fn finishing_passes(mesh: &Mesh, ctx: &FinishingContext, options: &Finishing
         out.drive_points += p.drive_points;
         out.planes += p.planes;
         out.inserted_poses += p.inserted_poses;
+        out.splits_at_unreachable += p.splits_at_unreachable;
+        out.splits_at_refinement += p.splits_at_refinement;
     }
     out
 }
@@ -158,16 +183,27 @@ fn feed_direction(points: &[DrivePoint], i: usize) -> Vector3 {
     let prev = points[i.saturating_sub(1)].point;
     let next = points[(i + 1).min(points.len() - 1)].point;
     let d = next - prev;
-    if d.norm() > 1e-12 { d.normalize() } else { Vector3::zeros() }
+    if d.norm() > 1e-12 {
+        d.normalize()
+    } else {
+        Vector3::zeros()
+    }
 }
 
-fn drive_curve(points: &[DrivePoint], ctx: &FinishingContext, options: &FinishingOptions, out: &mut Finishing) {
-    let r = ctx.tool.ball_radius();
+fn drive_curve(
+    points: &[DrivePoint],
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    out: &mut Finishing,
+) {
+    let r = ctx.tool.ball_radius;
     let mut current: Vec<ToolPose> = Vec::new();
     let mut last: Option<Placed> = None;
     let flush = |current: &mut Vec<ToolPose>, out: &mut Finishing| {
         if current.len() >= 2 {
-            out.segments.push(CutSegment { poses: std::mem::take(current) });
+            out.segments.push(CutSegment {
+                poses: std::mem::take(current),
+            });
         }
         current.clear();
     };
@@ -175,11 +211,19 @@ fn drive_curve(points: &[DrivePoint], ctx: &FinishingContext, options: &Finishin
         out.drive_points += 1;
         let drive = points[i];
         let feed = feed_direction(points, i);
-        let placed = place(ctx, &drive, &feed, last.map(|l| l.axis.into_inner()).as_ref());
+        let placed = place(
+            ctx,
+            &drive,
+            &feed,
+            last.map(|l| l.axis.into_inner()).as_ref(),
+        );
         let placed = match placed {
             Ok(p) => p,
             Err(why) => {
                 out.unreachable.push((drive.point, why));
+                if !current.is_empty() {
+                    out.splits_at_unreachable += 1;
+                }
                 flush(&mut current, out);
                 last = None;
                 continue;
@@ -191,49 +235,128 @@ fn drive_curve(points: &[DrivePoint], ctx: &FinishingContext, options: &Finishin
                     out.inserted_poses += inner.len();
                     current.extend(inner.iter().map(|p| pose_of(p, r)));
                 }
-                None => flush(&mut current, out),
+                None => {
+                    out.splits_at_refinement += 1;
+                    flush(&mut current, out);
+                }
             }
         }
-        if current.is_empty() {
-            current.push(pose_of(&placed, r));
-        } else {
-            current.push(pose_of(&placed, r));
-        }
+        current.push(pose_of(&placed, r));
         last = Some(placed);
     }
     flush(&mut current, out);
 }
 
 fn pose_of(p: &Placed, r: f64) -> ToolPose {
-    ToolPose { tip: p.centre - p.axis.into_inner() * r, axis: p.axis }
+    ToolPose {
+        tip: p.centre - p.axis.into_inner() * r,
+        axis: p.axis,
+    }
 }
 
-fn place(ctx: &FinishingContext, drive: &DrivePoint, feed: &Vector3, previous: Option<&Vector3>) -> Result<Placed, Unreachable> {
-    let r = ctx.tool.ball_radius();
+fn place(
+    ctx: &FinishingContext,
+    drive: &DrivePoint,
+    feed: &Vector3,
+    previous: Option<&Vector3>,
+) -> Result<Placed, Unreachable> {
+    let r = ctx.tool.ball_radius;
     let centre = place_ball(ctx.part.surface(), drive, r).ok_or(Unreachable::BallDoesNotFit)?;
-    let axis = ctx
-        .chooser
-        .choose(ctx.part, ctx.rays, ctx.tool, &ctx.margins, &centre, &drive.normal, feed, previous, ctx.reachable)?;
-    Ok(Placed { drive: *drive, centre, axis })
+    let axis = ctx.chooser.choose(
+        ctx.part,
+        ctx.rays,
+        ctx.tool,
+        &centre,
+        &drive.normal,
+        feed,
+        previous,
+        ctx.reachable,
+    )?;
+    Ok(Placed {
+        drive: *drive,
+        centre,
+        axis,
+    })
+}
+
+/// Places the midpoint between `a` and `b`: the ball as usual, the axis halfway between theirs
+/// when that axis is valid (so the axis turns smoothly where both ends are fine), otherwise the
+/// chooser's pick.
+fn place_between(
+    ctx: &FinishingContext,
+    drive: &DrivePoint,
+    feed: &Vector3,
+    a: &Placed,
+    b: &Placed,
+) -> Result<Placed, Unreachable> {
+    let r = ctx.tool.ball_radius;
+    let centre = place_ball(ctx.part.surface(), drive, r).ok_or(Unreachable::BallDoesNotFit)?;
+    let halfway = slerp(&a.axis, &b.axis, 0.5);
+    if axis_is_valid(
+        ctx.part,
+        ctx.rays,
+        ctx.tool,
+        &centre,
+        &halfway,
+        ctx.reachable,
+    )
+    .is_ok()
+    {
+        return Ok(Placed {
+            drive: *drive,
+            centre,
+            axis: Direction::new_normalize(halfway),
+        });
+    }
+    let axis = ctx.chooser.choose(
+        ctx.part,
+        ctx.rays,
+        ctx.tool,
+        &centre,
+        &drive.normal,
+        feed,
+        Some(&a.axis.into_inner()),
+        ctx.reachable,
+    )?;
+    Ok(Placed {
+        drive: *drive,
+        centre,
+        axis,
+    })
 }
 
 /// Poses to insert between `a` and `b` so that every straight move keeps the ball within the
 /// tolerance and turns the axis at most the allowed angle; `None` when that needs more than
 /// the depth allows (the caller splits the pass there).
-fn refine(ctx: &FinishingContext, options: &FinishingOptions, a: &Placed, b: &Placed, feed: &Vector3, depth: u32) -> Option<Vec<Placed>> {
-    let r = ctx.tool.ball_radius();
+fn refine(
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    a: &Placed,
+    b: &Placed,
+    feed: &Vector3,
+    depth: u32,
+) -> Option<Vec<Placed>> {
+    let r = ctx.tool.ball_radius;
     let mid_centre = nalgebra::center(&a.centre, &b.centre);
-    let chord_ok = ctx.part.check_ball(&mid_centre, r, options.tolerance).is_ok();
+    let chord_ok = ctx
+        .part
+        .check_ball(&mid_centre, r, options.tolerance)
+        .is_ok();
     let turn_ok = angle_between(&a.axis, &b.axis).to_degrees() <= options.max_axis_turn_deg;
     if chord_ok && turn_ok {
         return Some(Vec::new());
     }
-    if depth >= 8 || (a.drive.point - b.drive.point).norm() + (a.drive.normal - b.drive.normal).norm() < 1e-9 {
+    if depth >= 8
+        || (a.drive.point - b.drive.point).norm() + (a.drive.normal - b.drive.normal).norm() < 1e-9
+    {
         return None;
     }
     let normal = (a.drive.normal + b.drive.normal).try_normalize(1e-12)?;
-    let drive = DrivePoint { point: nalgebra::center(&a.drive.point, &b.drive.point), normal };
-    let m = place(ctx, &drive, feed, Some(&a.axis.into_inner())).ok()?;
+    let drive = DrivePoint {
+        point: nalgebra::center(&a.drive.point, &b.drive.point),
+        normal,
+    };
+    let m = place_between(ctx, &drive, feed, a, b).ok()?;
     let mut left = refine(ctx, options, a, &m, feed, depth + 1)?;
     let right = refine(ctx, options, &m, b, feed, depth + 1)?;
     left.push(m);

@@ -36,15 +36,28 @@ struct Segment {
 }
 
 /// The curves where the plane `{x : normal·x = offset}` cuts `mesh`, in a deterministic order.
-pub fn plane_section(mesh: &Mesh, face_normals: &[Vector3], normal: &Vector3, offset: f64) -> Vec<SectionCurve> {
-    let side: Vec<f64> = mesh.positions.iter().map(|p| normal.dot(&p.coords) - offset).collect();
+pub fn plane_section(
+    mesh: &Mesh,
+    face_normals: &[Vector3],
+    normal: &Vector3,
+    offset: f64,
+) -> Vec<SectionCurve> {
+    let side: Vec<f64> = mesh
+        .positions
+        .iter()
+        .map(|p| normal.dot(&p.coords) - offset)
+        .collect();
     let above = |i: u32| side[i as usize] >= 0.0;
     let crossing = |a: u32, b: u32| {
         let (da, db) = (side[a as usize], side[b as usize]);
         let t = da / (da - db);
         let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
         // Interpolate from the lower index so both triangles sharing the edge get the same bits.
-        if a < b { pa + (pb - pa) * t } else { pb + (pa - pb) * (1.0 - t) }
+        if a < b {
+            pa + (pb - pa) * t
+        } else {
+            pb + (pa - pb) * (1.0 - t)
+        }
     };
     let key = |a: u32, b: u32| (a.min(b), a.max(b));
     let mut segments = Vec::new();
@@ -73,8 +86,13 @@ pub fn plane_section(mesh: &Mesh, face_normals: &[Vector3], normal: &Vector3, of
 }
 
 fn chain(segments: Vec<Segment>) -> Vec<SectionCurve> {
-    let by_start: HashMap<(u32, u32), usize> = segments.iter().enumerate().map(|(i, s)| (s.start_edge, i)).collect();
-    let has_predecessor: std::collections::HashSet<(u32, u32)> = segments.iter().map(|s| s.end_edge).collect();
+    let by_start: HashMap<(u32, u32), usize> = segments
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.start_edge, i))
+        .collect();
+    let has_predecessor: std::collections::HashSet<(u32, u32)> =
+        segments.iter().map(|s| s.end_edge).collect();
     let mut used = vec![false; segments.len()];
     let mut curves = Vec::new();
     let follow = |first: usize, used: &mut Vec<bool>| {
@@ -83,8 +101,14 @@ fn chain(segments: Vec<Segment>) -> Vec<SectionCurve> {
         let closed = loop {
             used[i] = true;
             let s = &segments[i];
-            points.push(DrivePoint { point: s.start, normal: s.normal });
-            points.push(DrivePoint { point: s.end, normal: s.normal });
+            points.push(DrivePoint {
+                point: s.start,
+                normal: s.normal,
+            });
+            points.push(DrivePoint {
+                point: s.end,
+                normal: s.normal,
+            });
             match by_start.get(&s.end_edge) {
                 Some(&next) if next == first => break true,
                 Some(&next) if !used[next] => i = next,
@@ -110,7 +134,10 @@ fn chain(segments: Vec<Segment>) -> Vec<SectionCurve> {
 impl SectionCurve {
     /// Total length along the points.
     pub fn length(&self) -> f64 {
-        self.points.windows(2).map(|w| (w[1].point - w[0].point).norm()).sum()
+        self.points
+            .windows(2)
+            .map(|w| (w[1].point - w[0].point).norm())
+            .sum()
     }
 
     /// Inserts points so that no two consecutive points are more than `step` apart, drops
@@ -135,7 +162,13 @@ impl SectionCurve {
                 let pieces = (len / step).ceil().max(1.0) as usize;
                 for k in 1..pieces {
                     let t = k as f64 / pieces as f64;
-                    push(DrivePoint { point: a.point + (b.point - a.point) * t, normal: a.normal }, &mut out);
+                    push(
+                        DrivePoint {
+                            point: a.point + (b.point - a.point) * t,
+                            normal: a.normal,
+                        },
+                        &mut out,
+                    );
                 }
             }
         }
@@ -200,7 +233,10 @@ mod tests {
         let m = cuboid(10.0, 20.0, 30.0);
         let c = &plane_section(&m, &normals(&m), &Vector3::x(), 4.0)[0];
         let r = c.resampled(0.7);
-        assert!(r.windows(2).all(|w| (w[1].point - w[0].point).norm() <= 0.7 + 1e-12));
+        assert!(
+            r.windows(2)
+                .all(|w| (w[1].point - w[0].point).norm() <= 0.7 + 1e-12)
+        );
         assert_eq!(r.first().unwrap().point, r.last().unwrap().point);
         let len: f64 = r.windows(2).map(|w| (w[1].point - w[0].point).norm()).sum();
         assert!((len - c.length()).abs() < 1e-9);

@@ -33,7 +33,11 @@ pub struct Section {
 
 impl Section {
     pub fn cylinder(diameter: f64, length: f64) -> Self {
-        Self { diameter, top_diameter: None, length }
+        Self {
+            diameter,
+            top_diameter: None,
+            length,
+        }
     }
     pub fn top(&self) -> f64 {
         self.top_diameter.unwrap_or(self.diameter)
@@ -104,21 +108,42 @@ impl ToolAssembly {
 
     /// The largest radius of any body: how far from the axis anything of the tool reaches.
     pub fn max_radius(&self) -> f64 {
-        self.bodies().iter().map(|b| b.radius_from.max(b.radius_to)).fold(self.ball_radius(), f64::max)
+        self.bodies()
+            .iter()
+            .map(|b| b.radius_from.max(b.radius_to))
+            .fold(self.ball_radius(), f64::max)
     }
 
     /// The bodies above the ball, tip to spindle. The ball itself is handled exactly by
     /// `collide::distance` (its centre's distance to the part).
     pub fn bodies(&self) -> Vec<Body> {
         let r = self.ball_radius();
-        let mut out = vec![Body { role: BodyRole::Flutes, from: r, to: self.flute_length(), radius_from: r, radius_to: r }];
+        let mut out = vec![Body {
+            role: BodyRole::Flutes,
+            from: r,
+            to: self.flute_length(),
+            radius_from: r,
+            radius_to: r,
+        }];
         if self.stickout > self.flute_length() {
             let rs = self.shank_diameter / 2.0;
-            out.push(Body { role: BodyRole::Shank, from: self.flute_length(), to: self.stickout, radius_from: rs, radius_to: rs });
+            out.push(Body {
+                role: BodyRole::Shank,
+                from: self.flute_length(),
+                to: self.stickout,
+                radius_from: rs,
+                radius_to: rs,
+            });
         }
         let mut h = self.stickout;
         for s in &self.holder {
-            out.push(Body { role: BodyRole::Holder, from: h, to: h + s.length, radius_from: s.diameter / 2.0, radius_to: s.top() / 2.0 });
+            out.push(Body {
+                role: BodyRole::Holder,
+                from: h,
+                to: h + s.length,
+                radius_from: s.diameter / 2.0,
+                radius_to: s.top() / 2.0,
+            });
             h += s.length;
         }
         out.retain(|b| b.to > b.from);
@@ -129,20 +154,36 @@ impl ToolAssembly {
     pub fn validate(&self) -> Result<(), ToolError> {
         let r = self.ball_radius();
         let positive = |name: &str, v: f64| {
-            if v.is_finite() && v > 0.0 { Ok(()) } else { Err(ToolError::Invalid(format!("{name} must be positive, got {v}"))) }
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(ToolError::Invalid(format!(
+                    "{name} must be positive, got {v}"
+                )))
+            }
         };
         positive("cutter diameter", 2.0 * r)?;
         positive("flute length", self.flute_length())?;
         positive("shank diameter", self.shank_diameter)?;
         positive("stickout", self.stickout)?;
         if self.flute_length() < r {
-            return Err(ToolError::Invalid(format!("flute length {} is shorter than the ball radius {r}", self.flute_length())));
+            return Err(ToolError::Invalid(format!(
+                "flute length {} is shorter than the ball radius {r}",
+                self.flute_length()
+            )));
         }
         if self.stickout < self.flute_length() {
-            return Err(ToolError::Invalid(format!("stickout {} is shorter than the flute length {}", self.stickout, self.flute_length())));
+            return Err(ToolError::Invalid(format!(
+                "stickout {} is shorter than the flute length {}",
+                self.stickout,
+                self.flute_length()
+            )));
         }
         for (i, s) in self.holder.iter().enumerate() {
-            positive(&format!("holder section {i} diameter"), s.diameter.min(s.top()))?;
+            positive(
+                &format!("holder section {i} diameter"),
+                s.diameter.min(s.top()),
+            )?;
             positive(&format!("holder section {i} length"), s.length)?;
         }
         Ok(())
@@ -150,7 +191,10 @@ impl ToolAssembly {
 
     /// A one-line description for reports and G-code comments.
     pub fn describe(&self) -> String {
-        let Cutter::Ball { diameter, flute_length } = self.cutter;
+        let Cutter::Ball {
+            diameter,
+            flute_length,
+        } = self.cutter;
         let holder: Vec<String> = self
             .holder
             .iter()
@@ -178,7 +222,10 @@ pub fn parse_cutter(spec: &str) -> Result<Cutter, ToolError> {
         return Err(bad());
     }
     match kind.trim() {
-        "ball" => Ok(Cutter::Ball { diameter, flute_length: 3.0 * diameter }),
+        "ball" => Ok(Cutter::Ball {
+            diameter,
+            flute_length: 3.0 * diameter,
+        }),
         _ => Err(bad()),
     }
 }
@@ -190,10 +237,20 @@ mod tests {
     fn sample() -> ToolAssembly {
         ToolAssembly {
             id: 1,
-            cutter: Cutter::Ball { diameter: 6.0, flute_length: 18.0 },
+            cutter: Cutter::Ball {
+                diameter: 6.0,
+                flute_length: 18.0,
+            },
             shank_diameter: 6.0,
             stickout: 40.0,
-            holder: vec![Section { diameter: 20.0, top_diameter: Some(30.0), length: 20.0 }, Section::cylinder(40.0, 40.0)],
+            holder: vec![
+                Section {
+                    diameter: 20.0,
+                    top_diameter: Some(30.0),
+                    length: 20.0,
+                },
+                Section::cylinder(40.0, 40.0),
+            ],
         }
     }
 
@@ -213,7 +270,13 @@ mod tests {
 
     #[test]
     fn specs_parse_and_reject() {
-        assert_eq!(parse_cutter("ball:6").unwrap(), Cutter::Ball { diameter: 6.0, flute_length: 18.0 });
+        assert_eq!(
+            parse_cutter("ball:6").unwrap(),
+            Cutter::Ball {
+                diameter: 6.0,
+                flute_length: 18.0
+            }
+        );
         for bad in ["ball", "ball:x", "ball:-1", "flat:6", "ball:inf", ""] {
             assert!(parse_cutter(bad).is_err(), "{bad}");
         }

@@ -1,0 +1,338 @@
+//! The job file (TOML): part, units, tool, machine, strategy, feeds, safety margins.
+//!
+//! Every field has a documented default, embedded here, so `wavemill plan PART` works without a
+//! job file; a job file only says what differs, and CLI flags override both. Unknown keys are
+//! errors (a misspelt `scallop_heigth` must not silently fall back to the default).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::tool::{Cutter, Section, ToolAssembly};
+
+/// A whole job.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Job {
+    pub part: PartSection,
+    pub tool: ToolSection,
+    pub machine: MachineSection,
+    pub strategy: StrategySection,
+    pub feeds: FeedSection,
+    pub safety: SafetySection,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PartSection {
+    /// Mesh file; relative paths are relative to the job file. The CLI's PART overrides it.
+    pub path: Option<PathBuf>,
+    /// Units the mesh file is written in: "mm" (default), "m" or "in".
+    pub units: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ToolSection {
+    /// Tool number (T word, H offset).
+    pub id: u32,
+    /// Ball diameter, mm.
+    pub diameter: f64,
+    /// Fluted length from the tip, mm.
+    pub flute_length: f64,
+    pub shank_diameter: f64,
+    /// Length out of the holder, from the tip, mm.
+    pub stickout: f64,
+    /// Holder sections from the nose up.
+    pub holder: Vec<Section>,
+    pub spindle_rpm: u32,
+}
+
+impl Default for ToolSection {
+    /// A 4 mm ball mill, 36 mm out of a slim shrink-fit holder: a common impeller finisher.
+    fn default() -> Self {
+        Self {
+            id: 1,
+            diameter: 4.0,
+            flute_length: 10.0,
+            shank_diameter: 4.0,
+            stickout: 36.0,
+            holder: vec![
+                Section {
+                    diameter: 12.0,
+                    top_diameter: Some(22.0),
+                    length: 30.0,
+                },
+                Section::cylinder(40.0, 40.0),
+            ],
+            spindle_rpm: 16000,
+        }
+    }
+}
+
+impl ToolSection {
+    pub fn assembly(&self) -> ToolAssembly {
+        ToolAssembly {
+            id: self.id,
+            cutter: Cutter::Ball {
+                diameter: self.diameter,
+                flute_length: self.flute_length,
+            },
+            shank_diameter: self.shank_diameter,
+            stickout: self.stickout,
+            holder: self.holder.clone(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MachineSection {
+    /// Only "table-table-ac" so far.
+    pub kinematics: String,
+    /// Where the part frame's origin sits relative to the pivot (A and C axes' intersection), mm.
+    pub part_origin_in_table: [f64; 3],
+    /// A axis travel, degrees.
+    pub a_limits: [f64; 2],
+    /// C axis travel, degrees; absent = continuous.
+    pub c_limits: Option<[f64; 2]>,
+    /// Distance of the safe retract plane from the pivot, mm; absent = the part's reach from
+    /// the pivot plus `safe_margin`.
+    pub safe_distance: Option<f64>,
+    /// mm added to the part's reach for the automatic safe distance.
+    pub safe_margin: f64,
+    /// mm/min.
+    pub rapid_feed: f64,
+    /// Fastest rotary motion, degrees/min, for time estimates.
+    pub max_rotary_speed: f64,
+}
+
+impl Default for MachineSection {
+    fn default() -> Self {
+        Self {
+            kinematics: "table-table-ac".into(),
+            part_origin_in_table: [0.0, 0.0, 0.0],
+            a_limits: [-120.0, 120.0],
+            c_limits: None,
+            safe_distance: None,
+            safe_margin: 20.0,
+            rapid_feed: 15000.0,
+            max_rotary_speed: 7200.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StrategySection {
+    /// Cusp height left between passes on a flat surface, mm.
+    pub scallop_height: f64,
+    /// Chord and post-processor tolerance, mm.
+    pub tolerance: f64,
+    /// Normal of the parallel drive planes.
+    pub drive_normal: [f64; 3],
+    /// Longest step between drive points before refinement, mm.
+    pub max_step: f64,
+    pub lead_deg: f64,
+    pub tilt_deg: f64,
+    /// How far the axis may turn from the preferred lead/tilt axis to avoid collisions, degrees.
+    pub max_axis_deviation_deg: f64,
+    /// Largest axis change between consecutive poses, degrees.
+    pub max_axis_turn_deg: f64,
+}
+
+impl Default for StrategySection {
+    fn default() -> Self {
+        Self {
+            scallop_height: 0.01,
+            tolerance: 0.01,
+            drive_normal: [1.0, 0.0, 0.0],
+            max_step: 1.0,
+            lead_deg: 10.0,
+            tilt_deg: 0.0,
+            max_axis_deviation_deg: 70.0,
+            max_axis_turn_deg: 5.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FeedSection {
+    /// mm/min.
+    pub cut: f64,
+    pub approach: f64,
+    pub retract: f64,
+    /// Distance above the entry point where the rapid plunge turns into the approach feed, mm.
+    pub clearance: f64,
+}
+
+impl Default for FeedSection {
+    fn default() -> Self {
+        Self {
+            cut: 2000.0,
+            approach: 600.0,
+            retract: 3000.0,
+            clearance: 3.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SafetySection {
+    /// The shank must stay this far from the part, mm.
+    pub shank_margin: f64,
+    /// The holder must stay this far from the part, mm.
+    pub holder_margin: f64,
+}
+
+impl Default for SafetySection {
+    fn default() -> Self {
+        Self {
+            shank_margin: 0.5,
+            holder_margin: 2.0,
+        }
+    }
+}
+
+impl Job {
+    /// Parses a job file's text; `name` is used in error messages.
+    pub fn from_toml(text: &str, name: &str) -> Result<Job, String> {
+        let job: Job = toml::from_str(text).map_err(|e| format!("{name}: {e}"))?;
+        job.validate().map_err(|e| format!("{name}: {e}"))?;
+        Ok(job)
+    }
+
+    /// Reads a job file; a relative part path becomes relative to the file's folder.
+    pub fn load(path: &Path) -> Result<Job, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut job = Job::from_toml(&text, &path.display().to_string())?;
+        if let Some(p) = &job.part.path
+            && p.is_relative()
+        {
+            job.part.path = Some(path.parent().unwrap_or(Path::new(".")).join(p));
+        }
+        Ok(job)
+    }
+
+    /// Checks every number is usable, naming the key that is not.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{key} must be a positive number, got {v}"))
+            }
+        };
+        let non_negative = |key: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{key} must be zero or positive, got {v}"))
+            }
+        };
+        self.tool.assembly().validate().map_err(|e| e.to_string())?;
+        positive("strategy.scallop_height", self.strategy.scallop_height)?;
+        positive("strategy.tolerance", self.strategy.tolerance)?;
+        positive("strategy.max_step", self.strategy.max_step)?;
+        positive(
+            "strategy.max_axis_turn_deg",
+            self.strategy.max_axis_turn_deg,
+        )?;
+        non_negative(
+            "strategy.max_axis_deviation_deg",
+            self.strategy.max_axis_deviation_deg,
+        )?;
+        if self.strategy.scallop_height >= self.tool.diameter / 2.0 {
+            return Err(format!(
+                "strategy.scallop_height {} must be smaller than the ball radius {}",
+                self.strategy.scallop_height,
+                self.tool.diameter / 2.0
+            ));
+        }
+        let n = self.strategy.drive_normal;
+        if !n.iter().all(|c| c.is_finite()) || n.iter().map(|c| c * c).sum::<f64>() < 1e-12 {
+            return Err(format!(
+                "strategy.drive_normal must be a non-zero vector, got {n:?}"
+            ));
+        }
+        for (key, v) in [
+            ("feeds.cut", self.feeds.cut),
+            ("feeds.approach", self.feeds.approach),
+            ("feeds.retract", self.feeds.retract),
+            ("machine.rapid_feed", self.machine.rapid_feed),
+            ("machine.max_rotary_speed", self.machine.max_rotary_speed),
+        ] {
+            positive(key, v)?;
+        }
+        non_negative("feeds.clearance", self.feeds.clearance)?;
+        non_negative("safety.shank_margin", self.safety.shank_margin)?;
+        non_negative("safety.holder_margin", self.safety.holder_margin)?;
+        non_negative("machine.safe_margin", self.machine.safe_margin)?;
+        if let Some(d) = self.machine.safe_distance {
+            positive("machine.safe_distance", d)?;
+        }
+        if self.machine.kinematics != "table-table-ac" {
+            return Err(format!(
+                "machine.kinematics `{}` is not supported (only table-table-ac)",
+                self.machine.kinematics
+            ));
+        }
+        let [lo, hi] = self.machine.a_limits;
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(format!(
+                "machine.a_limits must be [min, max] with min < max, got {:?}",
+                self.machine.a_limits
+            ));
+        }
+        if let Some([lo, hi]) = self.machine.c_limits
+            && !(lo.is_finite() && hi.is_finite() && lo < hi)
+        {
+            return Err(format!(
+                "machine.c_limits must be [min, max] with min < max, got [{lo}, {hi}]"
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_file_gives_the_defaults() {
+        assert_eq!(Job::from_toml("", "empty.toml").unwrap(), Job::default());
+    }
+
+    #[test]
+    fn partial_file_overrides_only_what_it_says() {
+        let job = Job::from_toml(
+            "[tool]\ndiameter = 3.0\nshank_diameter = 3.0\n[strategy]\nscallop_height = 0.02\n",
+            "j.toml",
+        )
+        .unwrap();
+        assert_eq!(job.tool.diameter, 3.0);
+        assert_eq!(job.strategy.scallop_height, 0.02);
+        assert_eq!(job.tool.stickout, ToolSection::default().stickout);
+    }
+
+    #[test]
+    fn mistakes_are_named() {
+        let e = Job::from_toml("[strategy]\nscallop_heigth = 0.02\n", "j.toml").unwrap_err();
+        assert!(e.contains("j.toml") && e.contains("scallop_heigth"), "{e}");
+        let e = Job::from_toml("[feeds]\ncut = -5\n", "j.toml").unwrap_err();
+        assert!(e.contains("feeds.cut"), "{e}");
+        let e = Job::from_toml("[machine]\na_limits = [30, -30]\n", "j.toml").unwrap_err();
+        assert!(e.contains("a_limits"), "{e}");
+        let e = Job::from_toml("[strategy]\nscallop_height = 5\n", "j.toml").unwrap_err();
+        assert!(e.contains("ball radius"), "{e}");
+    }
+
+    #[test]
+    fn defaults_round_trip_through_toml() {
+        let text = toml::to_string(&Job::default()).unwrap();
+        assert_eq!(Job::from_toml(&text, "x").unwrap(), Job::default());
+    }
+}

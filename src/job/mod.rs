@@ -1,0 +1,17 @@
+//! Jobs: the job file, and the pipeline that wires the stages together into a plan.
+//!
+//! [`plan`] is what `wavemill plan` runs and what other planners call: it takes a raw part mesh
+//! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
+
+mod config;
+mod output;
+mod pipeline;
+mod preview;
+mod report;
+
+pub use config::{
+    FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
+};
+pub use output::{write_atomically, write_outputs};
+pub use pipeline::{Observer, PlanOutput, Quiet, load_part, plan};
+pub use report::{PlanReport, PoseCounts, StageTimings};

@@ -1,0 +1,345 @@
+//! The plan pipeline: prepare the part, build the collision structures, drive the finishing
+//! passes, link, verify, post, preview. Each stage is a plain function of the stage before;
+//! this file only wires them and times them.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use super::config::Job;
+use super::preview::preview;
+use super::report::*;
+use crate::access::RayScene;
+use crate::collide::{Margins, PartCollider, PreparedTool};
+use crate::error::{Error, Result};
+use crate::geom::{Point3, Vector3};
+use crate::mesh::io::{RawMesh, Units, read_mesh};
+use crate::mesh::{Mesh, PrepareOptions, prepare};
+use crate::orient::{AxisChooser, AxisOptions};
+use crate::path::{
+    self, FinishingContext, FinishingOptions, LinkOptions, MoveKind, ToolPose, Toolpath,
+};
+use crate::post::{
+    self, GcodeOptions, LineariseOptions, MachineKinematics, ProgramHeader, TableTableAC,
+};
+use crate::verify::verify;
+
+/// Hears about progress; the CLI shows it as progress bars, libraries can ignore it.
+pub trait Observer: Sync {
+    /// A stage starts; `work` units of [`Observer::advance`] will follow (0 if unknown).
+    fn stage(&self, name: &str, work: u64);
+    fn advance(&self);
+    fn finish(&self);
+}
+
+/// An observer that ignores everything.
+pub struct Quiet;
+
+impl Observer for Quiet {
+    fn stage(&self, _: &str, _: u64) {}
+    fn advance(&self) {}
+    fn finish(&self) {}
+}
+
+/// Everything a plan produces, in memory.
+pub struct PlanOutput {
+    /// The part as planned (welded, oriented).
+    pub part: Mesh,
+    pub toolpath: Toolpath,
+    pub gcode: String,
+    pub cl_csv: String,
+    pub report: PlanReport,
+    pub preview_glb: Vec<u8>,
+    /// What the independent re-check of the finished path found wrong, if anything. A path
+    /// that fails must not be run; [`super::write_outputs`] then writes only the report.
+    pub verification_failure: Option<String>,
+}
+
+/// Reads a part file in the given units.
+pub fn load_part(path: &Path, units: &str) -> Result<RawMesh> {
+    let units: Units = units
+        .parse()
+        .map_err(|e| Error::Job(format!("--units: {e}")))?;
+    Ok(read_mesh(path, units)?)
+}
+
+fn ms(since: Instant) -> f64 {
+    (since.elapsed().as_secs_f64() * 1e3 * 10.0).round() / 10.0
+}
+
+/// Plans 5-axis ball-end finishing of `raw` (already in mm) for `job`. `part_name` names the
+/// part in errors, the report and the G-code header.
+pub fn plan(
+    raw: &RawMesh,
+    part_name: &str,
+    units: &str,
+    job: &Job,
+    observer: &dyn Observer,
+) -> Result<PlanOutput> {
+    job.validate().map_err(Error::Job)?;
+    let started = Instant::now();
+    let mut timings = StageTimings::default();
+    let mesh_error = |reason: String| Error::Mesh {
+        file: part_name.to_string(),
+        reason,
+    };
+
+    let t = Instant::now();
+    observer.stage("prepare part", 0);
+    let (part, mesh_report) = prepare(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+    if !mesh_report.watertight {
+        return Err(mesh_error(format!(
+            "the part must be a closed, consistently oriented surface to tell inside from outside; found: {}",
+            mesh_report.problems().join("; ")
+        )));
+    }
+    timings.prepare = ms(t);
+
+    let t = Instant::now();
+    observer.stage("collision structures", 0);
+    let collider = PartCollider::new(&part).map_err(mesh_error)?;
+    let rays = RayScene::new(&part);
+    timings.collision_structures = ms(t);
+
+    let tool = job.tool.assembly();
+    let margins = Margins {
+        shank: job.safety.shank_margin,
+        holder: job.safety.holder_margin,
+    };
+    let prepared = PreparedTool::new(&tool, &margins);
+    let kinematics = machine(job)?;
+    let pivot = Point3::from(-Vector3::from(job.machine.part_origin_in_table));
+    let reach = part
+        .positions
+        .iter()
+        .map(|p| (p - pivot).norm())
+        .fold(0.0, f64::max);
+    let safe_distance = job
+        .machine
+        .safe_distance
+        .unwrap_or(reach + job.machine.safe_margin);
+    if safe_distance <= reach {
+        return Err(Error::Job(format!(
+            "machine.safe_distance {safe_distance} mm is inside the part's reach from the pivot ({reach:.3} mm)"
+        )));
+    }
+
+    let t = Instant::now();
+    let chooser = AxisChooser::new(AxisOptions {
+        lead_deg: job.strategy.lead_deg,
+        tilt_deg: job.strategy.tilt_deg,
+        max_deviation_deg: job.strategy.max_axis_deviation_deg,
+        ..AxisOptions::default()
+    });
+    let reachable = |axis: &Vector3| {
+        let pose = ToolPose {
+            tip: pivot,
+            axis: crate::geom::Direction::new_normalize(*axis),
+        };
+        kinematics.inverse(&pose, None).is_ok()
+    };
+    let ctx = FinishingContext {
+        part: &collider,
+        rays: &rays,
+        tool: &prepared,
+        chooser: &chooser,
+        reachable: &reachable,
+    };
+    let options = FinishingOptions {
+        drive_normal: Vector3::from(job.strategy.drive_normal),
+        scallop_height: job.strategy.scallop_height,
+        tolerance: job.strategy.tolerance,
+        max_step: job.strategy.max_step,
+        max_axis_turn_deg: job.strategy.max_axis_turn_deg,
+    };
+    let stepover = path::stepover_for_scallop(tool.ball_radius(), options.scallop_height);
+    let extent = part
+        .aabb()
+        .extent()
+        .dot(&options.drive_normal.normalize())
+        .abs();
+    observer.stage(
+        "finishing passes",
+        (extent / stepover.max(1e-3)).ceil() as u64,
+    );
+    let finishing = path::finishing_passes(&part, &ctx, &options, &|| observer.advance());
+    timings.finishing_passes = ms(t);
+
+    let t = Instant::now();
+    observer.stage("linking", 0);
+    let link_options = LinkOptions {
+        pivot,
+        safe_distance,
+        clearance: job.feeds.clearance,
+        cut_feed: job.feeds.cut,
+        approach_feed: job.feeds.approach,
+        retract_feed: job.feeds.retract,
+        rapid_feed: job.machine.rapid_feed,
+    };
+    let (toolpath, link_report) = path::link(
+        &finishing.segments,
+        &collider,
+        &prepared,
+        tool.id,
+        &link_options,
+    );
+    timings.linking = ms(t);
+
+    let t = Instant::now();
+    observer.stage("verification", 0);
+    let search = job.safety.holder_margin.max(job.safety.shank_margin) + 5.0;
+    let verification = verify(&toolpath, &collider, &prepared, search);
+    timings.verification = ms(t);
+    let verification_failure = verification
+        .passes(
+            job.strategy.tolerance,
+            job.safety.shank_margin,
+            job.safety.holder_margin,
+        )
+        .err();
+
+    let t = Instant::now();
+    observer.stage("post-processing", 0);
+    let header = ProgramHeader {
+        program_name: format!("wavemill finishing of {part_name}"),
+        part_name: part_name.to_string(),
+        tool_description: vec![tool.describe()],
+        tool_number: tool.id,
+        spindle_rpm: job.tool.spindle_rpm,
+        coolant: true,
+        comments: vec![
+            format!(
+                "ball-end finishing along parallel planes, scallop {} mm, tolerance {} mm",
+                job.strategy.scallop_height, job.strategy.tolerance
+            ),
+            format!("safe plane {safe_distance:.3} mm from the pivot along the tool axis"),
+        ],
+    };
+    let linearise = LineariseOptions::default().with_tolerance_mm(job.strategy.tolerance);
+    let program = post::linearise_opt(&kinematics, &toolpath, &linearise)?;
+    let mut writer = post::GcodeWriter::new(&kinematics, GcodeOptions::default());
+    post::emit(&program, &header, &mut writer);
+    let gcode = writer.into_string();
+    let cl_csv = post::write_cl_csv(&toolpath);
+    let time = post::estimate_time(&program, job.machine.max_rotary_speed);
+    timings.post = ms(t);
+
+    let t = Instant::now();
+    observer.stage("preview", 0);
+    let preview_glb = preview(&part, &toolpath, 5.0, 2.0 * tool.ball_radius() + 8.0)?;
+    timings.preview = ms(t);
+    timings.total = ms(started);
+    observer.finish();
+
+    let length = |kind: MoveKind| -> f64 {
+        toolpath
+            .moves
+            .windows(2)
+            .filter(|w| w[1].kind == kind)
+            .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+            .sum()
+    };
+    let mut by_reason = BTreeMap::new();
+    for (_, why) in &finishing.unreachable {
+        *by_reason
+            .entry(
+                serde_json::to_value(why)
+                    .ok()
+                    .and_then(|v| v.as_str().map(String::from))
+                    .unwrap_or_default(),
+            )
+            .or_insert(0) += 1;
+    }
+    let report = PlanReport {
+        wavemill_version: env!("CARGO_PKG_VERSION"),
+        part: PartSummary {
+            file: part_name.to_string(),
+            units: units.to_string(),
+            warnings: raw.warnings.clone(),
+            problems: mesh_report.problems(),
+            mesh: mesh_report,
+        },
+        tool: ToolSummary {
+            description: tool.describe(),
+            ball_radius_mm: tool.ball_radius(),
+            shank_margin_mm: margins.shank,
+            holder_margin_mm: margins.holder,
+            assembly: tool.clone(),
+        },
+        machine: MachineSummary {
+            description: kinematics.description(),
+            pivot_in_part_frame: pivot.coords.into(),
+            safe_distance_mm: safe_distance,
+        },
+        strategy: StrategySummary {
+            kind: "parallel-plane ball-end finishing",
+            scallop_height_mm: options.scallop_height,
+            stepover_mm: stepover,
+            tolerance_mm: options.tolerance,
+            drive_planes: finishing.planes,
+            drive_points: finishing.drive_points,
+            refinement_poses: finishing.inserted_poses,
+            splits_at_unreachable: finishing.splits_at_unreachable,
+            splits_at_refinement: finishing.splits_at_refinement,
+            lead_deg: job.strategy.lead_deg,
+            tilt_deg: job.strategy.tilt_deg,
+        },
+        poses: pose_counts(&toolpath),
+        cutting_length_mm: length(MoveKind::Cut),
+        approach_length_mm: length(MoveKind::Approach),
+        rapid_length_mm: length(MoveKind::Rapid),
+        estimated_time: TimeSummary {
+            total_s: time.total_s(),
+            by_kind: time,
+        },
+        clearance: verification,
+        unreachable: UnreachableSummary {
+            count: finishing.unreachable.len(),
+            by_reason,
+            first_points: finishing
+                .unreachable
+                .iter()
+                .take(100)
+                .map(|(p, _)| p.coords.into())
+                .collect(),
+        },
+        linking: link_report,
+        nc_blocks: program.len(),
+        timings_ms: Some(timings),
+    };
+    Ok(PlanOutput {
+        part,
+        toolpath,
+        gcode,
+        cl_csv,
+        report,
+        preview_glb,
+        verification_failure,
+    })
+}
+
+/// The machine the job describes.
+pub fn machine(job: &Job) -> Result<TableTableAC> {
+    let m = &job.machine;
+    let kin = TableTableAC::new(Vector3::from(m.part_origin_in_table))
+        .with_a_limits(m.a_limits[0], m.a_limits[1])
+        .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi)));
+    kin.validate()?;
+    Ok(kin)
+}
+
+fn pose_counts(path: &Toolpath) -> PoseCounts {
+    let mut c = PoseCounts {
+        total: path.moves.len(),
+        ..Default::default()
+    };
+    for m in &path.moves {
+        match m.kind {
+            MoveKind::Rapid => c.rapid += 1,
+            MoveKind::Approach => c.approach += 1,
+            MoveKind::Cut => c.cut += 1,
+            MoveKind::Retract => c.retract += 1,
+        }
+    }
+    c
+}

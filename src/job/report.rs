@@ -1,0 +1,126 @@
+//! `report.json`: what was planned, how long it takes, and how close the tool comes to the part.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::mesh::MeshReport;
+use crate::path::LinkReport;
+use crate::post::TimeEstimate;
+use crate::tool::ToolAssembly;
+use crate::verify::Verification;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PlanReport {
+    pub wavemill_version: &'static str,
+    pub part: PartSummary,
+    pub tool: ToolSummary,
+    pub machine: MachineSummary,
+    pub strategy: StrategySummary,
+    pub poses: PoseCounts,
+    pub cutting_length_mm: f64,
+    pub approach_length_mm: f64,
+    pub rapid_length_mm: f64,
+    pub estimated_time: TimeSummary,
+    pub clearance: Verification,
+    pub unreachable: UnreachableSummary,
+    pub linking: LinkReport,
+    /// Blocks in `job.nc` after linearisation.
+    pub nc_blocks: usize,
+    /// Milliseconds per stage; the only part of the outputs that changes between runs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timings_ms: Option<StageTimings>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PartSummary {
+    pub file: String,
+    pub units: String,
+    pub warnings: Vec<String>,
+    pub problems: Vec<String>,
+    #[serde(flatten)]
+    pub mesh: MeshReport,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ToolSummary {
+    pub description: String,
+    pub ball_radius_mm: f64,
+    pub shank_margin_mm: f64,
+    pub holder_margin_mm: f64,
+    #[serde(flatten)]
+    pub assembly: ToolAssembly,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct MachineSummary {
+    pub description: String,
+    pub pivot_in_part_frame: [f64; 3],
+    pub safe_distance_mm: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct StrategySummary {
+    pub kind: &'static str,
+    pub scallop_height_mm: f64,
+    pub stepover_mm: f64,
+    pub tolerance_mm: f64,
+    pub drive_planes: usize,
+    pub drive_points: usize,
+    pub refinement_poses: usize,
+    pub splits_at_unreachable: usize,
+    pub splits_at_refinement: usize,
+    pub lead_deg: f64,
+    pub tilt_deg: f64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct PoseCounts {
+    pub rapid: usize,
+    pub approach: usize,
+    pub cut: usize,
+    pub retract: usize,
+    pub total: usize,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TimeSummary {
+    pub total_s: f64,
+    #[serde(flatten)]
+    pub by_kind: TimeEstimate,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct UnreachableSummary {
+    /// Drive points that could not be machined.
+    pub count: usize,
+    pub by_reason: BTreeMap<String, usize>,
+    /// Up to 100 of them, in path order, for a first look.
+    pub first_points: Vec<[f64; 3]>,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct StageTimings {
+    pub prepare: f64,
+    pub collision_structures: f64,
+    pub finishing_passes: f64,
+    pub linking: f64,
+    pub verification: f64,
+    pub post: f64,
+    pub preview: f64,
+    pub total: f64,
+}
+
+impl PlanReport {
+    /// Pretty JSON with a final newline; timings left out when `timings` is false.
+    pub fn to_json(&self, timings: bool) -> String {
+        let mut r = self.clone();
+        if !timings {
+            r.timings_ms = None;
+        }
+        let mut s =
+            serde_json::to_string_pretty(&r).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
+        s.push('\n');
+        s
+    }
+}

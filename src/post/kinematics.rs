@@ -1,0 +1,559 @@
+//! Machine kinematics: the map between a tool pose in the part frame and the joint values
+//! (X, Y, Z, A, C) a controller is commanded with.
+//!
+//! # Table-table A/C convention
+//!
+//! ```text
+//!            spindle (tool along machine +Z, never tilts)
+//!               │
+//!               ▼ tool tip = (X, Y, Z) in machine coordinates
+//!        ┌─────────────┐   C: round table, turns about its own axis (table +Z)
+//!        │   part      │
+//!        └──────┬──────┘
+//!   ════════════╪════════  A: cradle, turns about machine X
+//!              pivot  = table-frame origin = where the A and C axes meet
+//! ```
+//!
+//! * The tool always points along machine +Z. The cradle rotates by `A` about machine X; the
+//!   round table, mounted on the cradle, rotates by `C` about its own axis (table +Z).
+//! * The part is clamped on the C table; `part_origin_in_table` (`o`) is where the part
+//!   frame's origin sits in the table frame.
+//! * A part point `p` maps to the machine point
+//!   `m = R_x(a) · R_z(c) · (p + o)`, with right-handed rotations
+//!   `R_x(a) = [[1,0,0],[0,cos a,−sin a],[0,sin a,cos a]]`,
+//!   `R_z(c) = [[cos c,−sin c,0],[sin c,cos c,0],[0,0,1]]`.
+//! * The tool axis `k` (part frame) must map to machine +Z:
+//!   `R_x(a) R_z(c) k = Z ⇔ k = R_z(−c) R_x(−a) Z = (sin a · sin c, sin a · cos c, cos a)`
+//!   (the third row of `R = R_x(a) R_z(c)`; checked by the closed-form tests, e.g.
+//!   `k = (0, sin 30°, cos 30°) ⇒ a = 30°, c = 0°` and `k = (1, 0, 0) ⇒ a = 90°, c = 90°`).
+//! * Machine X, Y, Z are the tool **tip** in machine coordinates, measured from the pivot
+//!   (the work offset must put its origin at the pivot); the controller applies tool length
+//!   compensation (G43).
+//!
+//! Inverse: with `h = √(k_x² + k_y²)`, `a = atan2(h, k_z) ∈ [0°, 180°]`, `c = atan2(k_x, k_y)`,
+//! and the second branch `(−a, c + 180°)` gives the same axis. [`TableTableAC::inverse`] picks,
+//! among the branches and the 360° wraps of C that are inside the limits, the one closest to the
+//! previous joints (squared degree distance `Δa² + Δc²`), or, without previous joints, `a ≥ 0`
+//! and `c ∈ (−180°, 180°]`.
+//!
+//! Singularity: when the tool axis is parallel to the C axis (`sin a = 0`) C is free; the exact
+//! inverse keeps the previous C (the axis does not depend on `c` there, so the forward map stays
+//! exact). Near it the exact C swings fast between neighbouring poses; the linearisation uses
+//! [`MachineKinematics::inverse_relaxed`], which trades a bounded axis error for a calm C inside
+//! the `singular_tolerance_deg` cone (see its docs).
+//!
+//! All joint angles are in **degrees**, as the controller sees them.
+
+use nalgebra::{Matrix3, Point3, Unit, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::path::ToolPose;
+
+/// Horizontal component `√(k_x² + k_y²)` of the tool axis (part frame) at or below which the
+/// exact inverse treats the pose as singular and keeps the previous C. Choosing C freely there
+/// moves the forward-kinematics axis by at most this much (radians), far below the 1e-9
+/// round-trip accuracy.
+pub const SINGULAR_AXIS_EPS: f64 = 1e-12;
+
+/// Slack (degrees) allowed when testing a joint value against a limit, to absorb rounding of
+/// poses that sit exactly on a limit; values within the slack are clamped onto the limit.
+pub const LIMIT_SLACK_DEG: f64 = 1e-9;
+
+/// A rotary axis name, used in errors and G-code words.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum RotaryAxis {
+    /// Rotation about machine X.
+    A,
+    /// Rotation about machine Y.
+    B,
+    /// Rotation about machine (or table) Z.
+    C,
+}
+
+impl std::fmt::Display for RotaryAxis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = match self {
+            RotaryAxis::A => "A",
+            RotaryAxis::B => "B",
+            RotaryAxis::C => "C",
+        };
+        f.write_str(s)
+    }
+}
+
+/// Errors of the kinematic maps.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum KinematicsError {
+    /// No branch (and no 360° wrap of C) puts the rotary axes inside their limits.
+    #[error("axis {axis} would need {value_deg:.4}° but its limits are [{min_deg}°, {max_deg}°]")]
+    OutOfLimits {
+        /// The axis that cannot reach the pose.
+        axis: RotaryAxis,
+        /// The value (degrees) the pose needs on that axis (first branch).
+        value_deg: f64,
+        /// Lower limit (degrees).
+        min_deg: f64,
+        /// Upper limit (degrees).
+        max_deg: f64,
+    },
+    /// The pose or joints contain NaN or infinite values.
+    #[error("non-finite pose or joint values")]
+    NonFinite,
+    /// The machine description is inconsistent (e.g. limits not ordered, negative tolerance).
+    #[error("invalid machine description: {0}")]
+    InvalidMachine(String),
+}
+
+/// Joint values as the controller sees them: linear axes in mm, rotary axes in **degrees**.
+///
+/// For the table-table A/C machine, `a` is the cradle angle and `c` the round-table angle.
+/// (Machines with other rotary pairs will reuse the two rotary slots with their own names;
+/// see [`MachineKinematics::rotary_axes`].)
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Joints {
+    /// Machine X (mm).
+    pub x: f64,
+    /// Machine Y (mm).
+    pub y: f64,
+    /// Machine Z (mm).
+    pub z: f64,
+    /// First rotary axis (degrees); A on an A/C machine.
+    pub a: f64,
+    /// Second rotary axis (degrees); C on an A/C machine.
+    pub c: f64,
+}
+
+impl Joints {
+    /// Linear interpolation in joint space (what the controller does between two blocks).
+    pub fn lerp(&self, other: &Joints, t: f64) -> Joints {
+        let l = |p: f64, q: f64| p + (q - p) * t;
+        Joints {
+            x: l(self.x, other.x),
+            y: l(self.y, other.y),
+            z: l(self.z, other.z),
+            a: l(self.a, other.a),
+            c: l(self.c, other.c),
+        }
+    }
+
+    /// The linear axes as a vector (mm).
+    pub fn xyz(&self) -> Vector3<f64> {
+        Vector3::new(self.x, self.y, self.z)
+    }
+
+    /// `true` when every value is finite.
+    pub fn is_finite(&self) -> bool {
+        [self.x, self.y, self.z, self.a, self.c]
+            .iter()
+            .all(|v| v.is_finite())
+    }
+}
+
+/// A 5-axis machine's kinematic model. Implemented for [`TableTableAC`]; B/C table-table,
+/// head-table and head-head machines fit the same trait.
+pub trait MachineKinematics {
+    /// Exact inverse kinematics: the joints that put the tool tip at `pose.tip` with the tool
+    /// along `pose.axis` (part frame). Chooses the branch and rotary wrap closest to `previous`
+    /// among those inside the limits; without `previous`, a machine-specific default branch.
+    fn inverse(
+        &self,
+        pose: &ToolPose,
+        previous: Option<&Joints>,
+    ) -> Result<Joints, KinematicsError>;
+
+    /// Forward kinematics: the part-frame pose the joints produce.
+    fn forward(&self, joints: &Joints) -> ToolPose;
+
+    /// Singularity-relaxed inverse used by linearisation: like [`Self::inverse`] with
+    /// `preferred` as the previous joints, but near the singularity the machine may keep the
+    /// rotary axes close to `preferred` at the cost of an axis error of at most
+    /// `max_axis_error_deg` (the tip stays exact). The default is the exact inverse.
+    fn inverse_relaxed(
+        &self,
+        pose: &ToolPose,
+        preferred: &Joints,
+        max_axis_error_deg: f64,
+    ) -> Result<Joints, KinematicsError> {
+        let _ = max_axis_error_deg;
+        self.inverse(pose, Some(preferred))
+    }
+
+    /// Checks joint values against the machine's limits.
+    fn check_limits(&self, joints: &Joints) -> Result<(), KinematicsError>;
+
+    /// Names of the two rotary axes, in the order of [`Joints::a`] and [`Joints::c`].
+    fn rotary_axes(&self) -> [RotaryAxis; 2];
+
+    /// One-line human description (for program headers).
+    fn description(&self) -> String;
+}
+
+/// Table-table A/C 5-axis machine (tool fixed along +Z, A cradle about X carrying a C round
+/// table). See the module docs for the convention and formulas.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TableTableAC {
+    /// Where the part frame's origin sits in the table frame (mm); the table frame's origin
+    /// is the pivot, where the A and C axes meet. Serialised as `[x, y, z]`.
+    #[serde(with = "vec3_as_array")]
+    pub part_origin_in_table: Vector3<f64>,
+    /// A limits `(min, max)` in degrees.
+    pub a_limits_deg: (f64, f64),
+    /// C limits `(min, max)` in degrees; `None` means continuous (unlimited) C.
+    pub c_limits_deg: Option<(f64, f64)>,
+    /// Half-angle (degrees) of the cone around the C axis where C is treated as nearly free
+    /// by [`MachineKinematics::inverse_relaxed`]. Default 0.05°.
+    pub singular_tolerance_deg: f64,
+}
+
+impl Default for TableTableAC {
+    /// Pivot at the part origin, A in [−120°, 120°], continuous C, singular tolerance 0.05°.
+    fn default() -> Self {
+        TableTableAC {
+            part_origin_in_table: Vector3::zeros(),
+            a_limits_deg: (-120.0, 120.0),
+            c_limits_deg: None,
+            singular_tolerance_deg: 0.05,
+        }
+    }
+}
+
+/// Serde for `Vector3<f64>` as `[x, y, z]` (nalgebra's own serde feature is not enabled).
+mod vec3_as_array {
+    use nalgebra::Vector3;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Vector3<f64>, s: S) -> Result<S::Ok, S::Error> {
+        [v.x, v.y, v.z].serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vector3<f64>, D::Error> {
+        let [x, y, z] = <[f64; 3]>::deserialize(d)?;
+        Ok(Vector3::new(x, y, z))
+    }
+}
+
+/// One inverse-kinematics candidate.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    a: f64,
+    c: f64,
+}
+
+impl TableTableAC {
+    /// A machine with the given part offset and the [`Default`] limits.
+    pub fn new(part_origin_in_table: Vector3<f64>) -> Self {
+        TableTableAC {
+            part_origin_in_table,
+            ..TableTableAC::default()
+        }
+    }
+
+    /// Sets the A limits (degrees).
+    pub fn with_a_limits(mut self, min_deg: f64, max_deg: f64) -> Self {
+        self.a_limits_deg = (min_deg, max_deg);
+        self
+    }
+
+    /// Sets the C limits (degrees); `None` = continuous C.
+    pub fn with_c_limits(mut self, limits: Option<(f64, f64)>) -> Self {
+        self.c_limits_deg = limits;
+        self
+    }
+
+    /// Sets the singular tolerance (degrees).
+    pub fn with_singular_tolerance(mut self, deg: f64) -> Self {
+        self.singular_tolerance_deg = deg;
+        self
+    }
+
+    /// Checks the description: finite ordered limits, non-negative finite tolerance.
+    pub fn validate(&self) -> Result<(), KinematicsError> {
+        let bad = |s: &str| Err(KinematicsError::InvalidMachine(s.to_string()));
+        if !self.part_origin_in_table.iter().all(|v| v.is_finite()) {
+            return bad("part_origin_in_table is not finite");
+        }
+        let (lo, hi) = self.a_limits_deg;
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return bad("A limits must be finite and ordered");
+        }
+        if let Some((lo, hi)) = self.c_limits_deg
+            && !(lo.is_finite() && hi.is_finite() && lo <= hi && hi - lo <= 1e6)
+        {
+            return bad("C limits must be finite, ordered and at most 1e6 degrees apart");
+        }
+        if !(self.singular_tolerance_deg.is_finite() && self.singular_tolerance_deg >= 0.0) {
+            return bad("singular_tolerance_deg must be finite and >= 0");
+        }
+        Ok(())
+    }
+
+    /// `R = R_x(a) · R_z(c)` (angles in degrees): maps table-frame vectors to machine ones.
+    pub fn rotation(a_deg: f64, c_deg: f64) -> Matrix3<f64> {
+        let (sa, ca) = a_deg.to_radians().sin_cos();
+        let (sc, cc) = c_deg.to_radians().sin_cos();
+        Matrix3::new(cc, -sc, 0.0, ca * sc, ca * cc, -sa, sa * sc, sa * cc, ca)
+    }
+
+    /// The joints for rotary values `(a, c)`: tip mapped to machine coordinates.
+    fn joints_for(&self, pose: &ToolPose, a: f64, c: f64) -> Joints {
+        let m = Self::rotation(a, c) * (pose.tip.coords + self.part_origin_in_table);
+        Joints {
+            x: m.x,
+            y: m.y,
+            z: m.z,
+            a,
+            c,
+        }
+    }
+
+    /// Snaps `v` onto `[lo, hi]` if within [`LIMIT_SLACK_DEG`]; `None` if outside.
+    fn within(v: f64, (lo, hi): (f64, f64)) -> Option<f64> {
+        if v < lo - LIMIT_SLACK_DEG || v > hi + LIMIT_SLACK_DEG {
+            None
+        } else {
+            Some(v.clamp(lo, hi))
+        }
+    }
+
+    /// The 360° wraps of `c` to consider: for continuous C the one nearest `reference` (or, without
+    /// reference, the one in `(−180°, 180°]`); for limited C every wrap inside the limits.
+    fn c_wraps(&self, c: f64, reference: Option<f64>) -> Vec<f64> {
+        match self.c_limits_deg {
+            None => vec![match reference {
+                Some(r) => c + 360.0 * ((r - c) / 360.0).round(),
+                None => normalize_deg(c),
+            }],
+            Some((lo, hi)) => {
+                let k0 = ((lo - LIMIT_SLACK_DEG - c) / 360.0).ceil() as i64;
+                let k1 = ((hi + LIMIT_SLACK_DEG - c) / 360.0).floor() as i64;
+                (k0..=k1)
+                    .filter_map(|k| Self::within(c + 360.0 * k as f64, (lo, hi)))
+                    .collect()
+            }
+        }
+    }
+
+    /// Picks the best candidate among `branches` (values before C wrapping).
+    fn choose(
+        &self,
+        branches: &[Candidate],
+        previous: Option<&Joints>,
+    ) -> Result<Candidate, KinematicsError> {
+        let mut feasible: Vec<Candidate> = Vec::new();
+        let mut a_ok = false;
+        for b in branches {
+            let Some(a) = Self::within(b.a, self.a_limits_deg) else {
+                continue;
+            };
+            a_ok = true;
+            for c in self.c_wraps(b.c, previous.map(|p| p.c)) {
+                feasible.push(Candidate { a, c });
+            }
+        }
+        let best = match previous {
+            Some(p) => feasible.iter().copied().min_by(|u, v| {
+                let cost = |w: &Candidate| (w.a - p.a).powi(2) + (w.c - p.c).powi(2);
+                cost(u)
+                    .total_cmp(&cost(v))
+                    .then((u.a < 0.0).cmp(&(v.a < 0.0)))
+                    .then(u.c.total_cmp(&v.c))
+            }),
+            None => feasible.iter().copied().min_by(|u, v| {
+                let outside = |w: &Candidate| !(w.c > -180.0 && w.c <= 180.0);
+                (u.a < 0.0)
+                    .cmp(&(v.a < 0.0))
+                    .then(outside(u).cmp(&outside(v)))
+                    .then(u.c.abs().total_cmp(&v.c.abs()))
+                    .then(u.c.total_cmp(&v.c))
+            }),
+        };
+        match best {
+            Some(b) => Ok(b),
+            None if !a_ok => {
+                let (min_deg, max_deg) = self.a_limits_deg;
+                Err(KinematicsError::OutOfLimits {
+                    axis: RotaryAxis::A,
+                    value_deg: branches.first().map_or(f64::NAN, |b| b.a),
+                    min_deg,
+                    max_deg,
+                })
+            }
+            None => {
+                let (min_deg, max_deg) = self.c_limits_deg.unwrap_or((f64::MIN, f64::MAX));
+                Err(KinematicsError::OutOfLimits {
+                    axis: RotaryAxis::C,
+                    value_deg: branches.first().map_or(f64::NAN, |b| b.c),
+                    min_deg,
+                    max_deg,
+                })
+            }
+        }
+    }
+
+    /// Validates a pose and returns its axis as a plain vector.
+    fn checked_axis(pose: &ToolPose) -> Result<Vector3<f64>, KinematicsError> {
+        let k = pose.axis.into_inner();
+        if k.iter()
+            .chain(pose.tip.coords.iter())
+            .all(|v| v.is_finite())
+        {
+            Ok(k)
+        } else {
+            Err(KinematicsError::NonFinite)
+        }
+    }
+}
+
+/// An angle (degrees) wrapped into `(−180°, 180°]`, without negative zero.
+fn normalize_deg(d: f64) -> f64 {
+    let w = d - 360.0 * (d / 360.0).round(); // in [−180, 180]
+    if w <= -180.0 { w + 360.0 } else { w + 0.0 }
+}
+
+/// `atan2` in degrees normalised to `(−180°, 180°]` (so `−0.0` and `−180°` never appear).
+fn atan2_deg(y: f64, x: f64) -> f64 {
+    normalize_deg(y.atan2(x).to_degrees())
+}
+
+impl MachineKinematics for TableTableAC {
+    fn inverse(
+        &self,
+        pose: &ToolPose,
+        previous: Option<&Joints>,
+    ) -> Result<Joints, KinematicsError> {
+        self.validate()?;
+        let k = Self::checked_axis(pose)?;
+        if previous.is_some_and(|p| !p.is_finite()) {
+            return Err(KinematicsError::NonFinite);
+        }
+        let h = k.x.hypot(k.y);
+        let tilt = h.atan2(k.z).to_degrees(); // in [0, 180]
+        let c0 = if h <= SINGULAR_AXIS_EPS {
+            // Singular: C is free; keep the previous C (the axis does not depend on it).
+            previous.map_or(0.0, |p| p.c)
+        } else {
+            atan2_deg(k.x, k.y)
+        };
+        let branches = if h <= SINGULAR_AXIS_EPS {
+            // Both tilt signs give the same axis; a = ±0 or ±180 with unchanged C.
+            [Candidate { a: tilt, c: c0 }, Candidate { a: -tilt, c: c0 }]
+        } else {
+            [
+                Candidate { a: tilt, c: c0 },
+                Candidate {
+                    a: -tilt,
+                    c: c0 + 180.0,
+                },
+            ]
+        };
+        let best = self.choose(&branches, previous)?;
+        // `+ 0.0` turns a −0.0 into +0.0.
+        Ok(self.joints_for(pose, best.a + 0.0, best.c + 0.0))
+    }
+
+    fn forward(&self, j: &Joints) -> ToolPose {
+        let r = Self::rotation(j.a, j.c);
+        let tip = r.transpose() * j.xyz() - self.part_origin_in_table;
+        // Third row of R = R^T · Z = (sin a sin c, sin a cos c, cos a): unit by construction.
+        let axis = Unit::new_unchecked(Vector3::new(r[(2, 0)], r[(2, 1)], r[(2, 2)]));
+        ToolPose {
+            tip: Point3::from(tip),
+            axis,
+        }
+    }
+
+    /// Relaxed inverse for the A/C table-table machine.
+    ///
+    /// Let `φ` be the angle between the tool axis and the C axis line (`min(tilt, 180° − tilt)`)
+    /// and `s = min(singular_tolerance_deg, max_axis_error_deg)`. The allowed axis error is
+    /// `e(φ) = s` for `φ ≤ s`, `2s − φ` for `s < φ < 2s` and 0 beyond (exact inverse). With C
+    /// fixed at some value, the best A is `a = atan2(k_x sin c + k_y cos c, k_z)` and the axis
+    /// error is `asin(sin φ · |sin(c − c_exact)|)`; so C may be anywhere in the set
+    /// `|sin(c − c_exact)| ≤ sin e / sin φ` (everything when `φ ≤ s`). The chosen C is the
+    /// point of that set nearest `preferred.c`. The set varies continuously with the pose, so
+    /// linearisation converges through and around the pole instead of chasing the exact C's
+    /// half-turn. The tip stays exact. Falls back to the exact inverse when the relaxed joints
+    /// would leave the limits.
+    fn inverse_relaxed(
+        &self,
+        pose: &ToolPose,
+        preferred: &Joints,
+        max_axis_error_deg: f64,
+    ) -> Result<Joints, KinematicsError> {
+        self.validate()?;
+        let k = Self::checked_axis(pose)?;
+        if !preferred.is_finite() || !max_axis_error_deg.is_finite() {
+            return Err(KinematicsError::NonFinite);
+        }
+        let s = self.singular_tolerance_deg.min(max_axis_error_deg);
+        let h = k.x.hypot(k.y);
+        let tilt = h.atan2(k.z).to_degrees();
+        let phi = tilt.min(180.0 - tilt);
+        if s <= 0.0 || phi >= 2.0 * s {
+            return self.inverse(pose, Some(preferred));
+        }
+        let e = if phi <= s { s } else { 2.0 * s - phi };
+        let ratio = e.to_radians().sin() / phi.to_radians().sin();
+        let c = if h <= SINGULAR_AXIS_EPS || ratio >= 1.0 {
+            preferred.c
+        } else {
+            let delta = ratio.asin().to_degrees(); // in [0, 90)
+            let c_exact = atan2_deg(k.x, k.y);
+            let d = preferred.c - c_exact;
+            let n = (d / 180.0).round();
+            let r = d - 180.0 * n; // in [−90, 90]
+            c_exact + 180.0 * n + r.clamp(-delta, delta)
+        };
+        let (sc, cc) = c.to_radians().sin_cos();
+        let a = (k.x * sc + k.y * cc).atan2(k.z).to_degrees();
+        let (Some(a), Some(c)) = (
+            Self::within(a, self.a_limits_deg),
+            self.c_limits_deg.map_or(Some(c), |l| Self::within(c, l)),
+        ) else {
+            return self.inverse(pose, Some(preferred));
+        };
+        Ok(self.joints_for(pose, a + 0.0, c + 0.0))
+    }
+
+    fn check_limits(&self, j: &Joints) -> Result<(), KinematicsError> {
+        if !j.is_finite() {
+            return Err(KinematicsError::NonFinite);
+        }
+        let (lo, hi) = self.a_limits_deg;
+        if Self::within(j.a, (lo, hi)).is_none() {
+            return Err(KinematicsError::OutOfLimits {
+                axis: RotaryAxis::A,
+                value_deg: j.a,
+                min_deg: lo,
+                max_deg: hi,
+            });
+        }
+        if let Some((lo, hi)) = self.c_limits_deg
+            && Self::within(j.c, (lo, hi)).is_none()
+        {
+            return Err(KinematicsError::OutOfLimits {
+                axis: RotaryAxis::C,
+                value_deg: j.c,
+                min_deg: lo,
+                max_deg: hi,
+            });
+        }
+        Ok(())
+    }
+
+    fn rotary_axes(&self) -> [RotaryAxis; 2] {
+        [RotaryAxis::A, RotaryAxis::C]
+    }
+
+    fn description(&self) -> String {
+        let o = self.part_origin_in_table;
+        let c = match self.c_limits_deg {
+            None => "continuous".to_string(),
+            Some((lo, hi)) => format!("{lo}..{hi} deg"),
+        };
+        format!(
+            "table-table A/C: tool +Z, A about X, C on cradle; part origin in table ({}, {}, {}) mm; A {}..{} deg; C {}",
+            o.x, o.y, o.z, self.a_limits_deg.0, self.a_limits_deg.1, c
+        )
+    }
+}

@@ -1,0 +1,287 @@
+//! Linearisation: make the controller's joint-space interpolation follow the planned motion.
+//!
+//! Between two blocks the controller interpolates X, Y, Z, A, C linearly. In the part frame the
+//! tool tip then follows a curve, not the straight segment the planner meant, and the tool
+//! axis does not follow the great-circle (slerp) interpolation.
+//!
+//! Each feed move (Approach, Cut, Retract) `p0 → p1` is walked from the previous block in
+//! adaptive steps `t → t + dt` along its planned motion (tip `lerp`, axis `slerp`). A step's
+//! joints come from [`MachineKinematics::inverse_relaxed`] relative to the current joints, and
+//! the step is accepted when the forward kinematics of the joint-space interpolation, at
+//! `s ∈ {¼, ½, ¾}` of the step, is within `tolerance_mm` of the planned tip and within
+//! `angle_tolerance_deg` of the planned axis; otherwise `dt` is halved (down to
+//! `2^−max_depth`, error beyond), and after each accepted step doubled. Every accepted interior
+//! step end becomes an inserted block, lying exactly on the planned segment.
+//!
+//! Why a forward walk rather than splitting the move at its midpoint: the end joints must be on
+//! the branch and C wrap the planned motion actually reaches. Picking them by joint distance
+//! alone can choose a branch that is near in joint space but not connected along the motion
+//! (the axis sweeping around the pole at 1°, where the exact C turns by ~165° while the other
+//! branch looks like a 20° move); no midpoint subdivision converges then. Walking forward, the
+//! nearest branch of each short step is one whose joint motion verifiably follows the plan.
+//!
+//! Joints use half the angle tolerance as the relaxed inverse's axis-error budget: near the C
+//! singularity C stays calm (tip exact, axis within half the angle tolerance), leaving the
+//! other half for interpolation. Rapid moves are positioning moves above the safe height: they
+//! get the nearest joints (C continuity kept) and are not subdivided. C is unwrapped
+//! continuously across the whole program.
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use super::kinematics::{Joints, KinematicsError, MachineKinematics};
+use crate::path::{Move, MoveKind, ToolPose, Toolpath};
+
+/// Interpolation parameters at which joint-space and part-frame motion are compared.
+pub const CHECK_PARAMETERS: [f64; 3] = [0.25, 0.5, 0.75];
+
+/// Options of [`linearise_opt`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LineariseOptions {
+    /// Largest allowed tip deviation (mm) between joint-space and planned motion. Default 0.01.
+    pub tolerance_mm: f64,
+    /// Largest allowed tool-axis deviation (degrees). Default 0.1.
+    pub angle_tolerance_deg: f64,
+    /// Largest subdivision depth per move (at most `2^max_depth` blocks per move). Default 16.
+    pub max_depth: u32,
+}
+
+impl Default for LineariseOptions {
+    fn default() -> Self {
+        LineariseOptions {
+            tolerance_mm: 0.01,
+            angle_tolerance_deg: 0.1,
+            max_depth: 16,
+        }
+    }
+}
+
+impl LineariseOptions {
+    /// Sets the tip tolerance (mm).
+    pub fn with_tolerance_mm(mut self, v: f64) -> Self {
+        self.tolerance_mm = v;
+        self
+    }
+    /// Sets the axis tolerance (degrees).
+    pub fn with_angle_tolerance_deg(mut self, v: f64) -> Self {
+        self.angle_tolerance_deg = v;
+        self
+    }
+    /// Sets the subdivision depth bound.
+    pub fn with_max_depth(mut self, v: u32) -> Self {
+        self.max_depth = v;
+        self
+    }
+}
+
+/// Errors of [`linearise`].
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LineariseError {
+    /// Inverse kinematics failed for move `move_index` (or a point inserted before it).
+    #[error("move {move_index}: {source}")]
+    Kinematics {
+        /// Index of the move in the original toolpath.
+        move_index: usize,
+        /// The kinematic failure.
+        #[source]
+        source: KinematicsError,
+    },
+    /// The subdivision bound was hit before the deviation fell below tolerance.
+    #[error("move {move_index}: deviation still above tolerance at subdivision depth {depth}")]
+    DepthLimit {
+        /// Index of the move in the original toolpath.
+        move_index: usize,
+        /// The depth bound.
+        depth: u32,
+    },
+    /// The tool axis turns by 180° within one move: the planned interpolation is undefined.
+    #[error("move {move_index}: tool axis reverses within the move")]
+    AntipodalAxes {
+        /// Index of the move in the original toolpath.
+        move_index: usize,
+    },
+    /// A pose or feed is not finite.
+    #[error("move {move_index}: non-finite pose or feed")]
+    NonFinite {
+        /// Index of the move in the original toolpath.
+        move_index: usize,
+    },
+    /// Tolerances must be finite and positive.
+    #[error("invalid tolerance: {0}")]
+    InvalidOptions(String),
+}
+
+/// Angle (radians) between two unit vectors, accurate for small and large angles.
+pub fn angle_between(u: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
+    u.cross(v).norm().atan2(u.dot(v))
+}
+
+/// Angle (radians) above which two axes count as antipodal for [`slerp`].
+const ANTIPODAL_SLACK: f64 = 1e-9;
+
+/// Spherical linear interpolation of unit vectors; `None` when they are (nearly) antipodal.
+pub fn slerp(u: &Vector3<f64>, v: &Vector3<f64>, t: f64) -> Option<Vector3<f64>> {
+    let theta = angle_between(u, v);
+    if std::f64::consts::PI - theta < ANTIPODAL_SLACK {
+        return None;
+    }
+    let w = if theta < 1e-12 {
+        u * (1.0 - t) + v * t
+    } else {
+        let s = theta.sin();
+        u * (((1.0 - t) * theta).sin() / s) + v * ((t * theta).sin() / s)
+    };
+    Some(w.normalize())
+}
+
+/// The planned (part-frame) pose at parameter `t` of the segment `p0 → p1`: tip linear, axis
+/// slerp.
+pub fn interpolate_pose(p0: &ToolPose, p1: &ToolPose, t: f64) -> Option<ToolPose> {
+    let axis = slerp(&p0.axis, &p1.axis, t)?;
+    Some(ToolPose {
+        tip: p0.tip + (p1.tip - p0.tip) * t,
+        axis: nalgebra::Unit::new_unchecked(axis),
+    })
+}
+
+/// Largest deviation (tip mm, axis degrees) between joint-space interpolation `j0 → j1` and the
+/// planned interpolation `p0 → p1`, over [`CHECK_PARAMETERS`].
+pub fn segment_deviation<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    p0: &ToolPose,
+    j0: &Joints,
+    p1: &ToolPose,
+    j1: &Joints,
+) -> Option<(f64, f64)> {
+    let mut tip_dev: f64 = 0.0;
+    let mut ang_dev: f64 = 0.0;
+    for &t in &CHECK_PARAMETERS {
+        let planned = interpolate_pose(p0, p1, t)?;
+        let actual = kin.forward(&j0.lerp(j1, t));
+        tip_dev = tip_dev.max((actual.tip - planned.tip).norm());
+        ang_dev = ang_dev.max(angle_between(&actual.axis, &planned.axis).to_degrees());
+    }
+    Some((tip_dev, ang_dev))
+}
+
+/// [`linearise_opt`] with the given tolerances and the default depth bound.
+pub fn linearise<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    toolpath: &Toolpath,
+    tolerance_mm: f64,
+    angle_tolerance_deg: f64,
+) -> Result<Vec<(Move, Joints)>, LineariseError> {
+    let opts = LineariseOptions::default()
+        .with_tolerance_mm(tolerance_mm)
+        .with_angle_tolerance_deg(angle_tolerance_deg);
+    linearise_opt(kin, toolpath, &opts)
+}
+
+/// Converts a toolpath into machine blocks: every original move with its joints, plus the
+/// part-frame points inserted so that joint-space interpolation stays within tolerance (see
+/// the module docs). Inserted moves carry the kind and feed of the move they subdivide.
+pub fn linearise_opt<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    toolpath: &Toolpath,
+    opts: &LineariseOptions,
+) -> Result<Vec<(Move, Joints)>, LineariseError> {
+    if !(opts.tolerance_mm.is_finite() && opts.tolerance_mm > 0.0) {
+        return Err(LineariseError::InvalidOptions(
+            "tolerance_mm must be finite and > 0".into(),
+        ));
+    }
+    if !(opts.angle_tolerance_deg.is_finite() && opts.angle_tolerance_deg > 0.0) {
+        return Err(LineariseError::InvalidOptions(
+            "angle_tolerance_deg must be finite and > 0".into(),
+        ));
+    }
+    let budget = 0.5 * opts.angle_tolerance_deg;
+    let mut out: Vec<(Move, Joints)> = Vec::with_capacity(toolpath.moves.len());
+    for (i, mv) in toolpath.moves.iter().enumerate() {
+        let finite = mv.feed.is_finite()
+            && mv
+                .pose
+                .tip
+                .iter()
+                .chain(mv.pose.axis.iter())
+                .all(|v| v.is_finite());
+        if !finite {
+            return Err(LineariseError::NonFinite { move_index: i });
+        }
+        let kin_err = |source| LineariseError::Kinematics {
+            move_index: i,
+            source,
+        };
+        let Some(&(prev_move, prev_j)) = out.last() else {
+            let j = kin.inverse(&mv.pose, None).map_err(kin_err)?;
+            out.push((*mv, j));
+            continue;
+        };
+        if mv.kind == MoveKind::Rapid {
+            // Positioning: the nearest joints, whatever the joint path.
+            let j = kin
+                .inverse_relaxed(&mv.pose, &prev_j, budget)
+                .map_err(kin_err)?;
+            out.push((*mv, j));
+        } else {
+            let j = march(kin, &prev_move.pose, &prev_j, mv, i, opts, budget, &mut out)?;
+            out.push((*mv, j));
+        }
+    }
+    Ok(out)
+}
+
+/// Walks the feed move `p0 → mv.pose` from joints `j0` in adaptive steps (see the module
+/// docs), pushing the inserted blocks into `out`; returns the joints at `mv.pose`.
+#[allow(clippy::too_many_arguments)]
+fn march<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    p0: &ToolPose,
+    j0: &Joints,
+    mv: &Move,
+    move_index: usize,
+    opts: &LineariseOptions,
+    budget: f64,
+    out: &mut Vec<(Move, Joints)>,
+) -> Result<Joints, LineariseError> {
+    let p1 = &mv.pose;
+    let antipodal = LineariseError::AntipodalAxes { move_index };
+    let min_dt = 0.5f64.powi(opts.max_depth.min(1000) as i32);
+    let (mut t, mut dt) = (0.0f64, 1.0f64);
+    let (mut cur_p, mut cur_j) = (*p0, *j0);
+    loop {
+        // Snap onto the move's end when the remaining piece is negligible.
+        let t_next = if t + dt >= 1.0 - 1e-12 { 1.0 } else { t + dt };
+        let p_next = if t_next == 1.0 {
+            *p1
+        } else {
+            interpolate_pose(p0, p1, t_next).ok_or(antipodal.clone())?
+        };
+        let j_next = kin
+            .inverse_relaxed(&p_next, &cur_j, budget)
+            .map_err(|source| LineariseError::Kinematics { move_index, source })?;
+        let (tip_dev, ang_dev) =
+            segment_deviation(kin, &cur_p, &cur_j, &p_next, &j_next).ok_or(antipodal.clone())?;
+        if tip_dev <= opts.tolerance_mm && ang_dev <= opts.angle_tolerance_deg {
+            if t_next == 1.0 {
+                return Ok(j_next);
+            }
+            out.push((
+                Move {
+                    pose: p_next,
+                    ..*mv
+                },
+                j_next,
+            ));
+            (t, cur_p, cur_j) = (t_next, p_next, j_next);
+            dt *= 2.0;
+        } else if dt <= min_dt {
+            return Err(LineariseError::DepthLimit {
+                move_index,
+                depth: opts.max_depth,
+            });
+        } else {
+            dt *= 0.5;
+        }
+    }
+}

@@ -1,0 +1,97 @@
+//! Post-processing (DESIGN §3.8): machine kinematics, linearisation and output.
+//!
+//! ```text
+//! Toolpath (part-frame poses) ──► linearise (inverse kinematics, C continuity, subdivision)
+//!      │                               │
+//!      │                               ▼  Vec<(Move, Joints)>
+//!      │                        emit ──► ProgramSink ──► GcodeWriter (G-code text)
+//!      └──► write_cl_csv (CL data, original moves)       estimate_time (seconds per kind)
+//! ```
+//!
+//! * [`kinematics`]: the [`MachineKinematics`] trait and the table-table A/C machine
+//!   [`TableTableAC`]; the convention `m = R_x(a) · R_z(c) · (p + o)`,
+//!   `k = (sin a · sin c, sin a · cos c, cos a)` is documented there.
+//! * [`linearise`](mod@linearise): inserts part-frame points until the controller's joint-space
+//!   interpolation stays within the tip and axis tolerances.
+//! * [`gcode`]: the [`GcodeWriter`] sink; [`cl`]: CL CSV; [`estimate`]: time estimate.
+//!
+//! Feeds are posted in G94 (mm/min along machine X, Y, Z). Inverse-time feed (G93), which keeps
+//! the part-frame feed exact when rotaries move, is not implemented yet.
+#![warn(missing_docs)]
+
+pub mod cl;
+pub mod estimate;
+mod format;
+pub mod gcode;
+pub mod kinematics;
+pub mod linearise;
+
+#[cfg(test)]
+mod tests;
+
+use serde::{Deserialize, Serialize};
+
+pub use cl::{CL_CSV_HEADER, write_cl_csv};
+pub use estimate::{TimeEstimate, estimate_time};
+pub use gcode::{GcodeOptions, GcodeWriter};
+pub use kinematics::{Joints, KinematicsError, MachineKinematics, RotaryAxis, TableTableAC};
+pub use linearise::{LineariseError, LineariseOptions, linearise, linearise_opt};
+
+use crate::path::{Move, Toolpath};
+
+/// What goes at the top of a program.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ProgramHeader {
+    /// Program name (comment).
+    pub program_name: String,
+    /// Part name (comment).
+    pub part_name: String,
+    /// Tool description, one comment line each.
+    pub tool_description: Vec<String>,
+    /// Tool number: `T` word and `H` length-offset register.
+    pub tool_number: u32,
+    /// Spindle speed (rev/min), clockwise.
+    pub spindle_rpm: u32,
+    /// Flood coolant on (M8) during the program.
+    pub coolant: bool,
+    /// Free comments, one line each.
+    pub comments: Vec<String>,
+}
+
+/// Receives a posted program: one `begin`, one `motion` per block, one `end`. Implemented by
+/// output formats ([`GcodeWriter`]; previews and other dialects can follow).
+pub trait ProgramSink {
+    /// Starts the program.
+    fn begin(&mut self, header: &ProgramHeader);
+    /// One block: the move (part-frame pose, kind, feed) and the joints that realise it.
+    fn motion(&mut self, m: &Move, j: &Joints);
+    /// Ends the program.
+    fn end(&mut self);
+}
+
+/// Feeds a linearised program through a sink.
+pub fn emit<S: ProgramSink + ?Sized>(
+    program: &[(Move, Joints)],
+    header: &ProgramHeader,
+    sink: &mut S,
+) {
+    sink.begin(header);
+    for (m, j) in program {
+        sink.motion(m, j);
+    }
+    sink.end();
+}
+
+/// Convenience: linearise `toolpath` on `kin` and write G-code.
+pub fn post_gcode<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    toolpath: &Toolpath,
+    header: &ProgramHeader,
+    lin: &LineariseOptions,
+    gcode: &GcodeOptions,
+) -> Result<String, LineariseError> {
+    let program = linearise_opt(kin, toolpath, lin)?;
+    let mut w = GcodeWriter::new(kin, gcode.clone());
+    emit(&program, header, &mut w);
+    Ok(w.into_string())
+}

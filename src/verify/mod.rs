@@ -1,0 +1,143 @@
+//! Verification of a finished toolpath against the part, independent of how it was planned.
+//!
+//! Every cut and approach pose is checked again: the ball centre's exact f64 signed distance to
+//! the part (gouge), and the distance of flutes, shank and holder to the part (parry3d
+//! `closest_points` with a search radius; full `distance` is milliseconds per query on big
+//! meshes, CRATES.md §2). Straight moves between consecutive cut poses are checked at their
+//! midpoints too, which is where a chord cuts deepest into a convex surface.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::collide::{BodyClearance, PartCollider, PreparedTool};
+use crate::geom::Point3;
+use crate::path::{MoveKind, ToolPose, Toolpath};
+
+/// Clearances over all checked poses, mm. Body clearances are capped at `search`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Verification {
+    pub checked_poses: usize,
+    pub checked_midpoints: usize,
+    /// min over poses of (ball centre distance − ball radius): 0 means touching, < 0 a gouge.
+    pub min_cutter_clearance: f64,
+    /// The same at the midpoints of cut moves (the chord error, negative = inside by that much).
+    pub min_chord_clearance: f64,
+    /// Flutes (the cylinder above the ball): ≈0 where the ball touches with its side, < 0 if
+    /// they cut into the part.
+    pub min_flutes_clearance: f64,
+    pub min_shank_clearance: f64,
+    pub min_holder_clearance: f64,
+    /// The body clearances above were searched up to this distance.
+    pub search_distance: f64,
+}
+
+impl Verification {
+    /// Whether the path respects the tolerances and margins it was planned with.
+    pub fn passes(
+        &self,
+        tolerance: f64,
+        shank_margin: f64,
+        holder_margin: f64,
+    ) -> Result<(), String> {
+        let mut problems = Vec::new();
+        if self.min_cutter_clearance < -1e-6 {
+            problems.push(format!(
+                "ball gouges the part by {:.6} mm",
+                -self.min_cutter_clearance
+            ));
+        }
+        if self.min_chord_clearance < -tolerance - 1e-6 {
+            problems.push(format!(
+                "a straight move cuts {:.6} mm into the part (tolerance {tolerance})",
+                -self.min_chord_clearance
+            ));
+        }
+        if self.min_flutes_clearance < 0.0 {
+            problems.push("the flutes cut into the part above the ball".into());
+        }
+        if self.min_shank_clearance < shank_margin {
+            problems.push(format!(
+                "shank clearance {:.4} mm is below its margin {shank_margin}",
+                self.min_shank_clearance
+            ));
+        }
+        if self.min_holder_clearance < holder_margin {
+            problems.push(format!(
+                "holder clearance {:.4} mm is below its margin {holder_margin}",
+                self.min_holder_clearance
+            ));
+        }
+        if problems.is_empty() {
+            Ok(())
+        } else {
+            Err(problems.join("; "))
+        }
+    }
+}
+
+/// Checks every cut and approach pose of `path`. Body clearances are searched up to
+/// `search` mm.
+///
+/// Exact clearance queries cost far more than "is it farther than d" queries, and only the
+/// minimum is reported, so each chunk of poses keeps its running minimum and asks each pose
+/// only whether it comes closer than that (branch and bound). Chunks are fixed, and the minimum
+/// of exact per-pose values does not depend on the order they were found in, so the result is
+/// the same for any number of threads.
+pub fn verify(
+    path: &Toolpath,
+    part: &PartCollider,
+    tool: &PreparedTool,
+    search: f64,
+) -> Verification {
+    let r = tool.ball_radius;
+    let centre = |pose: &ToolPose| pose.tip + pose.axis.into_inner() * r;
+    let ball_clearance = |c: &Point3| {
+        part.surface()
+            .signed_distance(c)
+            .map_or(f64::NEG_INFINITY, |(d, _)| d - r)
+    };
+    let cutting: Vec<usize> = (0..path.moves.len())
+        .filter(|&i| matches!(path.moves[i].kind, MoveKind::Cut | MoveKind::Approach))
+        .collect();
+    let per_chunk: Vec<(f64, BodyClearance)> = cutting
+        .par_chunks(256)
+        .map(|chunk| {
+            let mut ball = f64::INFINITY;
+            let mut bodies = BodyClearance {
+                flutes: search,
+                shank: search,
+                holder: search,
+            };
+            for &i in chunk {
+                let pose = &path.moves[i].pose;
+                ball = ball.min(ball_clearance(&centre(pose)));
+                bodies = part.clearances(tool, pose, &bodies);
+            }
+            (ball, bodies)
+        })
+        .collect();
+    let midpoints: Vec<f64> = (1..path.moves.len())
+        .filter(|&i| path.moves[i].kind == MoveKind::Cut)
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|&i| {
+            ball_clearance(&nalgebra::center(
+                &centre(&path.moves[i - 1].pose),
+                &centre(&path.moves[i].pose),
+            ))
+        })
+        .collect();
+    let min = |f: &dyn Fn(&(f64, BodyClearance)) -> f64| {
+        per_chunk.iter().map(f).fold(f64::INFINITY, f64::min)
+    };
+    Verification {
+        checked_poses: cutting.len(),
+        checked_midpoints: midpoints.len(),
+        min_cutter_clearance: min(&|c| c.0),
+        min_chord_clearance: midpoints.iter().copied().fold(f64::INFINITY, f64::min),
+        min_flutes_clearance: min(&|c| c.1.flutes),
+        min_shank_clearance: min(&|c| c.1.shank),
+        min_holder_clearance: min(&|c| c.1.holder),
+        search_distance: search,
+    }
+}

@@ -1,0 +1,271 @@
+//! Helpers shared by the end-to-end tests: where the shared test data lives, and an
+//! independent distance oracle (uniform grid + brute-force point–triangle distance, ray
+//! parity for inside/outside) that shares no code with the library's own queries.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use nalgebra::{Point3, Vector3};
+
+/// `../shared/testdata` beside the clone (CI has it), or `WAVEMILL_TESTDATA`.
+pub fn testdata() -> Option<PathBuf> {
+    let dir = std::env::var_os("WAVEMILL_TESTDATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/testdata"));
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: shared test data not found at {} (set WAVEMILL_TESTDATA or clone beside ../shared)",
+            dir.display()
+        );
+        None
+    }
+}
+
+pub fn repo_file(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Closest point on triangle by projecting onto the plane and, if outside, onto the three
+/// edges (a different formulation from the library's Voronoi-region walk).
+pub fn point_triangle_distance(p: &Point3<f64>, t: &[Point3<f64>; 3]) -> f64 {
+    let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
+    let nn = n.norm_squared();
+    if nn > 0.0 {
+        let q = p - n * ((p - t[0]).dot(&n) / nn);
+        let inside = (0..3).all(|k| (t[(k + 1) % 3] - t[k]).cross(&(q - t[k])).dot(&n) >= 0.0);
+        if inside {
+            return (p - q).norm();
+        }
+    }
+    (0..3)
+        .map(|k| {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let ab = b - a;
+            let s = if ab.norm_squared() > 0.0 {
+                ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (p - (a + ab * s)).norm()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Triangles bucketed in a uniform grid for "everything within d of p" queries.
+pub struct Oracle {
+    pub triangles: Vec<[Point3<f64>; 3]>,
+    min: Point3<f64>,
+    cell: f64,
+    dims: [usize; 3],
+    buckets: Vec<Vec<u32>>,
+    /// Per ray axis, triangles by the 2D cell of their projected box.
+    columns: [std::collections::HashMap<(i64, i64), Vec<u32>>; 3],
+}
+
+impl Oracle {
+    pub fn new(positions: &[Point3<f64>], indices: &[[u32; 3]], cell: f64) -> Self {
+        let triangles: Vec<[Point3<f64>; 3]> = indices
+            .iter()
+            .map(|t| t.map(|i| positions[i as usize]))
+            .collect();
+        let mut min = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut max = Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for p in positions {
+            min = min.inf(p);
+            max = max.sup(p);
+        }
+        let dims = [0, 1, 2].map(|i| (((max[i] - min[i]) / cell).floor() as usize) + 1);
+        let mut buckets = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
+        for (ti, t) in triangles.iter().enumerate() {
+            let lo = [0, 1, 2].map(|i| {
+                (((t[0][i].min(t[1][i]).min(t[2][i]) - min[i]) / cell).floor() as usize)
+                    .min(dims[i] - 1)
+            });
+            let hi = [0, 1, 2].map(|i| {
+                (((t[0][i].max(t[1][i]).max(t[2][i]) - min[i]) / cell).floor() as usize)
+                    .min(dims[i] - 1)
+            });
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        buckets[(x * dims[1] + y) * dims[2] + z].push(ti as u32);
+                    }
+                }
+            }
+        }
+        let mut columns: [std::collections::HashMap<(i64, i64), Vec<u32>>; 3] = Default::default();
+        for (axis, map) in columns.iter_mut().enumerate() {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            for (ti, t) in triangles.iter().enumerate() {
+                let cell_of = |c: usize, x: f64| ((x - min[c]) / cell).floor() as i64;
+                let (u0, u1) = (
+                    cell_of(u, t[0][u].min(t[1][u]).min(t[2][u])),
+                    cell_of(u, t[0][u].max(t[1][u]).max(t[2][u])),
+                );
+                let (v0, v1) = (
+                    cell_of(v, t[0][v].min(t[1][v]).min(t[2][v])),
+                    cell_of(v, t[0][v].max(t[1][v]).max(t[2][v])),
+                );
+                for a in u0..=u1 {
+                    for b in v0..=v1 {
+                        map.entry((a, b)).or_default().push(ti as u32);
+                    }
+                }
+            }
+        }
+        Self {
+            triangles,
+            min,
+            cell,
+            dims,
+            buckets,
+            columns,
+        }
+    }
+
+    /// Distance from `p` to the surface if it is below `limit`, else `limit`.
+    pub fn distance_below(&self, p: &Point3<f64>, limit: f64) -> f64 {
+        let r = (limit / self.cell).ceil() as i64;
+        let c = [0, 1, 2].map(|i| ((p[i] - self.min[i]) / self.cell).floor() as i64);
+        let mut best = limit;
+        let mut seen = std::collections::HashSet::new();
+        for x in c[0] - r..=c[0] + r {
+            for y in c[1] - r..=c[1] + r {
+                for z in c[2] - r..=c[2] + r {
+                    if x < 0
+                        || y < 0
+                        || z < 0
+                        || x >= self.dims[0] as i64
+                        || y >= self.dims[1] as i64
+                        || z >= self.dims[2] as i64
+                    {
+                        continue;
+                    }
+                    for &t in &self.buckets
+                        [((x as usize) * self.dims[1] + y as usize) * self.dims[2] + z as usize]
+                    {
+                        if seen.insert(t) {
+                            best =
+                                best.min(point_triangle_distance(p, &self.triangles[t as usize]));
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// Inside test by ray parity along +X, +Y and +Z, majority vote (a ray through an edge
+    /// can miscount; three rarely all do). Each axis has a 2D grid of the triangles' projected
+    /// boxes, so a query only looks at the triangles its ray can meet.
+    pub fn inside(&self, p: &Point3<f64>) -> bool {
+        let votes = (0..3)
+            .filter(|&axis| self.crossings_along(p, axis) % 2 == 1)
+            .count();
+        votes >= 2
+    }
+
+    fn crossings_along(&self, p: &Point3<f64>, axis: usize) -> usize {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        // Shift the ray sideways by an irrational hair (far below any distance the tests care
+        // about) so that it does not pass exactly through edges of meshes built on round
+        // coordinates, where both neighbouring triangles would reject it.
+        let mut p = *p;
+        p[u] += 1.234_567e-7 * std::f64::consts::SQRT_2;
+        p[v] += 0.987_654e-7 * 3f64.sqrt();
+        let p = &p;
+        let columns = self.columns[axis].get(&(
+            ((p[u] - self.min[u]) / self.cell).floor() as i64,
+            ((p[v] - self.min[v]) / self.cell).floor() as i64,
+        ));
+        let Some(columns) = columns else { return 0 };
+        columns
+            .iter()
+            .filter(|&&t| {
+                let t = &self.triangles[t as usize];
+                // 2D point-in-triangle in the (u, v) plane, half-open on edges.
+                let mut sign = 0i32;
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    let cross = (b[u] - a[u]) * (p[v] - a[v]) - (b[v] - a[v]) * (p[u] - a[u]);
+                    let s = if cross > 0.0 {
+                        1
+                    } else if cross < 0.0 {
+                        -1
+                    } else {
+                        0
+                    };
+                    if s == 0 {
+                        return false;
+                    }
+                    if sign == 0 {
+                        sign = s;
+                    } else if s != sign {
+                        return false;
+                    }
+                }
+                // Height of the triangle's plane above p along the axis.
+                let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
+                if n[axis].abs() < 1e-300 {
+                    return false;
+                }
+                let along =
+                    t[0][axis] - ((p[u] - t[0][u]) * n[u] + (p[v] - t[0][v]) * n[v]) / n[axis];
+                along > p[axis]
+            })
+            .count()
+    }
+}
+
+/// Points on every triangle at most `spacing` apart (vertices, edge points, interior grid).
+pub fn surface_samples(triangles: &[[Point3<f64>; 3]], spacing: f64) -> Vec<Point3<f64>> {
+    let mut out = Vec::new();
+    for t in triangles {
+        let longest = (0..3)
+            .map(|k| (t[(k + 1) % 3] - t[k]).norm())
+            .fold(0.0, f64::max);
+        let n = ((longest / spacing).ceil() as usize).max(1);
+        for i in 0..=n {
+            for j in 0..=(n - i) {
+                let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                out.push(t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v);
+            }
+        }
+    }
+    out
+}
+
+/// A CL row of `cl.csv`.
+#[derive(Clone, Debug)]
+pub struct ClRow {
+    pub tip: Point3<f64>,
+    pub axis: Vector3<f64>,
+    pub kind: String,
+    pub feed: f64,
+    pub tool: u32,
+}
+
+pub fn parse_cl(text: &str) -> Vec<ClRow> {
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("x,y,z,i,j,k,kind,feed,tool"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            assert_eq!(f.len(), 9, "bad row {l}");
+            let n = |i: usize| {
+                f[i].parse::<f64>()
+                    .unwrap_or_else(|_| panic!("bad number in {l}"))
+            };
+            ClRow {
+                tip: Point3::new(n(0), n(1), n(2)),
+                axis: Vector3::new(n(3), n(4), n(5)),
+                kind: f[6].to_string(),
+                feed: n(7),
+                tool: f[8].parse().unwrap_or_else(|_| panic!("bad tool in {l}")),
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,203 @@
+//! End to end on the bundled sample impeller: plan it, then check the outputs with code that
+//! shares nothing with the planner's own queries.
+
+mod common;
+
+use common::{Oracle, parse_cl, repo_file, surface_samples};
+use nalgebra::Point3;
+use wavemill::job::{self, Job, Quiet};
+
+/// A coarse job (few passes) so the test stays quick in a debug build; the geometry checks do
+/// not depend on the density.
+fn coarse_job() -> Job {
+    let mut job = Job::load(&repo_file("data/impeller.toml")).expect("data/impeller.toml");
+    job.strategy.scallop_height = 0.4;
+    job.strategy.max_step = 2.0;
+    job
+}
+
+fn plan_with_threads(threads: usize) -> job::PlanOutput {
+    let path = repo_file("data/impeller.glb");
+    let job = coarse_job();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let raw = job::load_part(&path, "mm").unwrap();
+        job::plan(&raw, "data/impeller.glb", "mm", &job, &Quiet).unwrap()
+    })
+}
+
+#[test]
+fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
+    let out = plan_with_threads(2);
+    let job = coarse_job();
+    let r = job.tool.diameter / 2.0;
+    let report = &out.report;
+    assert!(
+        report.poses.cut > 1000,
+        "too few cut poses: {:?}",
+        report.poses
+    );
+    assert!(
+        report.unreachable.count < report.strategy.drive_points,
+        "everything unreachable"
+    );
+
+    // --- CL data, checked independently -------------------------------------------------
+    let rows = parse_cl(&out.cl_csv);
+    assert_eq!(rows.len(), out.toolpath.moves.len());
+    let part = &out.part;
+    let oracle = Oracle::new(&part.positions, &part.triangles, 4.0);
+    let mut worst = f64::INFINITY;
+    let mut farthest: f64 = 0.0;
+    let mut cutting = 0;
+    for row in rows
+        .iter()
+        .filter(|r| r.kind == "cut" || r.kind == "approach")
+    {
+        cutting += 1;
+        assert!(
+            (row.axis.norm() - 1.0).abs() < 1e-6,
+            "axis not unit: {row:?}"
+        );
+        let centre = row.tip + row.axis * r;
+        let d = oracle.distance_below(&centre, r + 1.0);
+        assert!(
+            !oracle.inside(&centre),
+            "ball centre inside the part at {row:?}"
+        );
+        worst = worst.min(d);
+        farthest = farthest.max(d);
+    }
+    assert!(cutting > 1000);
+    assert!(
+        worst >= r - 1e-6,
+        "gouge: ball centre {worst} mm from the part, radius {r}"
+    );
+    // Every cut pose touches the part: the ball is not cutting air.
+    assert!(
+        farthest <= r + 1e-3,
+        "a cut pose floats {} mm above the part",
+        farthest - r
+    );
+
+    // --- Shank and holder: every sampled point of the part stays outside each body grown by
+    // its margin (minus a sampling allowance), at every cut pose. ---------------------------
+    let tool = job.tool.assembly();
+    let samples = surface_samples(&oracle.triangles, 1.0);
+    let sample_grid = PointGrid::new(&samples, 10.0);
+    let bodies = tool.bodies();
+    let allowance = 0.6; // half the sample spacing, rounded up: a gap between samples
+    for row in rows.iter().filter(|r| r.kind == "cut").step_by(3) {
+        for body in bodies
+            .iter()
+            .filter(|b| b.role != wavemill::tool::BodyRole::Flutes)
+        {
+            let margin = match body.role {
+                wavemill::tool::BodyRole::Holder => job.safety.holder_margin,
+                _ => job.safety.shank_margin,
+            };
+            let centre = row.tip + row.axis * (0.5 * (body.from + body.to));
+            let reach = 0.5 * (body.to - body.from) + body.radius_from.max(body.radius_to) + margin;
+            for p in sample_grid.near(&centre, reach) {
+                let rel = p - row.tip;
+                let h = rel.dot(&row.axis);
+                if h < body.from || h > body.to {
+                    continue;
+                }
+                let t = (h - body.from) / (body.to - body.from);
+                let radius = body.radius_from + t * (body.radius_to - body.radius_from);
+                let rho = (rel - row.axis * h).norm();
+                assert!(
+                    rho >= radius + margin - allowance,
+                    "{:?} within {} mm of the part at {row:?}",
+                    body.role,
+                    rho - radius
+                );
+            }
+        }
+    }
+
+    // --- Report consistency --------------------------------------------------------------
+    assert!(report.clearance.min_cutter_clearance >= -1e-6);
+    assert!(report.clearance.min_holder_clearance >= job.safety.holder_margin);
+    assert!(report.clearance.min_shank_clearance >= job.safety.shank_margin);
+    assert_eq!(report.poses.total, rows.len());
+    let cut_length: f64 = out
+        .toolpath
+        .moves
+        .windows(2)
+        .filter(|w| w[1].kind == wavemill::path::MoveKind::Cut)
+        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+        .sum();
+    assert!((report.cutting_length_mm - cut_length).abs() < 1e-6 * cut_length.max(1.0));
+
+    // --- Determinism across thread counts ------------------------------------------------
+    let single = plan_with_threads(1);
+    assert_eq!(
+        single.gcode, out.gcode,
+        "G-code differs between 1 and 2 threads"
+    );
+    assert_eq!(single.cl_csv, out.cl_csv);
+    assert_eq!(single.preview_glb, out.preview_glb);
+    assert_eq!(single.report.to_json(false), out.report.to_json(false));
+}
+
+/// Points bucketed in a uniform grid.
+struct PointGrid {
+    cell: f64,
+    map: std::collections::HashMap<(i64, i64, i64), Vec<Point3<f64>>>,
+}
+
+impl PointGrid {
+    fn new(points: &[Point3<f64>], cell: f64) -> Self {
+        let mut map: std::collections::HashMap<(i64, i64, i64), Vec<Point3<f64>>> =
+            Default::default();
+        for p in points {
+            map.entry(Self::key(p, cell)).or_default().push(*p);
+        }
+        Self { cell, map }
+    }
+    fn key(p: &Point3<f64>, cell: f64) -> (i64, i64, i64) {
+        (
+            (p.x / cell).floor() as i64,
+            (p.y / cell).floor() as i64,
+            (p.z / cell).floor() as i64,
+        )
+    }
+    fn near(&self, c: &Point3<f64>, reach: f64) -> impl Iterator<Item = &Point3<f64>> {
+        let r = (reach / self.cell).ceil() as i64;
+        let k = Self::key(c, self.cell);
+        let keys: Vec<(i64, i64, i64)> = (k.0 - r..=k.0 + r)
+            .flat_map(|x| {
+                (k.1 - r..=k.1 + r).flat_map(move |y| (k.2 - r..=k.2 + r).map(move |z| (x, y, z)))
+            })
+            .collect();
+        keys.into_iter()
+            .filter_map(|key| self.map.get(&key))
+            .flatten()
+            .filter(move |p| (*p - c).norm() <= reach)
+    }
+}
+
+/// The oracle's inside test itself, on points whose side is known from the part's design:
+/// the bore (radius 8) is air, the hub just above its base is solid, and above the blades is air.
+#[test]
+fn oracle_knows_inside_from_outside_on_the_sample() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").unwrap();
+    let oracle = Oracle::new(&raw.mesh.positions, &raw.mesh.triangles, 4.0);
+    for z in [0.5, 3.0, 6.0, 10.0] {
+        assert!(!oracle.inside(&Point3::new(0.0, 0.0, z)), "bore at z = {z}");
+        assert!(
+            !oracle.inside(&Point3::new(-4.0, 5.0, z)),
+            "bore at z = {z}"
+        );
+        assert!(oracle.inside(&Point3::new(20.0, 3.0, 1.0)), "hub");
+    }
+    assert!(
+        !oracle.inside(&Point3::new(20.0, 3.0, 40.0)),
+        "above the part"
+    );
+}
