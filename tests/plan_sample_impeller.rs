@@ -134,6 +134,26 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         .sum();
     assert!((report.cutting_length_mm - cut_length).abs() < 1e-6 * cut_length.max(1.0));
 
+    // --- The preview is a valid glTF: reading it back gives the part's triangles, and the
+    // toolpath lines are there (skipped by the mesh reader with a warning). ---------------
+    let preview = wavemill::mesh::io::read_mesh_bytes(
+        &out.preview_glb,
+        wavemill::mesh::io::Format::Glb,
+        "paths.glb",
+        None,
+        wavemill::mesh::io::Units::Millimetres,
+    )
+    .unwrap();
+    assert_eq!(preview.mesh.triangles.len(), part.triangles.len());
+    assert!(
+        preview
+            .warnings
+            .iter()
+            .any(|w| w.to_lowercase().contains("line")),
+        "{:?}",
+        preview.warnings
+    );
+
     // --- Determinism across thread counts ------------------------------------------------
     let single = plan_with_threads(1);
     assert_eq!(

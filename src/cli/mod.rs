@@ -9,8 +9,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::error::{Error, Result};
-use crate::job::{self, Job};
-use crate::mesh::io::{GlbBuilder, write_obj};
+use crate::job::{self, Job, SamplePart, sample_files};
 use crate::mesh::{PrepareOptions, prepare};
 use crate::sample;
 use crate::tool::{Cutter, parse_cutter};
@@ -191,7 +190,7 @@ fn info(args: &InfoArgs) -> Result<()> {
 }
 
 fn sample_part(args: &SampleArgs) -> Result<()> {
-    let (mesh, name) = match args.kind {
+    let part = match args.kind {
         SampleKind::Impeller => {
             let mut p = sample::ImpellerParams::default();
             if let Some(b) = args.blades {
@@ -200,36 +199,34 @@ fn sample_part(args: &SampleArgs) -> Result<()> {
             if let Some(r) = args.resolution {
                 p.resolution = r;
             }
-            (sample::impeller(&p)?, "impeller")
+            SamplePart::Impeller(p)
         }
         SampleKind::Blade => {
             let mut p = sample::BladeParams::default();
             if let Some(r) = args.resolution {
                 p.resolution = r;
             }
-            (sample::blade(&p)?, "blade")
+            SamplePart::Blade(p)
         }
     };
+    let (mesh, files) = sample_files(&part)?;
     std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
         path: args.out.display().to_string(),
         source,
     })?;
-    let mut builder = GlbBuilder::new();
-    builder
-        .add_triangles(name, &mesh, [0.72, 0.74, 0.78, 1.0], None)
-        .map_err(|e| Error::Job(format!("{name}: {e}")))?;
-    let glb = builder.build();
-    let obj = write_obj(
-        &mesh,
-        &format!("wavemill sample {name} (generated, deterministic)"),
-    );
-    job::write_atomically(&args.out.join(format!("{name}.glb")), &glb)?;
-    job::write_atomically(&args.out.join(format!("{name}.obj")), &obj)?;
+    for (name, bytes) in &files {
+        job::write_atomically(&args.out.join(name), bytes)?;
+    }
     println!(
-        "{name}: {} triangles, {} vertices -> {}",
+        "{}: {} triangles, {} vertices -> {}",
+        part.name(),
         mesh.triangles.len(),
         mesh.positions.len(),
-        args.out.join(format!("{name}.{{glb,obj}}")).display()
+        files
+            .iter()
+            .map(|(n, _)| args.out.join(n).display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     Ok(())
 }

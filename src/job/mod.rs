@@ -8,6 +8,7 @@ mod output;
 mod pipeline;
 mod preview;
 mod report;
+mod samples;
 
 pub use config::{
     FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
@@ -15,3 +16,4 @@ pub use config::{
 pub use output::{write_atomically, write_outputs};
 pub use pipeline::{Observer, PlanOutput, Quiet, load_part, plan};
 pub use report::{PlanReport, PoseCounts, StageTimings};
+pub use samples::{SamplePart, sample_files};

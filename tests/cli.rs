@@ -1,0 +1,170 @@
+//! The command-line tool as a script would use it: help, exit codes, errors that name the
+//! file, the four outputs, regenerated sample data, byte-identical runs.
+
+mod common;
+
+use std::process::{Command, Output};
+
+use common::repo_file;
+use wavemill::job::{SamplePart, sample_files};
+
+fn wavemill(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_wavemill"))
+        .args(args)
+        .output()
+        .expect("run wavemill")
+}
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("wavemill-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for sub in [
+        &["--help"][..],
+        &["info", "--help"],
+        &["sample", "--help"],
+        &["plan", "--help"],
+    ] {
+        let out = wavemill(sub);
+        assert_eq!(out.status.code(), Some(0), "{sub:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stdout).contains("Usage"),
+            "{sub:?}"
+        );
+    }
+}
+
+#[test]
+fn bad_input_gives_exit_code_and_names_the_problem() {
+    let out_dir = temp_dir("bad");
+    let out = out_dir.to_str().unwrap();
+    let missing = wavemill(&["plan", "no/such/part.stl", "--out", out]);
+    assert_eq!(missing.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/part.stl"));
+
+    let garbage = out_dir.with_extension("stl");
+    std::fs::write(
+        &garbage,
+        b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zero\n",
+    )
+    .unwrap();
+    let parse = wavemill(&["info", garbage.to_str().unwrap()]);
+    assert_eq!(parse.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&parse.stderr);
+    assert!(
+        err.contains(garbage.file_name().unwrap().to_str().unwrap()) && err.contains("line 4"),
+        "{err}"
+    );
+    std::fs::remove_file(&garbage).unwrap();
+
+    let tool = wavemill(&[
+        "plan",
+        "data/impeller.glb",
+        "--tool",
+        "ball:x",
+        "--out",
+        out,
+    ]);
+    assert_eq!(tool.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&tool.stderr).contains("ball:x"));
+
+    let job = out_dir.with_extension("toml");
+    std::fs::write(&job, "[strategy]\nscallop_heigth = 0.1\n").unwrap();
+    let bad_job = wavemill(&[
+        "plan",
+        "data/impeller.glb",
+        "--job",
+        job.to_str().unwrap(),
+        "--out",
+        out,
+    ]);
+    assert_eq!(bad_job.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad_job.stderr).contains("scallop_heigth"));
+    std::fs::remove_file(&job).unwrap();
+
+    assert_eq!(wavemill(&["plan", "--no-such-flag"]).status.code(), Some(2));
+    assert!(!out_dir.join("job.nc").exists(), "no output after errors");
+}
+
+/// The committed sample files are exactly what the generator makes today.
+#[test]
+fn regenerating_the_sample_parts_gives_identical_bytes() {
+    for part in [
+        SamplePart::Impeller(Default::default()),
+        SamplePart::Blade(Default::default()),
+    ] {
+        let (_, files) = sample_files(&part).unwrap();
+        for (name, bytes) in files {
+            let committed = std::fs::read(repo_file(&format!("data/{name}"))).unwrap();
+            assert!(
+                committed == bytes,
+                "data/{name} differs from the generator's output: run `cargo run --release -- sample {}`",
+                part.name()
+            );
+        }
+    }
+}
+
+/// A coarse plan through the CLI with 1 and with 2 threads: the four outputs exist, are
+/// complete, and are byte-identical (with --no-timings).
+#[test]
+fn plan_writes_four_identical_outputs_for_any_thread_count() {
+    let job = temp_dir("job").with_extension("toml");
+    let text = std::fs::read_to_string(repo_file("data/impeller.toml")).unwrap();
+    let text = text.replace(
+        "path = \"impeller.glb\"",
+        &format!("path = {:?}", repo_file("data/impeller.glb")),
+    );
+    let text = text
+        .replace("scallop_height = 0.01", "scallop_height = 0.5")
+        .replace("max_step = 1.0", "max_step = 3.0");
+    std::fs::write(&job, text).unwrap();
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        let dir = temp_dir(&format!("plan{threads}"));
+        let out = wavemill(&[
+            "plan",
+            "--job",
+            job.to_str().unwrap(),
+            "--threads",
+            threads,
+            "--no-timings",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let files: Vec<Vec<u8>> = ["job.nc", "cl.csv", "report.json", "paths.glb"]
+            .iter()
+            .map(|f| std::fs::read(dir.join(f)).unwrap())
+            .collect();
+        let gcode = String::from_utf8_lossy(&files[0]);
+        assert!(
+            gcode.trim_end().ends_with('%') && gcode.contains("M30"),
+            "G-code must be complete"
+        );
+        let report: serde_json::Value = serde_json::from_slice(&files[2]).unwrap();
+        assert!(report.get("timings_ms").is_none());
+        assert!(report["poses"]["cut"].as_u64().unwrap() > 100);
+        outputs.push(files);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    for (k, name) in ["job.nc", "cl.csv", "report.json", "paths.glb"]
+        .iter()
+        .enumerate()
+    {
+        assert!(
+            outputs[0][k] == outputs[1][k],
+            "{name} differs between 1 and 2 threads"
+        );
+    }
+    std::fs::remove_file(&job).unwrap();
+}
