@@ -28,8 +28,11 @@ impl SamplePart {
     }
 }
 
-/// `(file name, bytes)` of the GLB and OBJ of a sample part; deterministic.
-pub fn sample_files(part: &SamplePart) -> Result<(Mesh, Vec<(String, Vec<u8>)>)> {
+/// A file to write: its name and its bytes.
+pub type NamedFile = (String, Vec<u8>);
+
+/// The mesh of a sample part and its GLB and OBJ files; deterministic.
+pub fn sample_files(part: &SamplePart) -> Result<(Mesh, Vec<NamedFile>)> {
     let name = part.name();
     let mesh = part.mesh()?;
     let mut glb = GlbBuilder::new();
