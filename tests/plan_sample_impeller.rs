@@ -120,6 +120,28 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         }
     }
 
+    // --- The table: the part stands on it (its lowest point), and no point of the tool comes
+    // within the table margin of it: the ball's bottom and the rims of every body. -----------
+    let table_z = part
+        .positions
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::INFINITY, f64::min);
+    for row in rows.iter().filter(|r| r.kind != "rapid") {
+        let lateral = (1.0 - row.axis.z * row.axis.z).max(0.0).sqrt();
+        let mut lowest = row.tip.z + row.axis.z * r - r;
+        for body in &bodies {
+            for (h, radius) in [(body.from, body.radius_from), (body.to, body.radius_to)] {
+                lowest = lowest.min(row.tip.z + row.axis.z * h - radius * lateral);
+            }
+        }
+        assert!(
+            lowest >= table_z + job.safety.table_margin - 1e-6,
+            "tool {} mm above the table at {row:?}",
+            lowest - table_z
+        );
+    }
+
     // --- Report consistency --------------------------------------------------------------
     assert!(report.clearance.min_cutter_clearance >= -1e-6);
     assert!(report.clearance.min_holder_clearance >= job.safety.holder_margin);

@@ -12,4 +12,6 @@ pub mod distance;
 mod tool_bodies;
 
 pub use distance::{Closest, SurfaceDistance};
-pub use tool_bodies::{BodyClearance, Collision, F32_SLACK, Margins, PartCollider, PreparedTool};
+pub use tool_bodies::{
+    BodyClearance, Collision, F32_SLACK, Margins, PartCollider, PreparedTool, Table,
+};

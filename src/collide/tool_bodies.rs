@@ -26,6 +26,8 @@ pub enum Collision {
     Gouge { depth: f64 },
     /// A body above the ball comes closer to the part than its margin allows.
     Body { role: BodyRole },
+    /// Some part of the tool comes closer to the table than its margin.
+    Table,
 }
 
 /// Distance from each kind of body to the part at one pose, capped at the search distance.
@@ -43,11 +45,21 @@ pub struct Margins {
     pub holder: f64,
 }
 
-/// The part, ready for tool queries.
+/// The machine table (or fixture top) the part stands on, in the part frame: everything below
+/// the plane `z = top_z` is solid, and the tool must stay `margin` above it. The table turns
+/// with the part on a table-table machine, so in the part frame it never moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Table {
+    pub top_z: f64,
+    pub margin: f64,
+}
+
+/// The part (and the table it stands on), ready for tool queries.
 pub struct PartCollider {
     surface: SurfaceDistance,
     trimesh: TriMesh,
     origin: Point3,
+    table: Option<Table>,
 }
 
 impl PartCollider {
@@ -65,7 +77,37 @@ impl PartCollider {
             surface: SurfaceDistance::new(mesh),
             trimesh,
             origin,
+            table: None,
         })
+    }
+
+    /// Adds the table the part stands on: every tool check then also keeps the whole tool
+    /// `table.margin` above it.
+    pub fn with_table(mut self, table: Table) -> Self {
+        self.table = Some(table);
+        self
+    }
+
+    pub fn table(&self) -> Option<&Table> {
+        self.table.as_ref()
+    }
+
+    /// Height of the tool's lowest point above the table top (∞ without a table).
+    pub fn table_clearance(&self, tool: &PreparedTool, pose: &ToolPose, sweep: f64) -> f64 {
+        self.table
+            .map_or(f64::INFINITY, |t| tool.lowest_z(pose, sweep) - t.top_z)
+    }
+
+    fn check_table(
+        &self,
+        tool: &PreparedTool,
+        pose: &ToolPose,
+        sweep: f64,
+    ) -> Result<(), Collision> {
+        match self.table {
+            Some(t) if self.table_clearance(tool, pose, sweep) < t.margin => Err(Collision::Table),
+            _ => Ok(()),
+        }
     }
 
     pub fn surface(&self) -> &SurfaceDistance {
@@ -106,6 +148,7 @@ impl PartCollider {
     /// The bodies above the ball at `pose`: flutes must not touch, shank and holder must stay
     /// their margins away.
     pub fn check_bodies(&self, tool: &PreparedTool, pose: &ToolPose) -> Result<(), Collision> {
+        self.check_table(tool, pose, 0.0)?;
         for body in &tool.bodies {
             if self.intersects(body.check.as_ref(), &body.place(pose, self)) {
                 return Err(Collision::Body { role: body.role });
@@ -123,6 +166,7 @@ impl PartCollider {
         pose: &ToolPose,
         sweep: f64,
     ) -> Result<(), Collision> {
+        self.check_table(tool, pose, sweep)?;
         for body in &tool.bodies {
             let grown = body.geometry.grown(body.check_grow).swept(sweep);
             if self.intersects(grown.shape(true).as_ref(), &grown.place(pose, self)) {
@@ -366,6 +410,26 @@ impl PreparedTool {
             bodies,
         }
     }
+
+    /// The lowest z of any point of the tool at `pose`, or anywhere along its move of `sweep`
+    /// mm up its own axis. Every body is a frustum along the axis, whose lowest point is on the
+    /// rim of one of its end discs: z = tip.z + h·a_z − R·√(1 − a_z²).
+    pub fn lowest_z(&self, pose: &ToolPose, sweep: f64) -> f64 {
+        let a = pose.axis.into_inner();
+        let lateral = (1.0 - a.z * a.z).max(0.0).sqrt();
+        let mut lowest = f64::INFINITY;
+        for start in [0.0, sweep.max(0.0)] {
+            let tip_z = pose.tip.z + a.z * start;
+            lowest = lowest.min(tip_z + a.z * self.ball_radius - self.ball_radius);
+            for b in &self.bodies {
+                let g = &b.geometry;
+                for (h, r) in [(g.from, g.radius_from), (g.to, g.radius_to)] {
+                    lowest = lowest.min(tip_z + a.z * h - r * lateral);
+                }
+            }
+        }
+        lowest
+    }
 }
 
 fn to_f32(v: &Vector3) -> Vec3 {
@@ -506,6 +570,39 @@ mod tests {
             (c.holder - (24.0 - 15.0 - 20.0)).abs() < 1e-3 || c.holder == 0.0,
             "{c:?}"
         );
+    }
+
+    #[test]
+    fn lowest_point_and_table_match_closed_form() {
+        let part = plate().with_table(Table {
+            top_z: 0.0,
+            margin: 1.0,
+        });
+        let t = prepared();
+        // Vertical tool on the plate top (z = 20): the lowest point is the tip.
+        let up = pose([0.0, 0.0, 20.0], [0.0, 0.0, 1.0]);
+        assert!((t.lowest_z(&up, 0.0) - 20.0).abs() < 1e-12);
+        // Horizontal tool along +X with the ball centre at z = 23 on the plate edge: the holder
+        // (radius 15) hangs 15 below the axis.
+        let side = pose([45.0, 0.0, 23.0], [1.0, 0.0, 0.0]);
+        assert!((t.lowest_z(&side, 0.0) - 8.0).abs() < 1e-12);
+        // Tilted 45° down: the holder's far rim is lowest.
+        let a = Vector3::new(1.0, 0.0, -1.0).normalize();
+        let down = ToolPose {
+            tip: Point3::new(60.0, 0.0, 60.0),
+            axis: Direction::new_normalize(a),
+        };
+        let expect =
+            60.0 - 50.0 * std::f64::consts::FRAC_1_SQRT_2 - 15.0 * std::f64::consts::FRAC_1_SQRT_2;
+        assert!((t.lowest_z(&down, 0.0) - expect).abs() < 1e-9);
+        assert_eq!(part.check_bodies(&t, &down), Ok(()));
+        // Swept 40 mm further along that axis it would reach below the table.
+        assert_eq!(
+            part.check_bodies_swept(&t, &down, 40.0),
+            Err(Collision::Table)
+        );
+        let below = pose([60.0, 0.0, 0.5], [1.0, 0.0, 0.0]);
+        assert_eq!(part.check_bodies(&t, &below), Err(Collision::Table));
     }
 
     #[test]

@@ -101,6 +101,9 @@ pub struct MachineSection {
     pub safe_distance: Option<f64>,
     /// mm added to the part's reach for the automatic safe distance.
     pub safe_margin: f64,
+    /// Height of the table top (or fixture top) in the part frame, mm; absent = the part's
+    /// lowest point (the part stands on the table). The tool stays `safety.table_margin` above it.
+    pub table_z: Option<f64>,
     /// mm/min.
     pub rapid_feed: f64,
     /// Fastest rotary motion, degrees/min, for time estimates.
@@ -116,6 +119,7 @@ impl Default for MachineSection {
             c_limits: None,
             safe_distance: None,
             safe_margin: 20.0,
+            table_z: None,
             rapid_feed: 15000.0,
             max_rotary_speed: 7200.0,
         }
@@ -185,6 +189,8 @@ pub struct SafetySection {
     pub shank_margin: f64,
     /// The holder must stay this far from the part, mm.
     pub holder_margin: f64,
+    /// Every part of the tool must stay this far above the table, mm.
+    pub table_margin: f64,
 }
 
 impl Default for SafetySection {
@@ -192,6 +198,7 @@ impl Default for SafetySection {
         Self {
             shank_margin: 0.5,
             holder_margin: 2.0,
+            table_margin: 2.0,
         }
     }
 }
@@ -269,6 +276,12 @@ impl Job {
         non_negative("feeds.clearance", self.feeds.clearance)?;
         non_negative("safety.shank_margin", self.safety.shank_margin)?;
         non_negative("safety.holder_margin", self.safety.holder_margin)?;
+        non_negative("safety.table_margin", self.safety.table_margin)?;
+        if let Some(z) = self.machine.table_z
+            && !z.is_finite()
+        {
+            return Err(format!("machine.table_z must be a number, got {z}"));
+        }
         non_negative("machine.safe_margin", self.machine.safe_margin)?;
         if let Some(d) = self.machine.safe_distance {
             positive("machine.safe_distance", d)?;

@@ -10,7 +10,7 @@ use super::config::Job;
 use super::preview::preview;
 use super::report::*;
 use crate::access::RayScene;
-use crate::collide::{Margins, PartCollider, PreparedTool};
+use crate::collide::{Margins, PartCollider, PreparedTool, Table};
 use crate::error::{Error, Result};
 use crate::geom::{Point3, Vector3};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
@@ -97,7 +97,14 @@ pub fn plan(
 
     let t = Instant::now();
     observer.stage("collision structures", 0);
-    let collider = PartCollider::new(&part).map_err(mesh_error)?;
+    let table_z = job.machine.table_z.unwrap_or(part.aabb().min.z);
+    let table = Table {
+        top_z: table_z,
+        margin: job.safety.table_margin,
+    };
+    let collider = PartCollider::new(&part)
+        .map_err(mesh_error)?
+        .with_table(table);
     let rays = RayScene::new(&part);
     timings.collision_structures = ms(t);
 
@@ -270,6 +277,8 @@ pub fn plan(
             description: kinematics.description(),
             pivot_in_part_frame: pivot.coords.into(),
             safe_distance_mm: safe_distance,
+            table_z_mm: table_z,
+            table_margin_mm: job.safety.table_margin,
         },
         strategy: StrategySummary {
             kind: "parallel-plane ball-end finishing",

@@ -57,6 +57,8 @@ pub struct MachineSummary {
     pub description: String,
     pub pivot_in_part_frame: [f64; 3],
     pub safe_distance_mm: f64,
+    pub table_z_mm: f64,
+    pub table_margin_mm: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -8,7 +8,7 @@
 //! ray screening; the exact body test stays the last word.
 
 use crate::access::RayScene;
-use crate::collide::{PartCollider, PreparedTool};
+use crate::collide::{Collision, PartCollider, PreparedTool};
 use crate::geom::{Direction, Point3, Vector3, angle_between, orthonormal_frame};
 use crate::path::ToolPose;
 
@@ -59,6 +59,8 @@ pub enum NoAxis {
     Occluded,
     /// Candidates passed the ray test but the shank or holder collides.
     Collision,
+    /// Every candidate brings the tool too close to the machine table.
+    Table,
 }
 
 /// The preferred axis at a contact point (unit normal `normal`, feed direction `feed`).
@@ -98,8 +100,10 @@ pub fn axis_is_valid(
         tip: centre - axis * r,
         axis: Direction::new_unchecked(*axis),
     };
-    part.check_bodies(tool, &pose)
-        .map_err(|_| NoAxis::Collision)
+    part.check_bodies(tool, &pose).map_err(|c| match c {
+        Collision::Table => NoAxis::Table,
+        _ => NoAxis::Collision,
+    })
 }
 
 impl AxisChooser {
@@ -161,9 +165,11 @@ impl AxisChooser {
             match axis_is_valid(part, rays, tool, centre, &axis, reachable) {
                 Ok(()) => return Ok(Direction::new_unchecked(axis)),
                 Err(NoAxis::MachineLimits) => {}
-                Err(NoAxis::Occluded) => {
-                    if why == NoAxis::MachineLimits {
-                        why = NoAxis::Occluded;
+                Err(cheap @ (NoAxis::Occluded | NoAxis::Table)) => {
+                    if why == NoAxis::MachineLimits
+                        || (why == NoAxis::Occluded && cheap == NoAxis::Table)
+                    {
+                        why = cheap;
                     }
                 }
                 Err(NoAxis::Collision) => {

@@ -79,6 +79,9 @@ pub enum Unreachable {
     Occluded,
     /// Shank or holder would collide for every candidate axis.
     Collision,
+    /// The tool would come too close to the machine table for every candidate axis (the
+    /// part's underside, which stands on the table).
+    Table,
 }
 
 impl From<NoAxis> for Unreachable {
@@ -87,6 +90,7 @@ impl From<NoAxis> for Unreachable {
             NoAxis::MachineLimits => Unreachable::MachineLimits,
             NoAxis::Occluded => Unreachable::Occluded,
             NoAxis::Collision => Unreachable::Collision,
+            NoAxis::Table => Unreachable::Table,
         }
     }
 }

@@ -27,6 +27,8 @@ pub struct Verification {
     pub min_flutes_clearance: f64,
     pub min_shank_clearance: f64,
     pub min_holder_clearance: f64,
+    /// Lowest point of the tool above the table top (∞ without a table).
+    pub min_table_clearance: f64,
     /// The body clearances above were searched up to this distance.
     pub search_distance: f64,
 }
@@ -99,7 +101,7 @@ pub fn verify(
     let cutting: Vec<usize> = (0..path.moves.len())
         .filter(|&i| matches!(path.moves[i].kind, MoveKind::Cut | MoveKind::Approach))
         .collect();
-    let per_chunk: Vec<(f64, BodyClearance)> = cutting
+    let per_chunk: Vec<(f64, BodyClearance, f64)> = cutting
         .par_chunks(256)
         .map(|chunk| {
             let mut ball = f64::INFINITY;
@@ -108,12 +110,14 @@ pub fn verify(
                 shank: search,
                 holder: search,
             };
+            let mut table = f64::INFINITY;
             for &i in chunk {
                 let pose = &path.moves[i].pose;
                 ball = ball.min(ball_clearance(&centre(pose)));
                 bodies = part.clearances(tool, pose, &bodies);
+                table = table.min(part.table_clearance(tool, pose, 0.0));
             }
-            (ball, bodies)
+            (ball, bodies, table)
         })
         .collect();
     let midpoints: Vec<f64> = (1..path.moves.len())
@@ -127,7 +131,7 @@ pub fn verify(
             ))
         })
         .collect();
-    let min = |f: &dyn Fn(&(f64, BodyClearance)) -> f64| {
+    let min = |f: &dyn Fn(&(f64, BodyClearance, f64)) -> f64| {
         per_chunk.iter().map(f).fold(f64::INFINITY, f64::min)
     };
     Verification {
@@ -138,6 +142,7 @@ pub fn verify(
         min_flutes_clearance: min(&|c| c.1.flutes),
         min_shank_clearance: min(&|c| c.1.shank),
         min_holder_clearance: min(&|c| c.1.holder),
+        min_table_clearance: min(&|c| c.2),
         search_distance: search,
     }
 }
