@@ -82,6 +82,10 @@ pub struct PlanArgs {
     /// Units of the part file: mm, m or in; overrides the job file.
     #[arg(long)]
     pub units: Option<String>,
+    /// Direction in the part file that should point up the C axis, e.g. `0,1,0` for a part
+    /// modelled with its axis along Y; overrides the job file.
+    #[arg(long, value_delimiter = ',', num_args = 3)]
+    pub up: Option<Vec<f64>>,
     /// Scallop height target, mm; overrides the job file.
     #[arg(long)]
     pub scallop: Option<f64>,
@@ -245,6 +249,9 @@ fn plan(args: &PlanArgs) -> Result<()> {
     }
     if let Some(u) = &args.units {
         job.part.units = Some(u.clone());
+    }
+    if let Some(up) = &args.up {
+        job.part.up = Some([up[0], up[1], up[2]]);
     }
     if let Some(s) = args.scallop {
         job.strategy.scallop_height = s;

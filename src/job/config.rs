@@ -29,6 +29,9 @@ pub struct PartSection {
     pub path: Option<PathBuf>,
     /// Units the mesh file is written in: "mm" (default), "m" or "in".
     pub units: Option<String>,
+    /// The direction in the file that points up the machine's C axis (the part's axis of
+    /// rotation for an impeller); the part is turned so that it becomes +Z. Default +Z.
+    pub up: Option<[f64; 3]>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -257,6 +260,11 @@ impl Job {
                 self.strategy.scallop_height,
                 self.tool.diameter / 2.0
             ));
+        }
+        if let Some(up) = self.part.up
+            && (!up.iter().all(|c| c.is_finite()) || up.iter().map(|c| c * c).sum::<f64>() < 1e-12)
+        {
+            return Err(format!("part.up must be a non-zero vector, got {up:?}"));
         }
         let n = self.strategy.drive_normal;
         if !n.iter().all(|c| c.is_finite()) || n.iter().map(|c| c * c).sum::<f64>() < 1e-12 {

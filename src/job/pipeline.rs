@@ -86,7 +86,11 @@ pub fn plan(
 
     let t = Instant::now();
     observer.stage("prepare part", 0);
-    let (part, mesh_report) = prepare(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+    let upright = match job.part.up {
+        Some(up) => turned_upright(&raw.mesh, &Vector3::from(up)),
+        None => raw.mesh.clone(),
+    };
+    let (part, mesh_report) = prepare(&upright, &PrepareOptions::default()).map_err(mesh_error)?;
     if !mesh_report.watertight {
         return Err(mesh_error(format!(
             "the part must be a closed, consistently oriented surface to tell inside from outside; found: {}",
@@ -262,6 +266,7 @@ pub fn plan(
         part: PartSummary {
             file: part_name.to_string(),
             units: units.to_string(),
+            up: job.part.up,
             warnings: raw.warnings.clone(),
             problems: mesh_report.problems(),
             mesh: mesh_report,
@@ -325,6 +330,19 @@ pub fn plan(
         preview_glb,
         verification_failure,
     })
+}
+
+/// `mesh` turned so that `up` points along +Z (the shortest rotation; 180° about X when `up`
+/// points down).
+fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
+    let rotation = nalgebra::Rotation3::rotation_between(&up.normalize(), &Vector3::z())
+        .unwrap_or_else(|| {
+            nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+        });
+    Mesh {
+        positions: mesh.positions.iter().map(|p| rotation * p).collect(),
+        triangles: mesh.triangles.clone(),
+    }
 }
 
 /// The machine the job describes.

@@ -36,6 +36,8 @@ pub struct PlanReport {
 pub struct PartSummary {
     pub file: String,
     pub units: String,
+    /// The file's direction that was turned to +Z, if any.
+    pub up: Option<[f64; 3]>,
     pub warnings: Vec<String>,
     pub problems: Vec<String>,
     #[serde(flatten)]
