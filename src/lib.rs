@@ -22,6 +22,7 @@ pub mod error;
 pub mod geom;
 pub mod job;
 pub mod mesh;
+pub mod multires;
 pub mod orient;
 pub mod path;
 pub mod post;

@@ -168,3 +168,51 @@ fn plan_writes_four_identical_outputs_for_any_thread_count() {
     }
     std::fs::remove_file(&job).unwrap();
 }
+
+/// `subdivide` multiplies the triangles by 4 per level, keeps a closed part closed with its
+/// genus, and writes OBJ or GLB by extension (anything else is an error).
+#[test]
+fn subdivide_writes_obj_and_glb() {
+    let dir = temp_dir("subdivide");
+    std::fs::create_dir_all(&dir).unwrap();
+    for ext in ["obj", "glb"] {
+        let out = dir.join(format!("blade.{ext}"));
+        let run = wavemill(&[
+            "subdivide",
+            "data/blade.glb",
+            "--levels",
+            "2",
+            "--crease-angle",
+            "60",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            run.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let raw =
+            wavemill::mesh::io::read_mesh(&out, wavemill::mesh::io::Units::Millimetres).unwrap();
+        let (_, report) = wavemill::mesh::prepare(&raw.mesh, &Default::default()).unwrap();
+        let (_, coarse) = wavemill::mesh::prepare(
+            &wavemill::job::load_part(&repo_file("data/blade.glb"), "mm")
+                .unwrap()
+                .mesh,
+            &Default::default(),
+        )
+        .unwrap();
+        assert_eq!(report.triangles, 16 * coarse.triangles);
+        assert!(report.watertight);
+        assert_eq!(report.genus, Some(0));
+    }
+    let bad = wavemill(&[
+        "subdivide",
+        "data/blade.glb",
+        "--out",
+        dir.join("blade.stl").to_str().unwrap(),
+    ]);
+    assert_eq!(bad.status.code(), Some(1));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -4,13 +4,24 @@
 
 mod progress;
 
+/// `println!` that ignores a closed stdout: `wavemill info PART | head` must end quietly,
+/// not panic on the broken pipe.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::error::{Error, Result};
 use crate::job::{self, Job, SamplePart, sample_files};
+use crate::mesh::io::{GlbBuilder, write_obj};
 use crate::mesh::{PrepareOptions, prepare};
+use crate::multires;
 use crate::sample;
 use crate::tool::{Cutter, parse_cutter};
 
@@ -33,6 +44,26 @@ pub enum Command {
     Sample(SampleArgs),
     /// Plan 5-axis ball-end finishing of a part and write G-code, CL data, a report and a preview.
     Plan(PlanArgs),
+    /// Loop-subdivide a mesh N times (plain Loop; creases only when asked) and write OBJ or GLB.
+    Subdivide(SubdivideArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct SubdivideArgs {
+    /// Mesh file (.stl, .obj, .gltf, .glb).
+    pub part: PathBuf,
+    /// Number of 1-to-4 subdivision steps.
+    #[arg(long, default_value_t = 1)]
+    pub levels: u32,
+    /// Treat edges whose faces meet at more than this angle (degrees) as sharp creases.
+    #[arg(long)]
+    pub crease_angle: Option<f64>,
+    /// Units of the input file: mm, m or in.
+    #[arg(long, default_value = "mm")]
+    pub units: String,
+    /// Output file; `.obj` or `.glb`.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -84,8 +115,8 @@ pub struct PlanArgs {
     pub units: Option<String>,
     /// Direction in the part file that should point up the C axis, e.g. `0,1,0` for a part
     /// modelled with its axis along Y; overrides the job file.
-    #[arg(long, value_delimiter = ',', num_args = 3)]
-    pub up: Option<Vec<f64>>,
+    #[arg(long, value_parser = parse_vector)]
+    pub up: Option<[f64; 3]>,
     /// Scallop height target, mm; overrides the job file.
     #[arg(long)]
     pub scallop: Option<f64>,
@@ -103,12 +134,23 @@ pub struct PlanArgs {
     pub out: PathBuf,
 }
 
+/// Parses `x,y,z`.
+fn parse_vector(text: &str) -> std::result::Result<[f64; 3], String> {
+    let parts: Vec<f64> = text
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("`{text}`: expected three numbers x,y,z"))?;
+    <[f64; 3]>::try_from(parts).map_err(|_| format!("`{text}`: expected three numbers x,y,z"))
+}
+
 /// Runs the parsed command; returns the process exit code.
 pub fn run(cli: Cli) -> i32 {
     let result = match cli.command {
         Command::Info(a) => info(&a),
         Command::Sample(a) => sample_part(&a),
         Command::Plan(a) => plan(&a),
+        Command::Subdivide(a) => subdivide(&a),
     };
     match result {
         Ok(()) => 0,
@@ -128,7 +170,7 @@ fn info(args: &InfoArgs) -> Result<()> {
             reason,
         })?;
     if args.json {
-        println!(
+        say!(
             "{}",
             serde_json::to_string_pretty(&report).unwrap_or_default()
         );
@@ -136,58 +178,63 @@ fn info(args: &InfoArgs) -> Result<()> {
     }
     let [x0, y0, z0] = report.bounding_box_min;
     let [x1, y1, z1] = report.bounding_box_max;
-    println!("{name}");
+    say!("{name}");
     for w in &raw.warnings {
-        println!("  warning: {w}");
+        say!("  warning: {w}");
     }
-    println!(
+    say!(
         "  triangles        {} ({} in the file)",
-        report.triangles, report.input_triangles
+        report.triangles,
+        report.input_triangles
     );
-    println!(
+    say!(
         "  welded vertices  {} ({} in the file)",
-        report.vertices, report.input_vertices
+        report.vertices,
+        report.input_vertices
     );
-    println!("  bounding box     [{x0:.4}, {y0:.4}, {z0:.4}] .. [{x1:.4}, {y1:.4}, {z1:.4}] mm");
-    println!(
+    say!("  bounding box     [{x0:.4}, {y0:.4}, {z0:.4}] .. [{x1:.4}, {y1:.4}, {z1:.4}] mm");
+    say!(
         "  size             {:.4} x {:.4} x {:.4} mm",
         x1 - x0,
         y1 - y0,
         z1 - z0
     );
-    println!("  components       {}", report.components);
-    println!(
+    say!("  components       {}", report.components);
+    say!(
         "  boundary edges   {} ({} holes)",
-        report.boundary_edges, report.boundary_loops
+        report.boundary_edges,
+        report.boundary_loops
     );
-    println!(
+    say!(
         "  non-manifold     {} edges, {} vertices",
-        report.non_manifold_edges, report.non_manifold_vertices
+        report.non_manifold_edges,
+        report.non_manifold_vertices
     );
-    println!(
+    say!(
         "  watertight       {}",
         if report.watertight { "yes" } else { "no" }
     );
     match report.genus {
-        Some(g) => println!("  genus            {g}"),
-        None => println!("  genus            undefined (not a manifold surface)"),
+        Some(g) => say!("  genus            {g}"),
+        None => say!("  genus            undefined (not a manifold surface)"),
     }
     match report.volume {
-        Some(v) => println!("  volume           {v:.4} mm^3"),
-        None => println!("  volume           undefined (not closed)"),
+        Some(v) => say!("  volume           {v:.4} mm^3"),
+        None => say!("  volume           undefined (not closed)"),
     }
-    println!("  surface area     {:.4} mm^2", report.surface_area);
-    println!(
+    say!("  surface area     {:.4} mm^2", report.surface_area);
+    say!(
         "  units guess      {:?} (from the size alone; read as {})",
-        report.units_guess, args.units
+        report.units_guess,
+        args.units
     );
     let problems = report.problems();
     if problems.is_empty() {
-        println!("  problems         none");
+        say!("  problems         none");
     } else {
-        println!("  problems:");
+        say!("  problems:");
         for p in problems {
-            println!("    - {p}");
+            say!("    - {p}");
         }
     }
     Ok(())
@@ -221,7 +268,7 @@ fn sample_part(args: &SampleArgs) -> Result<()> {
     for (name, bytes) in &files {
         job::write_atomically(&args.out.join(name), bytes)?;
     }
-    println!(
+    say!(
         "{}: {} triangles, {} vertices -> {}",
         part.name(),
         mesh.triangles.len(),
@@ -231,6 +278,60 @@ fn sample_part(args: &SampleArgs) -> Result<()> {
             .map(|(n, _)| args.out.join(n).display().to_string())
             .collect::<Vec<_>>()
             .join(", ")
+    );
+    Ok(())
+}
+
+fn subdivide(args: &SubdivideArgs) -> Result<()> {
+    let name = args.part.display().to_string();
+    let extension = args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(extension.as_deref(), Some("obj" | "glb")) {
+        return Err(Error::Job(format!(
+            "--out {}: the output must end in .obj or .glb",
+            args.out.display()
+        )));
+    }
+    if args.levels > 8 {
+        return Err(Error::Job(format!(
+            "--levels {}: at most 8 (each level multiplies the triangles by 4)",
+            args.levels
+        )));
+    }
+    let raw = job::load_part(&args.part, &args.units)?;
+    let mesh_error = |reason: String| Error::Mesh {
+        file: name.clone(),
+        reason,
+    };
+    let (mesh, _) = prepare(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+    let creases = match args.crease_angle {
+        Some(angle) => multires::detect_creases(&mesh, angle),
+        None => multires::Creases::none(),
+    };
+    let (fine, _) = multires::loop_subdivide(&mesh, &creases, args.levels)
+        .map_err(|e| mesh_error(e.to_string()))?;
+    let bytes = if extension.as_deref() == Some("obj") {
+        write_obj(
+            &fine,
+            &format!("wavemill subdivide: {name}, {} Loop levels", args.levels),
+        )
+    } else {
+        let mut glb = GlbBuilder::new();
+        glb.add_triangles("subdivided", &fine, [0.72, 0.74, 0.78, 1.0], None)
+            .map_err(|e| Error::Job(format!("{name}: {e}")))?;
+        glb.build()
+    };
+    job::write_atomically(&args.out, &bytes)?;
+    say!(
+        "{name}: {} -> {} triangles ({} levels, {} crease edges) -> {}",
+        mesh.triangles.len(),
+        fine.triangles.len(),
+        args.levels,
+        creases.len(),
+        args.out.display()
     );
     Ok(())
 }
@@ -250,8 +351,8 @@ fn plan(args: &PlanArgs) -> Result<()> {
     if let Some(u) = &args.units {
         job.part.units = Some(u.clone());
     }
-    if let Some(up) = &args.up {
-        job.part.up = Some([up[0], up[1], up[2]]);
+    if let Some(up) = args.up {
+        job.part.up = Some(up);
     }
     if let Some(s) = args.scallop {
         job.strategy.scallop_height = s;
@@ -286,28 +387,33 @@ fn plan(args: &PlanArgs) -> Result<()> {
 }
 
 fn summarise(r: &job::PlanReport, out: &Path) {
-    println!("planned {}:", r.part.file);
-    println!(
+    say!("planned {}:", r.part.file);
+    say!(
         "  poses            {} cut, {} approach, {} retract, {} rapid ({} NC blocks)",
-        r.poses.cut, r.poses.approach, r.poses.retract, r.poses.rapid, r.nc_blocks
+        r.poses.cut,
+        r.poses.approach,
+        r.poses.retract,
+        r.poses.rapid,
+        r.nc_blocks
     );
-    println!("  cutting length   {:.1} mm", r.cutting_length_mm);
-    println!(
+    say!("  cutting length   {:.1} mm", r.cutting_length_mm);
+    say!(
         "  estimated time   {:.1} min",
         r.estimated_time.total_s / 60.0
     );
-    println!(
+    say!(
         "  clearance        cutter {:.6} mm, shank {:.3} mm, holder {:.3} mm (searched to {} mm)",
         r.clearance.min_cutter_clearance,
         r.clearance.min_shank_clearance,
         r.clearance.min_holder_clearance,
         r.clearance.search_distance
     );
-    println!(
+    say!(
         "  unreachable      {} of {} drive points",
-        r.unreachable.count, r.strategy.drive_points
+        r.unreachable.count,
+        r.strategy.drive_points
     );
-    println!(
+    say!(
         "  outputs          {}/{{job.nc, cl.csv, report.json, paths.glb}}",
         out.display()
     );

@@ -94,7 +94,7 @@ pub struct MachineSection {
     /// Only "table-table-ac" so far.
     pub kinematics: String,
     /// Where the part frame's origin sits relative to the pivot (A and C axes' intersection), mm.
-    pub part_origin_in_table: [f64; 3],
+    pub part_origin_in_table: Option<[f64; 3]>,
     /// A axis travel, degrees.
     pub a_limits: [f64; 2],
     /// C axis travel, degrees; absent = continuous.
@@ -117,7 +117,7 @@ impl Default for MachineSection {
     fn default() -> Self {
         Self {
             kinematics: "table-table-ac".into(),
-            part_origin_in_table: [0.0, 0.0, 0.0],
+            part_origin_in_table: None,
             a_limits: [-120.0, 120.0],
             c_limits: None,
             safe_distance: None,

@@ -118,8 +118,16 @@ pub fn plan(
         holder: job.safety.holder_margin,
     };
     let prepared = PreparedTool::new(&tool, &margins);
-    let kinematics = machine(job)?;
-    let pivot = Point3::from(-Vector3::from(job.machine.part_origin_in_table));
+    // Unless told otherwise, the part is clamped centred on the C axis, standing on the table
+    // at the pivot height: its footprint's centre and lowest point are the pivot.
+    let part_box = part.aabb();
+    let part_origin_in_table = job
+        .machine
+        .part_origin_in_table
+        .map(Vector3::from)
+        .unwrap_or_else(|| -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z));
+    let kinematics = machine(job, part_origin_in_table)?;
+    let pivot = Point3::from(-part_origin_in_table);
     let reach = part
         .positions
         .iter()
@@ -345,10 +353,10 @@ fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
     }
 }
 
-/// The machine the job describes.
-pub fn machine(job: &Job) -> Result<TableTableAC> {
+/// The machine the job describes, with the part clamped at `part_origin_in_table`.
+pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<TableTableAC> {
     let m = &job.machine;
-    let kin = TableTableAC::new(Vector3::from(m.part_origin_in_table))
+    let kin = TableTableAC::new(part_origin_in_table)
         .with_a_limits(m.a_limits[0], m.a_limits[1])
         .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi)));
     kin.validate()?;
