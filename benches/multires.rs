@@ -1,0 +1,46 @@
+//! Multiresolution benchmarks: Loop subdivision throughput (output triangles/s; compare with
+//! `scripts/time_trimesh_loop.py` on the same mesh) and lifting-wavelet analysis + synthesis at
+//! three sizes (linear scaling expected).
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use wavemill::job;
+use wavemill::mesh::{PrepareOptions, prepare};
+use wavemill::multires::{Creases, WaveletHierarchy, loop_subdivide};
+
+fn sample_blade() -> wavemill::mesh::Mesh {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let raw = job::load_part(&root.join("data/blade.glb"), "mm").unwrap();
+    prepare(&raw.mesh, &PrepareOptions::default()).unwrap().0
+}
+
+fn subdivision(c: &mut Criterion) {
+    // The 18.7k-triangle sample blade, two levels: 300k output triangles.
+    let blade = sample_blade();
+    let mut g = c.benchmark_group("loop_subdivision");
+    g.sample_size(10);
+    let out = 16 * blade.triangles.len() as u64;
+    g.throughput(Throughput::Elements(out));
+    g.bench_function("blade_2_levels_output_triangles", |b| b.iter(|| loop_subdivide(&blade, &Creases::none(), 2).unwrap()));
+    g.finish();
+}
+
+fn wavelets(c: &mut Criterion) {
+    let blade = sample_blade();
+    let mut g = c.benchmark_group("wavelet_analysis_synthesis");
+    g.sample_size(10);
+    for levels in [1u32, 2, 3] {
+        let hierarchy = WaveletHierarchy::new(&blade.triangles, blade.positions.len(), &Creases::none(), levels as usize).unwrap();
+        let (fine, _) = loop_subdivide(&blade, &Creases::none(), levels).unwrap();
+        g.throughput(Throughput::Elements(fine.positions.len() as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(format!("{}_vertices", fine.positions.len())), &fine, |b, fine| {
+            b.iter(|| {
+                let w = hierarchy.analyse_all(&fine.positions).unwrap();
+                hierarchy.synthesise_all(&w).unwrap()
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, subdivision, wavelets);
+criterion_main!(benches);
