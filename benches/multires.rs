@@ -20,7 +20,9 @@ fn subdivision(c: &mut Criterion) {
     g.sample_size(10);
     let out = 16 * blade.triangles.len() as u64;
     g.throughput(Throughput::Elements(out));
-    g.bench_function("blade_2_levels_output_triangles", |b| b.iter(|| loop_subdivide(&blade, &Creases::none(), 2).unwrap()));
+    g.bench_function("blade_2_levels_output_triangles", |b| {
+        b.iter(|| loop_subdivide(&blade, &Creases::none(), 2).unwrap())
+    });
     g.finish();
 }
 
@@ -29,15 +31,25 @@ fn wavelets(c: &mut Criterion) {
     let mut g = c.benchmark_group("wavelet_analysis_synthesis");
     g.sample_size(10);
     for levels in [1u32, 2, 3] {
-        let hierarchy = WaveletHierarchy::new(&blade.triangles, blade.positions.len(), &Creases::none(), levels as usize).unwrap();
+        let hierarchy = WaveletHierarchy::new(
+            &blade.triangles,
+            blade.positions.len(),
+            &Creases::none(),
+            levels as usize,
+        )
+        .unwrap();
         let (fine, _) = loop_subdivide(&blade, &Creases::none(), levels).unwrap();
         g.throughput(Throughput::Elements(fine.positions.len() as u64));
-        g.bench_with_input(BenchmarkId::from_parameter(format!("{}_vertices", fine.positions.len())), &fine, |b, fine| {
-            b.iter(|| {
-                let w = hierarchy.analyse_all(&fine.positions).unwrap();
-                hierarchy.synthesise_all(&w).unwrap()
-            })
-        });
+        g.bench_with_input(
+            BenchmarkId::from_parameter(format!("{}_vertices", fine.positions.len())),
+            &fine,
+            |b, fine| {
+                b.iter(|| {
+                    let w = hierarchy.analyse_all(&fine.positions).unwrap();
+                    hierarchy.synthesise_all(&w).unwrap()
+                })
+            },
+        );
     }
     g.finish();
 }

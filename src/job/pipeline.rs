@@ -12,7 +12,7 @@ use super::report::*;
 use crate::access::RayScene;
 use crate::collide::{Margins, PartCollider, PreparedTool, Table};
 use crate::error::{Error, Result};
-use crate::geom::{Point3, Vector3};
+use crate::geom::{Point3, Vector3, positive_zero};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, PrepareOptions, prepare};
 use crate::orient::{AxisChooser, AxisOptions};
@@ -125,7 +125,8 @@ pub fn plan(
         .machine
         .part_origin_in_table
         .map(Vector3::from)
-        .unwrap_or_else(|| -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z));
+        .unwrap_or_else(|| -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z))
+        .map(positive_zero);
     let kinematics = machine(job, part_origin_in_table)?;
     let pivot = Point3::from(-part_origin_in_table);
     let reach = part

@@ -15,11 +15,13 @@
 //!
 //! Files: `split.rs` (topology only: [`Split`], [`Creases`], [`VertexClass`]),
 //! `subdivision.rs` (positions: [`loop_step`], [`loop_subdivide`], [`detect_creases`]),
-//! `check.rs` (the hierarchy invariant checker), `wavelet.rs` (the lifting scheme: analysis and
+//! `check.rs` (the hierarchy invariant checker), `simplify/` (the base mesh: topology-preserving
+//! quadric edge collapse, Garland & Heckbert 1997), `wavelet.rs` (the lifting scheme: analysis and
 //! synthesis, exactly invertible, per-level details and deviation bounds; DESIGN.md §3.3–3.4).
 #![warn(missing_docs)]
 
 pub mod check;
+pub mod simplify;
 pub mod split;
 pub mod subdivision;
 pub mod wavelet;
@@ -28,6 +30,7 @@ pub mod wavelet;
 pub(crate) mod test_meshes;
 
 pub use check::check_split;
+pub use simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
 pub use split::{Creases, Split, VertexClass, classify_vertices, split};
 pub use subdivision::{SubdivisionError, detect_creases, loop_step, loop_subdivide};
 pub use wavelet::{
