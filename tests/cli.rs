@@ -216,3 +216,48 @@ fn subdivide_writes_obj_and_glb() {
     assert_eq!(bad.status.code(), Some(1));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `levels` on the sample blade: a level file per level, a report whose finest level fits the
+/// part within the tolerance, exact reconstruction, and deviations that shrink to zero at the
+/// finest level.
+#[test]
+fn levels_describes_every_level() {
+    let dir = temp_dir("levels");
+    let run = wavemill(&[
+        "levels",
+        "data/blade.glb",
+        "--tolerance",
+        "0.05",
+        "--base-triangles",
+        "1000",
+        "--no-timings",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        run.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("levels.json")).unwrap()).unwrap();
+    let levels = report["levels"].as_array().unwrap();
+    assert!(!levels.is_empty());
+    assert!(report["finest_hausdorff_mm"].as_f64().unwrap() <= 0.05);
+    assert!(report["reconstruction_error_mm"].as_f64().unwrap() <= 1e-12 * 100.0);
+    for (j, level) in levels.iter().enumerate() {
+        assert!(dir.join(format!("level-{j}.glb")).is_file());
+        if j > 0 {
+            assert_eq!(
+                level["triangles"].as_u64().unwrap(),
+                4 * levels[j - 1]["triangles"].as_u64().unwrap()
+            );
+        }
+    }
+    assert_eq!(
+        levels.last().unwrap()["max_deviation_mm"].as_f64().unwrap(),
+        0.0
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -46,6 +46,32 @@ pub enum Command {
     Plan(PlanArgs),
     /// Loop-subdivide a mesh N times (plain Loop; creases only when asked) and write OBJ or GLB.
     Subdivide(SubdivideArgs),
+    /// Remesh a part to a rough-to-fine hierarchy, analyse it with wavelets, write every level.
+    Levels(LevelsArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct LevelsArgs {
+    /// Mesh file (.stl, .obj, .gltf, .glb): a manifold surface.
+    pub part: PathBuf,
+    /// Units of the input file: mm, m or in.
+    #[arg(long, default_value = "mm")]
+    pub units: String,
+    /// Fitting tolerance: two-sided Hausdorff distance of the finest level to the part, mm.
+    #[arg(long, default_value_t = 0.01)]
+    pub tolerance: f64,
+    /// Triangles of the base (coarsest) mesh.
+    #[arg(long, default_value_t = 2000)]
+    pub base_triangles: usize,
+    /// At most this many levels above the base.
+    #[arg(long, default_value_t = 5)]
+    pub max_levels: u32,
+    /// Leave the timings out of levels.json (byte-identical reports).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder: level-<j>.glb and levels.json.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -151,6 +177,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Sample(a) => sample_part(&a),
         Command::Plan(a) => plan(&a),
         Command::Subdivide(a) => subdivide(&a),
+        Command::Levels(a) => levels(&a),
     };
     match result {
         Ok(()) => 0,
@@ -331,6 +358,67 @@ fn subdivide(args: &SubdivideArgs) -> Result<()> {
         fine.triangles.len(),
         args.levels,
         creases.len(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn levels(args: &LevelsArgs) -> Result<()> {
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
+        return Err(Error::Job(format!(
+            "--tolerance {}: must be a positive number of mm",
+            args.tolerance
+        )));
+    }
+    if args.max_levels > 6 {
+        return Err(Error::Job(format!(
+            "--max-levels {}: at most 6 (each level multiplies the triangles by 4)",
+            args.max_levels
+        )));
+    }
+    let name = args.part.display().to_string();
+    let raw = job::load_part(&args.part, &args.units)?;
+    let (mesh, report) =
+        prepare(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
+            file: name.clone(),
+            reason,
+        })?;
+    if report.non_manifold_edges > 0 || report.non_manifold_vertices > 0 {
+        return Err(Error::Mesh {
+            file: name,
+            reason: format!("not a manifold surface: {}", report.problems().join("; ")),
+        });
+    }
+    let options = multires::RemeshOptions {
+        tolerance: args.tolerance,
+        base_triangles: args.base_triangles.max(4),
+        max_levels: args.max_levels,
+        ..Default::default()
+    };
+    let (files, report) = job::levels(&mesh, &options, !args.no_timings)?;
+    std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
+        path: args.out.display().to_string(),
+        source,
+    })?;
+    for (file, bytes) in &files {
+        job::write_atomically(&args.out.join(file), bytes)?;
+    }
+    let json = serde_json::to_string_pretty(&report).unwrap_or_default() + "\n";
+    job::write_atomically(&args.out.join("levels.json"), json.as_bytes())?;
+    for l in &report.levels {
+        say!(
+            "level {}: {:>8} triangles, max deviation to finest {:.4} mm, fit to input {:.4} mm",
+            l.level,
+            l.triangles,
+            l.max_deviation_mm,
+            l.fitted_hausdorff_mm
+        );
+    }
+    say!(
+        "finest level within {:.4} mm of {name} (tolerance {}), reconstruction error {:.2e} mm -> {}",
+        report.finest_hausdorff_mm,
+        report.tolerance_mm,
+        report.reconstruction_error_mm,
         args.out.display()
     );
     Ok(())

@@ -4,6 +4,7 @@
 //! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
 
 mod config;
+mod levels;
 mod output;
 mod pipeline;
 mod preview;
@@ -13,6 +14,7 @@ mod samples;
 pub use config::{
     FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
 };
+pub use levels::{LevelSummary, LevelsReport, levels};
 pub use output::{write_atomically, write_outputs};
 pub use pipeline::{Observer, PlanOutput, Quiet, load_part, plan};
 pub use report::{PlanReport, PoseCounts, StageTimings};

@@ -21,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod check;
+pub mod remesh;
 pub mod simplify;
 pub mod split;
 pub mod subdivision;
@@ -30,6 +31,7 @@ pub mod wavelet;
 pub(crate) mod test_meshes;
 
 pub use check::check_split;
+pub use remesh::{FittedLevel, Hierarchy, RemeshError, RemeshOptions};
 pub use simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
 pub use split::{Creases, Split, VertexClass, classify_vertices, split};
 pub use subdivision::{SubdivisionError, detect_creases, loop_step, loop_subdivide};
