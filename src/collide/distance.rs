@@ -138,6 +138,17 @@ impl SurfaceDistance {
 
     /// The closest surface point within `max_distance` of `p` (use `f64::INFINITY` for no limit).
     pub fn closest(&self, p: &Point3, max_distance: f64) -> Option<Closest> {
+        self.closest_where(p, max_distance, |_| true)
+    }
+
+    /// The closest point within `max_distance` on the triangles `accept` lets through (by
+    /// index). Used to project onto the side of a thin wall that faces the right way.
+    pub fn closest_where(
+        &self,
+        p: &Point3,
+        max_distance: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> Option<Closest> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -151,6 +162,9 @@ impl SurfaceDistance {
             let node = &self.nodes[ni as usize];
             if node.count > 0 {
                 for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                    if !accept(t) {
+                        continue;
+                    }
                     let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
                     let (q, feature) = closest_point_on_triangle(p, &a, &b, &c);
                     let qd2 = (q - p).norm_squared();
@@ -264,6 +278,31 @@ mod tests {
             assert!((c.distance - brute_force(&m, &p)).abs() < 1e-12);
             assert!((c.point - p).norm() - c.distance < 1e-12);
         }
+    }
+
+    /// Filtering by facing: from just inside a thin slab, the nearest face is the far side; the
+    /// nearest face whose normal agrees with +z is the top.
+    #[test]
+    fn filtered_search_finds_the_facing_side() {
+        let mut slab = crate::mesh::fixtures::cuboid(10.0, 10.0, 0.2);
+        for p in &mut slab.positions {
+            p.z -= 0.1;
+        }
+        let s = SurfaceDistance::new(&slab);
+        let p = Point3::new(5.0, 5.0, -0.05);
+        assert!((s.closest(&p, f64::INFINITY).unwrap().point.z + 0.1).abs() < 1e-12);
+        let up = s
+            .closest_where(&p, f64::INFINITY, |t| s.face_normal(t).z > 0.5)
+            .unwrap();
+        assert!((up.point.z - 0.1).abs() < 1e-12);
+        let brute = (0..slab.triangles.len() as u32)
+            .filter(|&t| s.face_normal(t).z > 0.5)
+            .map(|t| {
+                let [a, b, c] = slab.corners(t as usize);
+                (closest_point_on_triangle(&p, &a, &b, &c).0 - p).norm()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!((up.distance - brute).abs() < 1e-12);
     }
 
     #[test]

@@ -193,14 +193,39 @@ fn two_sided_hausdorff(
     one(input_samples, &level_distance).max(one(&level_samples, input))
 }
 
-/// Moves every vertex to its closest point on the input.
+/// Moves every vertex to its closest point on the input among the input triangles that face
+/// the same way as the level around the vertex. Without that filter a vertex near a thin wall
+/// (an impeller blade is a few tenths of its length thick) lands on the wall's far side and the
+/// level folds.
 fn project(mesh: &mut Mesh, target: &SurfaceDistance) {
     use rayon::prelude::*;
-    mesh.positions.par_iter_mut().for_each(|p| {
-        if let Some(c) = target.closest(p, f64::INFINITY) {
-            *p = c.point;
+    let normals = vertex_normals(mesh);
+    mesh.positions
+        .par_iter_mut()
+        .zip(normals.par_iter())
+        .for_each(|(p, n)| {
+            let facing =
+                target.closest_where(p, f64::INFINITY, |t| target.face_normal(t).dot(n) > 0.0);
+            if let Some(c) = facing.or_else(|| target.closest(p, f64::INFINITY)) {
+                *p = c.point;
+            }
+        });
+}
+
+/// Area-weighted unit vertex normals (zero for isolated vertices).
+fn vertex_normals(mesh: &Mesh) -> Vec<Vector3> {
+    let mut normal = vec![Vector3::zeros(); mesh.positions.len()];
+    for tri in &mesh.triangles {
+        let [a, b, c] = tri.map(|v| mesh.positions[v as usize]);
+        let face = crate::geom::triangle_normal(&a, &b, &c);
+        for &v in tri {
+            normal[v as usize] += face;
         }
-    });
+    }
+    normal
+        .iter()
+        .map(|n| n.try_normalize(1e-300).unwrap_or_else(Vector3::zeros))
+        .collect()
 }
 
 /// One pass of tangential relaxation: smooth vertices halfway toward the centroid of their
@@ -209,16 +234,9 @@ fn project(mesh: &mut Mesh, target: &SurfaceDistance) {
 fn relax(mesh: &mut Mesh, creases: &Creases) {
     let n = mesh.positions.len();
     let classes = classify_vertices(&mesh.triangles, n, creases);
-    let mut normal = vec![Vector3::zeros(); n];
+    let normal = vertex_normals(mesh);
     let mut sum = vec![Vector3::zeros(); n];
     let mut count = vec![0u32; n];
-    for tri in &mesh.triangles {
-        let [a, b, c] = tri.map(|v| mesh.positions[v as usize]);
-        let face = crate::geom::triangle_normal(&a, &b, &c);
-        for &v in tri {
-            normal[v as usize] += face;
-        }
-    }
     for e in edges(&mesh.triangles) {
         let [a, b] = e.vertices.map(|v| v as usize);
         sum[a] += mesh.positions[b].coords;
