@@ -87,6 +87,7 @@ impl Hierarchy {
     /// When the base mesh or a level cannot be made (non-manifold input).
     pub fn build(input: &Mesh, options: &RemeshOptions) -> Result<Hierarchy, RemeshError> {
         let target = SurfaceDistance::new(input);
+        let feature_lines = FeatureLines::new(input, options.crease_angle_deg);
         let spacing = sample_spacing(input);
         let input_samples = surface_samples(input, spacing);
         let base = simplify(
@@ -115,10 +116,10 @@ impl Hierarchy {
             let (fine, fine_creases) = loop_step(&mesh, &creases)?;
             mesh = fine;
             creases = fine_creases;
-            project(&mut mesh, &target);
+            project(&mut mesh, &target, &creases, &feature_lines);
             for _ in 0..options.relax_passes {
                 relax(&mut mesh, &creases);
-                project(&mut mesh, &target);
+                project(&mut mesh, &target, &creases, &feature_lines);
             }
             let hausdorff = two_sided_hausdorff(&mesh, &target, &input_samples, spacing);
             levels.push(FittedLevel {
@@ -197,19 +198,91 @@ fn two_sided_hausdorff(
 /// the same way as the level around the vertex. Without that filter a vertex near a thin wall
 /// (an impeller blade is a few tenths of its length thick) lands on the wall's far side and the
 /// level folds.
-fn project(mesh: &mut Mesh, target: &SurfaceDistance) {
+///
+/// Crease and boundary vertices go onto the input's feature lines instead (its crease and
+/// boundary edges): the closest point on a face near a sharp edge is usually on one face
+/// only, which rounds the edge off by up to the spacing of the level. Corners stay.
+fn project(mesh: &mut Mesh, target: &SurfaceDistance, creases: &Creases, lines: &FeatureLines) {
     use rayon::prelude::*;
     let normals = vertex_normals(mesh);
+    let classes = classify_vertices(&mesh.triangles, mesh.positions.len(), creases);
     mesh.positions
         .par_iter_mut()
         .zip(normals.par_iter())
-        .for_each(|(p, n)| {
-            let facing =
-                target.closest_where(p, f64::INFINITY, |t| target.face_normal(t).dot(n) > 0.0);
-            if let Some(c) = facing.or_else(|| target.closest(p, f64::INFINITY)) {
-                *p = c.point;
+        .zip(classes.par_iter())
+        .for_each(|((p, n), class)| match class {
+            VertexClass::Corner => {}
+            VertexClass::Crease(_) => {
+                if let Some(q) = lines.closest(p) {
+                    *p = q;
+                }
+            }
+            VertexClass::Smooth => {
+                let facing =
+                    target.closest_where(p, f64::INFINITY, |t| target.face_normal(t).dot(n) > 0.0);
+                if let Some(c) = facing.or_else(|| target.closest(p, f64::INFINITY)) {
+                    *p = c.point;
+                }
             }
         });
+}
+
+/// The input's sharp edges (creases above the angle, and boundary edges) for closest-point
+/// queries. Each segment is stored as a sliver triangle a hair wide (1e-9 of the part's size)
+/// so the triangle BVH answers the query; the answer is then snapped exactly onto the segment.
+struct FeatureLines {
+    segments: Vec<[Point3; 2]>,
+    slivers: Option<SurfaceDistance>,
+}
+
+impl FeatureLines {
+    fn new(input: &Mesh, crease_angle_deg: f64) -> Self {
+        let sharp = super::detect_creases(input, crease_angle_deg);
+        let boundary = edges(&input.triangles)
+            .into_iter()
+            .filter(|e| e.faces.len() == 1)
+            .map(|e| e.vertices);
+        let segments: Vec<[Point3; 2]> = sharp
+            .edges
+            .iter()
+            .copied()
+            .chain(boundary)
+            .map(|[a, b]| [input.positions[a as usize], input.positions[b as usize]])
+            .collect();
+        if segments.is_empty() {
+            return Self {
+                segments,
+                slivers: None,
+            };
+        }
+        let hair = 1e-9 * input.aabb().diagonal().max(1e-9);
+        let mut sliver = Mesh::default();
+        for [a, b] in &segments {
+            let d = b - a;
+            let side =
+                crate::geom::orthonormal_frame(&d.try_normalize(1e-300).unwrap_or_else(Vector3::z))
+                    .0;
+            let base = sliver.positions.len() as u32;
+            sliver.positions.extend([*a, *b, a + side * hair]);
+            sliver.triangles.push([base, base + 1, base + 2]);
+        }
+        Self {
+            segments,
+            slivers: Some(SurfaceDistance::new(&sliver)),
+        }
+    }
+
+    fn closest(&self, p: &Point3) -> Option<Point3> {
+        let c = self.slivers.as_ref()?.closest(p, f64::INFINITY)?;
+        let [a, b] = self.segments[c.triangle as usize];
+        let d = b - a;
+        let t = if d.norm_squared() > 0.0 {
+            ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        Some(a + d * t)
+    }
 }
 
 /// Area-weighted unit vertex normals (zero for isolated vertices).
