@@ -220,6 +220,7 @@ fn drive_curve(
             &drive,
             &feed,
             last.map(|l| l.axis.into_inner()).as_ref(),
+            None,
         );
         let placed = match placed {
             Ok(p) => p,
@@ -258,58 +259,25 @@ fn pose_of(p: &Placed, r: f64) -> ToolPose {
     }
 }
 
+/// Places the ball for a drive point and chooses its axis: `try_first` when that axis is valid
+/// (used between two placed poses, so the axis turns smoothly where both ends are fine),
+/// otherwise the chooser's pick near `previous`.
 fn place(
     ctx: &FinishingContext,
     drive: &DrivePoint,
     feed: &Vector3,
     previous: Option<&Vector3>,
+    try_first: Option<&Vector3>,
 ) -> Result<Placed, Unreachable> {
     let r = ctx.tool.ball_radius;
     let centre = place_ball(ctx.part.surface(), drive, r).ok_or(Unreachable::BallDoesNotFit)?;
-    let axis = ctx.chooser.choose(
-        ctx.part,
-        ctx.rays,
-        ctx.tool,
-        &centre,
-        &drive.normal,
-        feed,
-        previous,
-        ctx.reachable,
-    )?;
-    Ok(Placed {
-        drive: *drive,
-        centre,
-        axis,
-    })
-}
-
-/// Places the midpoint between `a` and `b`: the ball as usual, the axis halfway between theirs
-/// when that axis is valid (so the axis turns smoothly where both ends are fine), otherwise the
-/// chooser's pick.
-fn place_between(
-    ctx: &FinishingContext,
-    drive: &DrivePoint,
-    feed: &Vector3,
-    a: &Placed,
-    b: &Placed,
-) -> Result<Placed, Unreachable> {
-    let r = ctx.tool.ball_radius;
-    let centre = place_ball(ctx.part.surface(), drive, r).ok_or(Unreachable::BallDoesNotFit)?;
-    let halfway = slerp(&a.axis, &b.axis, 0.5);
-    if axis_is_valid(
-        ctx.part,
-        ctx.rays,
-        ctx.tool,
-        &centre,
-        &halfway,
-        ctx.reachable,
-    )
-    .is_ok()
+    if let Some(axis) = try_first
+        && axis_is_valid(ctx.part, ctx.rays, ctx.tool, &centre, axis, ctx.reachable).is_ok()
     {
         return Ok(Placed {
             drive: *drive,
             centre,
-            axis: Direction::new_normalize(halfway),
+            axis: Direction::new_normalize(*axis),
         });
     }
     let axis = ctx.chooser.choose(
@@ -319,7 +287,7 @@ fn place_between(
         &centre,
         &drive.normal,
         feed,
-        Some(&a.axis.into_inner()),
+        previous,
         ctx.reachable,
     )?;
     Ok(Placed {
@@ -360,7 +328,14 @@ fn refine(
         point: nalgebra::center(&a.drive.point, &b.drive.point),
         normal,
     };
-    let m = place_between(ctx, &drive, feed, a, b).ok()?;
+    let m = place(
+        ctx,
+        &drive,
+        feed,
+        Some(&a.axis.into_inner()),
+        Some(&slerp(&a.axis, &b.axis, 0.5)),
+    )
+    .ok()?;
     let mut left = refine(ctx, options, a, &m, feed, depth + 1)?;
     let right = refine(ctx, options, &m, b, feed, depth + 1)?;
     left.push(m);
