@@ -22,6 +22,9 @@ pub struct LevelsReport {
     /// max |synthesis(analysis(finest)) − finest|, mm: exact invertibility in practice.
     pub reconstruction_error_mm: f64,
     pub levels: Vec<LevelSummary>,
+    /// Lossy compression: details shorter than a threshold dropped, and the exact error that
+    /// leaves at the finest level.
+    pub compression: Vec<CompressionSummary>,
     /// Milliseconds; the only run-dependent part.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings_ms: Option<LevelsTimings>,
@@ -41,6 +44,15 @@ pub struct LevelSummary {
     /// Norms of the details that refine this level to the next (absent at the finest).
     pub detail_max_mm: Option<f64>,
     pub detail_rms_mm: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CompressionSummary {
+    pub threshold_mm: f64,
+    pub details_kept: usize,
+    pub details_total: usize,
+    /// max over finest vertices of |reconstruction − finest|, mm.
+    pub max_error_mm: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -124,12 +136,32 @@ pub fn levels(
             detail_rms_mm: stats.get(j).map(|s| s.rms_norm),
         });
     }
+    let total: usize = analysed.details.iter().map(Vec::len).sum();
+    let mut compression = Vec::new();
+    for threshold in [0.001, 0.01, 0.1] {
+        let (kept_wavelets, kept) = analysed.thresholded(threshold);
+        let rebuilt = wavelets
+            .synthesise_all(&kept_wavelets)
+            .map_err(wavelet_error)?;
+        let max_error = rebuilt
+            .iter()
+            .zip(&finest.positions)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f64::max);
+        compression.push(CompressionSummary {
+            threshold_mm: threshold,
+            details_kept: kept,
+            details_total: total,
+            max_error_mm: max_error,
+        });
+    }
     let report = LevelsReport {
         input_triangles: part.triangles.len(),
         tolerance_mm: options.tolerance,
         finest_hausdorff_mm: hierarchy.finest().hausdorff,
         reconstruction_error_mm: reconstruction_error,
         levels: summaries,
+        compression,
         timings_ms: timings.then_some(LevelsTimings {
             remesh: remesh_ms,
             analysis: analysis_ms,

@@ -37,6 +37,36 @@ impl MultiresWavelets {
         self.details.iter().map(|d| detail_stats(d)).collect()
     }
 
+    /// A copy with every detail shorter than `threshold` (mm) set to zero, and how many
+    /// details were kept: lossy compression of the hierarchy.
+    pub fn thresholded(&self, threshold: f64) -> (Self, usize) {
+        let mut kept = 0;
+        let details = self
+            .details
+            .iter()
+            .map(|level| {
+                level
+                    .iter()
+                    .map(|d| {
+                        if d.norm() >= threshold {
+                            kept += 1;
+                            *d
+                        } else {
+                            Vector3::zeros()
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        (
+            MultiresWavelets {
+                base: self.base.clone(),
+                details,
+            },
+            kept,
+        )
+    }
+
     /// A copy with every detail multiplied by `factor` (base unchanged).
     pub fn scaled_details(&self, factor: f64) -> Self {
         MultiresWavelets {
