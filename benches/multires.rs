@@ -5,7 +5,7 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use wavemill::job;
 use wavemill::mesh::{PrepareOptions, prepare};
-use wavemill::multires::{Creases, WaveletHierarchy, loop_subdivide};
+use wavemill::multires::{Creases, Hierarchy, RemeshOptions, WaveletHierarchy, loop_subdivide};
 
 fn sample_blade() -> wavemill::mesh::Mesh {
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -54,5 +54,33 @@ fn wavelets(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, subdivision, wavelets);
+/// Remeshing the 65k-triangle blower impeller (base 2000 + 2 levels, Hausdorff measured per
+/// level); skipped when the shared test data is absent.
+fn remeshing(c: &mut Criterion) {
+    let path = std::env::var_os("WAVEMILL_TESTDATA")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/testdata")
+        })
+        .join("meshes/impeller_blower_9blade__necro-nemesis_aero2205.stl");
+    if !path.is_file() {
+        eprintln!("skipped: {} not found", path.display());
+        return;
+    }
+    let raw = job::load_part(&path, "mm").unwrap();
+    let (mesh, _) = prepare(&raw.mesh, &PrepareOptions::default()).unwrap();
+    let options = RemeshOptions {
+        tolerance: 0.0,
+        max_levels: 2,
+        ..Default::default()
+    };
+    let mut g = c.benchmark_group("remesh");
+    g.sample_size(10);
+    g.bench_function("blower_65k_base2000_2_levels", |b| {
+        b.iter(|| Hierarchy::build(&mesh, &options).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, subdivision, wavelets, remeshing);
 criterion_main!(benches);
