@@ -66,6 +66,9 @@ pub struct LevelsArgs {
     /// At most this many levels above the base.
     #[arg(long, default_value_t = 5)]
     pub max_levels: u32,
+    /// Remesh the base isotropically before subdividing (experimental).
+    #[arg(long)]
+    pub isotropic_base: bool,
     /// Leave the timings out of levels.json (byte-identical reports).
     #[arg(long)]
     pub no_timings: bool,
@@ -393,6 +396,7 @@ fn levels(args: &LevelsArgs) -> Result<()> {
         tolerance: args.tolerance,
         base_triangles: args.base_triangles.max(4),
         max_levels: args.max_levels,
+        isotropic_base: args.isotropic_base,
         ..Default::default()
     };
     let (files, report) = job::levels(&mesh, &options, !args.no_timings)?;

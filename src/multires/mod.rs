@@ -21,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod check;
+pub mod isotropic;
 pub mod remesh;
 pub mod simplify;
 pub mod split;
@@ -31,6 +32,7 @@ pub mod wavelet;
 pub(crate) mod test_meshes;
 
 pub use check::check_split;
+pub use isotropic::{IsotropicError, IsotropicOptions, isotropic_remesh};
 pub use remesh::{FittedLevel, Hierarchy, RemeshError, RemeshOptions};
 pub use simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
 pub use split::{Creases, Split, VertexClass, classify_vertices, split};
