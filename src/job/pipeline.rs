@@ -379,3 +379,71 @@ fn pose_counts(path: &Toolpath) -> PoseCounts {
     }
     c
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::fixtures::cuboid;
+
+    fn plan_block() -> PlanOutput {
+        // A 30 x 30 x 10 block: the top is reachable straight down, the sides with the axis
+        // tilted, the bottom stands on the table.
+        let mut job = Job::default();
+        job.strategy.scallop_height = 0.5;
+        job.strategy.max_step = 3.0;
+        let raw = RawMesh {
+            mesh: cuboid(30.0, 30.0, 10.0),
+            warnings: Vec::new(),
+        };
+        plan(&raw, "block", "mm", &job, &Quiet).unwrap()
+    }
+
+    #[test]
+    fn a_block_is_machined_on_top_and_sides_and_refused_underneath() {
+        let out = plan_block();
+        let r = &out.report;
+        assert!(
+            out.verification_failure.is_none(),
+            "{:?}",
+            out.verification_failure
+        );
+        assert!(r.poses.cut > 100);
+        // Cut poses on the top face: the ball (r = 2) centred 2 mm above it.
+        let radius = Job::default().tool.diameter / 2.0;
+        let top = out
+            .toolpath
+            .moves
+            .iter()
+            .filter(|m| {
+                m.kind == MoveKind::Cut
+                    && ((m.pose.tip + m.pose.axis.into_inner() * radius).z - 12.0).abs() < 1e-6
+            })
+            .count();
+        assert!(top > 20, "{top}");
+        // Everything unreachable is underneath (table) or hugging it.
+        assert!(
+            r.unreachable.by_reason.keys().all(|k| k == "table"),
+            "{:?}",
+            r.unreachable.by_reason
+        );
+        assert!(
+            r.clearance.min_cutter_clearance >= -1e-9 && r.clearance.min_table_clearance >= 2.0
+        );
+    }
+
+    #[test]
+    fn a_path_that_fails_verification_writes_only_its_report() {
+        let mut out = plan_block();
+        out.verification_failure = Some("ball gouges the part by 0.1 mm".into());
+        let dir = std::env::temp_dir().join(format!("wavemill-verify-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let err = super::super::write_outputs(&dir, &out, false).unwrap_err();
+        assert_eq!(err.exit_code(), 3);
+        assert!(err.to_string().contains("gouges"));
+        assert!(dir.join("report.json").is_file());
+        for f in ["job.nc", "cl.csv", "paths.glb"] {
+            assert!(!dir.join(f).exists(), "{f} written for a failed path");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
