@@ -320,31 +320,9 @@ fn remeshing_is_deterministic() {
 const R: f64 = 1.0;
 const RR: f64 = 0.4;
 
+/// The shared torus fixture with this file's radii.
 fn torus(nu: u32, nv: u32) -> Mesh {
-    let mut positions = Vec::new();
-    for i in 0..nu {
-        for j in 0..nv {
-            let (u, v) = (
-                std::f64::consts::TAU * i as f64 / nu as f64,
-                std::f64::consts::TAU * j as f64 / nv as f64,
-            );
-            let w = R + RR * v.cos();
-            positions.push(P::new(w * u.cos(), w * u.sin(), RR * v.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % nu) * nv + (j % nv);
-    let mut triangles = Vec::new();
-    for i in 0..nu {
-        for j in 0..nv {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
-    Mesh {
-        positions,
-        triangles,
-    }
+    crate::mesh::fixtures::torus(R, RR, nu, nv)
 }
 
 fn torus_project(p: &P) -> P {
