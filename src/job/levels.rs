@@ -37,6 +37,10 @@ pub struct LevelSummary {
     pub triangles: usize,
     /// Of the fitted level (before the wavelet analysis), to the input, mm.
     pub fitted_hausdorff_mm: f64,
+    /// Its one-sided parts: farthest input point from the level (missed features) and
+    /// farthest level point from the input (folds, chords).
+    pub input_to_level_mm: f64,
+    pub level_to_input_mm: f64,
     /// Finest-connectivity surface with details of levels ≥ j zeroed, minus the finest level:
     /// max and RMS over vertices, mm (the exact L∞ bound of DESIGN.md §3.4).
     pub max_deviation_mm: f64,
@@ -130,6 +134,8 @@ pub fn levels(
             vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
             fitted_hausdorff_mm: fitted.hausdorff,
+            input_to_level_mm: fitted.fit.input_to_level,
+            level_to_input_mm: fitted.fit.level_to_input,
             max_deviation_mm: deviation.linf,
             rms_deviation_mm: rms,
             detail_max_mm: stats.get(j).map(|s| s.max_norm),

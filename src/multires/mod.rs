@@ -33,7 +33,7 @@ pub(crate) mod test_meshes;
 
 pub use check::check_split;
 pub use isotropic::{IsotropicError, IsotropicOptions, isotropic_remesh};
-pub use remesh::{FittedLevel, Hierarchy, RemeshError, RemeshOptions};
+pub use remesh::{Fit, FittedLevel, Hierarchy, RemeshError, RemeshOptions};
 pub use simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
 pub use split::{Creases, Split, VertexClass, classify_vertices, split};
 pub use subdivision::{SubdivisionError, detect_creases, loop_step, loop_subdivide};

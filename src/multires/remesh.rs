@@ -79,6 +79,8 @@ pub struct FittedLevel {
     pub creases: Creases,
     /// Two-sided Hausdorff distance to the input on samples, mm.
     pub hausdorff: f64,
+    /// Its two one-sided parts.
+    pub fit: Fit,
 }
 
 /// The semi-regular hierarchy: level 0 is the base, each next level the 1-to-4 split of the one
@@ -126,11 +128,12 @@ impl Hierarchy {
         } else {
             (base.mesh, base.creases)
         };
-        let hausdorff = two_sided_hausdorff(&mesh, &target, &input_samples, spacing);
+        let fit = two_sided_hausdorff(&mesh, &target, &input_samples, spacing);
         let mut levels = vec![FittedLevel {
             mesh: mesh.clone(),
             creases: creases.clone(),
-            hausdorff,
+            hausdorff: fit.hausdorff(),
+            fit,
         }];
         for _ in 0..options.max_levels {
             if levels
@@ -147,11 +150,12 @@ impl Hierarchy {
                 relax(&mut mesh, &creases);
                 project(&mut mesh, &target, &creases, &feature_lines);
             }
-            let hausdorff = two_sided_hausdorff(&mesh, &target, &input_samples, spacing);
+            let fit = two_sided_hausdorff(&mesh, &target, &input_samples, spacing);
             levels.push(FittedLevel {
                 mesh: mesh.clone(),
                 creases: creases.clone(),
-                hausdorff,
+                hausdorff: fit.hausdorff(),
+                fit,
             });
         }
         Ok(Hierarchy { levels })
@@ -221,7 +225,7 @@ fn two_sided_hausdorff(
     input: &SurfaceDistance,
     input_samples: &[Point3],
     spacing: f64,
-) -> f64 {
+) -> Fit {
     use rayon::prelude::*;
     let level_distance = SurfaceDistance::new(level);
     let level_samples = surface_samples(level, spacing);
@@ -234,7 +238,30 @@ fn two_sided_hausdorff(
             })
             .reduce(|| 0.0, f64::max)
     };
-    one(input_samples, &level_distance).max(one(&level_samples, input))
+    let (forward, backward) = (
+        one(input_samples, &level_distance),
+        one(&level_samples, input),
+    );
+    Fit {
+        input_to_level: forward,
+        level_to_input: backward,
+    }
+}
+
+/// The two one-sided Hausdorff distances of a level, mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fit {
+    /// Farthest input sample from the level: features the level misses.
+    pub input_to_level: f64,
+    /// Farthest level sample from the input: folds and chords.
+    pub level_to_input: f64,
+}
+
+impl Fit {
+    /// The two-sided Hausdorff distance.
+    pub fn hausdorff(&self) -> f64 {
+        self.input_to_level.max(self.level_to_input)
+    }
 }
 
 /// Moves every vertex to its closest point on the input among the input triangles that face
