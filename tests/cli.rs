@@ -27,6 +27,8 @@ fn every_subcommand_has_help() {
         &["--help"][..],
         &["info", "--help"],
         &["sample", "--help"],
+        &["subdivide", "--help"],
+        &["levels", "--help"],
         &["plan", "--help"],
     ] {
         let out = wavemill(sub);
