@@ -5,9 +5,7 @@
 //! guarantees wavemill gives (no gouge to 1e-6 mm) need f64 and a real inside test, so the
 //! queries that decide them are done here.
 
-use crate::geom::{
-    Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle, triangle_normal,
-};
+use crate::geom::{Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle};
 use crate::mesh::Mesh;
 use crate::mesh::topology::edges;
 
@@ -232,12 +230,6 @@ impl SurfaceDistance {
 
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
-    }
-
-    /// Twice-area normal of triangle `t`, for callers that want the raw cross product.
-    pub fn raw_normal(&self, t: u32) -> Vector3 {
-        let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
-        triangle_normal(&a, &b, &c)
     }
 }
 
