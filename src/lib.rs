@@ -18,6 +18,7 @@ pub use error::{Error, Result};
 pub mod access;
 pub mod cli;
 pub mod collide;
+pub mod contour;
 pub mod error;
 pub mod geom;
 pub mod job;
