@@ -142,20 +142,8 @@ impl GlbBuilder {
         segments: &[[Point3<f64>; 2]],
         rgba: [f32; 4],
     ) -> Result<&mut Self, GlbError> {
-        if segments.is_empty() {
-            return Ok(self);
-        }
-        let points: Vec<Point3<f64>> = segments.iter().flatten().copied().collect();
-        let positions = to_f32(name, &points)?;
-        let indices = (0..positions.len() as u32).collect(); // <= 2^32 checked in push
-        self.push(Part {
-            name: name.to_owned(),
-            rgba,
-            mode: MODE_LINES,
-            positions,
-            indices,
-            colors: None,
-        })
+        // A segment is a two-point polyline; one code path writes both.
+        self.add_polylines(name, segments, rgba)
     }
 
     /// Adds polylines (each drawn through its points in order) as one `LINES` part.

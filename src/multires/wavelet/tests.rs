@@ -110,29 +110,19 @@ fn bipyramid() -> (Vec<P>, Vec<[u32; 3]>) {
     (p, t)
 }
 
-/// Unit cube (8 vertices, 12 triangles) and its 12 cube edges as creases.
+/// Unit cube (8 vertices, 12 triangles: the shared fixture) and its 12 cube edges as creases.
 fn cube() -> (Vec<P>, Vec<[u32; 3]>, Vec<[u32; 2]>) {
-    let p = (0..8)
-        .map(|i| P::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let mut t = Vec::new();
+    let m = crate::mesh::fixtures::cuboid(1.0, 1.0, 1.0);
     let mut e = BTreeSet::new();
-    for [a, b, c, d] in quads {
-        t.push([a, b, c]);
-        t.push([a, c, d]);
+    // The fixture splits each face quad [a, b, c, d] into [a, b, c], [a, c, d]: the cube's
+    // edges are the quad's sides, not its diagonal a–c.
+    for pair in m.triangles.chunks(2) {
+        let ([a, b, c], [_, _, d]) = (pair[0], pair[1]);
         for [x, y] in [[a, b], [b, c], [c, d], [d, a]] {
             e.insert([x.min(y), x.max(y)]);
         }
     }
-    (p, t, e.into_iter().collect())
+    (m.positions, m.triangles, e.into_iter().collect())
 }
 
 /// n × n grid over [0,2]², open (boundary), with a bumpy height field.
