@@ -66,9 +66,10 @@ pub struct LevelsArgs {
     /// At most this many levels above the base.
     #[arg(long, default_value_t = 5)]
     pub max_levels: u32,
-    /// Remesh the base isotropically before subdividing (experimental).
-    #[arg(long)]
-    pub isotropic_base: bool,
+    /// Edges whose faces meet at more than this angle (degrees) are feature lines, followed
+    /// exactly by every level.
+    #[arg(long, default_value_t = 40.0)]
+    pub crease_angle: f64,
     /// Leave the timings out of levels.json (byte-identical reports).
     #[arg(long)]
     pub no_timings: bool,
@@ -396,7 +397,7 @@ fn levels(args: &LevelsArgs) -> Result<()> {
         tolerance: args.tolerance,
         base_triangles: args.base_triangles.max(4),
         max_levels: args.max_levels,
-        isotropic_base: args.isotropic_base,
+        crease_angle_deg: args.crease_angle,
         ..Default::default()
     };
     let (files, report) = job::levels(&mesh, &options, !args.no_timings)?;

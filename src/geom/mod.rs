@@ -8,7 +8,10 @@ mod aabb;
 mod triangle;
 
 pub use aabb::Aabb;
-pub use triangle::{ClosestFeature, closest_point_on_triangle, triangle_area, triangle_normal};
+pub use triangle::{
+    ClosestFeature, closest_point_on_segment, closest_point_on_triangle, triangle_area,
+    triangle_normal,
+};
 
 /// A point in millimetres.
 pub type Point3 = nalgebra::Point3<f64>;

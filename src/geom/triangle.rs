@@ -12,6 +12,16 @@ pub enum ClosestFeature {
     Face,
 }
 
+/// The point of segment `ab` closest to `p` (`a` if the segment is a point).
+pub fn closest_point_on_segment(p: &Point3, a: &Point3, b: &Point3) -> Point3 {
+    let d = b - a;
+    let len2 = d.norm_squared();
+    if len2 == 0.0 {
+        return *a;
+    }
+    a + d * ((p - a).dot(&d) / len2).clamp(0.0, 1.0)
+}
+
 /// The point of triangle `abc` closest to `p`, and the feature it lies on.
 /// Ericson, *Real-Time Collision Detection* §5.1.5, in f64; exact up to rounding.
 pub fn closest_point_on_triangle(

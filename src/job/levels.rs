@@ -41,6 +41,9 @@ pub struct LevelSummary {
     /// farthest level point from the input (folds, chords).
     pub input_to_level_mm: f64,
     pub level_to_input_mm: f64,
+    /// Where those two are reached (input point, level point), part coordinates.
+    pub worst_input_point: [f64; 3],
+    pub worst_level_point: [f64; 3],
     /// Finest-connectivity surface with details of levels ≥ j zeroed, minus the finest level:
     /// max and RMS over vertices, mm (the exact L∞ bound of DESIGN.md §3.4).
     pub max_deviation_mm: f64,
@@ -136,6 +139,8 @@ pub fn levels(
             fitted_hausdorff_mm: fitted.hausdorff,
             input_to_level_mm: fitted.fit.input_to_level,
             level_to_input_mm: fitted.fit.level_to_input,
+            worst_input_point: fitted.fit.worst_input_sample.coords.into(),
+            worst_level_point: fitted.fit.worst_level_sample.coords.into(),
             max_deviation_mm: deviation.linf,
             rms_deviation_mm: rms,
             detail_max_mm: stats.get(j).map(|s| s.max_norm),

@@ -38,6 +38,7 @@ pub(crate) struct Params {
 pub(crate) struct Outcome {
     pub(crate) mesh: Mesh,
     pub(crate) creases: Creases,
+    pub(crate) origin: Vec<u32>,
     pub(crate) collapses: usize,
     pub(crate) max_error: f64,
 }
@@ -492,9 +493,11 @@ impl State {
             }
         }
         let mut positions = Vec::new();
+        let mut origin = Vec::new();
         for (v, _) in used.iter().enumerate().filter(|(_, u)| **u) {
             new_index[v] = positions.len() as u32;
             positions.push(self.positions[v]);
+            origin.push(v as u32);
         }
         let triangles = self
             .faces
@@ -524,6 +527,7 @@ impl State {
                 triangles,
             },
             creases: Creases { edges: creases },
+            origin,
             collapses,
             max_error,
         }

@@ -146,6 +146,12 @@ pub struct Simplified {
     /// Interior sharp edges of `mesh` (creases), by its indices. Boundary edges are sharp too
     /// but, per the conventions, not listed.
     pub creases: Creases,
+    /// For each base vertex, the input vertex it kept the index of. Feature (crease, boundary,
+    /// corner) vertices also kept that input vertex's position exactly.
+    pub origin: Vec<u32>,
+    /// The input's sharp edges (creases by the angle, and boundary edges), `[min, max]` by
+    /// input indices: the feature lines the base's sharp edges run along.
+    pub input_sharp_edges: Vec<[u32; 2]>,
     /// Number of edge collapses performed.
     pub collapses: usize,
     /// Largest collapse error (same measure as [`SimplifyOptions::max_error`]), in mm; an
@@ -235,6 +241,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Si
         return Ok(Simplified {
             mesh: Mesh::default(),
             creases: Creases::default(),
+            origin: Vec::new(),
+            input_sharp_edges: Vec::new(),
             collapses: 0,
             max_error: 0.0,
         });
@@ -263,6 +271,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Si
     Ok(Simplified {
         mesh: outcome.mesh,
         creases: outcome.creases,
+        origin: outcome.origin,
+        input_sharp_edges: sharp,
         collapses: outcome.collapses,
         max_error: outcome.max_error,
     })
