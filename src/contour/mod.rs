@@ -1,4 +1,39 @@
-//! 2.5D contour machining of planar profiles with B-spline wavelets (DESIGN.md §3.9; seed 004
-//! ch. 3–4). So far: the endpoint-interpolating cubic B-spline wavelet filters ([`wavelet`]).
+//! 2.5D contour machining of planar profiles (DESIGN.md §3.9; seed 004 ch. 3–4).
+//!
+//! Shapes are closed curves of lines and arcs ([`geometry`]: bulge vertices, the region to the
+//! left of every contour). So far:
+//!
+//! * [`wavelet`] — the endpoint-interpolating cubic B-spline wavelet filters P^j and Q^j
+//!   (seed 004 §2.2, figs. 2.5–2.6);
+//! * [`parallel`] — the contour-parallel baseline the seed compares against (tables 3.1,
+//!   4.1): exact line/arc offsets of the part at r, r + s, …, clipped to the stock
+//!   (cavalier_contours), ordered from the far side toward the part and linked;
+//! * [`toolpath`] — tool-centre paths: [`Pass`], [`Link`], [`CenterPath`];
+//! * [`verify`] — exact overcut (closed-form line/arc distances), uncut area (exact
+//!   x-intervals per scanline), path statistics;
+//! * [`gcode`] — G-code with G2/G3 arcs and the seed's machining-time model (length / feed +
+//!   NC blocks × dwell);
+//! * helpers: [`segops`] (exact segment geometry), [`bvh`] (segment BVH), [`region`]
+//!   (point-in-shape, scanline crossings), [`cavc`] (the cavalier_contours bridge).
+//!
+//! Still to come (issue #6): SVG/DXF input, the wavelet decomposition and fitting of outlines,
+//! the multiresolution method itself (corners, segmentation, offsets with the eq. 3.1 bound,
+//! adaptive curves, loose convex hull) and the `contour` command.
 
+pub mod bvh;
+pub mod cavc;
+pub mod error;
+pub mod gcode;
+pub mod geometry;
+pub mod parallel;
+pub mod region;
+pub mod segops;
+pub mod toolpath;
+pub mod verify;
 pub mod wavelet;
+
+pub use error::ContourError;
+pub use gcode::{MachineParams, Program, ProgramStats};
+pub use parallel::{ParallelOptions, contour_parallel};
+pub use toolpath::{CenterPath, Link, Pass};
+pub use verify::{Clearance, PathStats, UncutArea, clearance, path_stats, uncut_area};
