@@ -3,6 +3,10 @@
 //! Shapes are closed curves of lines and arcs ([`geometry`]: bulge vertices, the region to the
 //! left of every contour). So far:
 //!
+//! * [`input`] — SVG (paths incl. arcs, basic shapes, nested transforms, fill rules) and DXF
+//!   (LINE, ARC, CIRCLE, ELLIPSE, LWPOLYLINE, POLYLINE, SPLINE) outlines read into a
+//!   [`geometry::Shape`]; curves that are not circles become biarcs within a tolerance;
+//!   crossing paths are refused, naming both and where they cross;
 //! * [`wavelet`] — the endpoint-interpolating cubic B-spline wavelet filters P^j and Q^j
 //!   (seed 004 §2.2, figs. 2.5–2.6);
 //! * [`parallel`] — the contour-parallel baseline the seed compares against (tables 3.1,
@@ -16,7 +20,7 @@
 //! * helpers: [`segops`] (exact segment geometry), [`bvh`] (segment BVH), [`region`]
 //!   (point-in-shape, scanline crossings), [`cavc`] (the cavalier_contours bridge).
 //!
-//! Still to come (issue #6): SVG/DXF input, the wavelet decomposition and fitting of outlines,
+//! Still to come (issue #6): Z-sections of meshes, stock minus part, the wavelet decomposition and fitting of outlines,
 //! the multiresolution method itself (corners, segmentation, offsets with the eq. 3.1 bound,
 //! adaptive curves, loose convex hull) and the `contour` command.
 
@@ -25,6 +29,7 @@ pub mod cavc;
 pub mod error;
 pub mod gcode;
 pub mod geometry;
+pub mod input;
 pub mod parallel;
 pub mod region;
 pub mod segops;
@@ -34,6 +39,7 @@ pub mod wavelet;
 
 pub use error::ContourError;
 pub use gcode::{MachineParams, Program, ProgramStats};
+pub use input::{OutlineError, OutlineOptions, read_outline};
 pub use parallel::{ParallelOptions, contour_parallel};
 pub use toolpath::{CenterPath, Link, Pass};
 pub use verify::{Clearance, PathStats, UncutArea, clearance, path_stats, uncut_area};
