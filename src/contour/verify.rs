@@ -125,6 +125,35 @@ enum Sweep {
     },
 }
 
+impl Sweep {
+    /// The swept shape of one piece of at most a quarter turn; an arc is stored
+    /// counter-clockwise (`lo` → `hi`) whatever its direction of travel.
+    fn of(piece: Segment) -> Self {
+        match piece {
+            Segment::Line { start, end } => Sweep::Line { a: start, b: end },
+            Segment::Arc {
+                start,
+                end,
+                center,
+                radius,
+                sweep,
+            } => {
+                let (lo, hi) = if sweep > 0.0 {
+                    (start, end)
+                } else {
+                    (end, start)
+                };
+                Sweep::Arc {
+                    center,
+                    radius,
+                    lo,
+                    hi,
+                }
+            }
+        }
+    }
+}
+
 /// Area of `stock − part` left unswept by the tool along the cutting moves of `path`, by exact
 /// row sections on rows `row_step` apart (default: the stock's larger bounding-box side / 10 000).
 pub fn uncut_area(
@@ -166,28 +195,7 @@ pub fn uncut_area(
     for seg in path.cutting_segments() {
         for piece in split_arc(&seg, FRAC_PI_2) {
             let b = bbox(&piece).expanded(r);
-            let sw = match piece {
-                Segment::Line { start, end } => Sweep::Line { a: start, b: end },
-                Segment::Arc {
-                    start,
-                    end,
-                    center,
-                    radius,
-                    sweep,
-                } => {
-                    let (lo, hi) = if sweep > 0.0 {
-                        (start, end)
-                    } else {
-                        (end, start)
-                    };
-                    Sweep::Arc {
-                        center,
-                        radius,
-                        lo,
-                        hi,
-                    }
-                }
-            };
+            let sw = Sweep::of(piece);
             sweeps.push((b.min.y, b.max.y, sw));
         }
     }
@@ -679,28 +687,7 @@ mod tests {
             let seg = Segment::new(a, b, if case % 4 == 0 { 0.0 } else { rnd(-2.5, 2.5) });
             let r = rnd(0.2, 2.0);
             for piece in split_arc(&seg, FRAC_PI_2) {
-                let sw = match piece {
-                    Segment::Line { start, end } => Sweep::Line { a: start, b: end },
-                    Segment::Arc {
-                        start,
-                        end,
-                        center,
-                        radius,
-                        sweep,
-                    } => {
-                        let (lo, hi) = if sweep > 0.0 {
-                            (start, end)
-                        } else {
-                            (end, start)
-                        };
-                        Sweep::Arc {
-                            center,
-                            radius,
-                            lo,
-                            hi,
-                        }
-                    }
-                };
+                let sw = Sweep::of(piece);
                 for _ in 0..5 {
                     let y = rnd(-6.0, 6.0);
                     let mut ivs = Vec::new();

@@ -42,6 +42,22 @@ impl Split {
     pub fn edge_index(&self, a: u32, b: u32) -> Option<usize> {
         self.edges.binary_search(&[a.min(b), a.max(b)]).ok()
     }
+
+    /// The fine level's creases: coarse crease `{a, b}` with odd vertex `m` becomes `{a, m}`
+    /// and `{b, m}` (`m` is above both). Listed creases that are not edges are dropped.
+    pub fn fine_creases(&self, coarse: &Creases) -> Creases {
+        let mut edges = Vec::with_capacity(2 * coarse.edges.len());
+        for &[a, b] in &coarse.edges {
+            if let Some(k) = self.edge_index(a, b) {
+                let m = self.odd_vertex(k);
+                edges.push([a.min(b), m]);
+                edges.push([a.max(b), m]);
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        Creases { edges }
+    }
 }
 
 /// The 1-to-4 split of `coarse_triangles` (a level with `coarse_vertices` vertices).

@@ -16,7 +16,8 @@ use nalgebra::{Point3, Vector3};
 use thiserror::Error;
 
 use super::split::{
-    Creases, EdgeTable, NO_HALFEDGE, VertexClass, classify, mark_sharp, normalized, split_triangles,
+    Creases, EdgeTable, NO_HALFEDGE, Split, VertexClass, classify, mark_sharp, normalized,
+    split_triangles,
 };
 use crate::mesh::Mesh;
 
@@ -273,33 +274,18 @@ fn step(mesh: &Mesh, creases: &Creases, level: u32) -> Result<(Mesh, Creases), S
         });
     }
 
-    let triangles = split_triangles(&mesh.triangles, &table.tri_edges, nv);
-
-    // Creases carry over: {a, b} with odd m -> {a, m}, {b, m} (m > a, b).
-    let mut fine_creases = Vec::with_capacity(2 * creases.edges.len());
-    // Every listed crease is an edge (validated), both lists sorted: one merge pass.
-    let mut ci = 0;
-    for (k, e) in table.edges.iter().enumerate() {
-        if ci == creases.edges.len() {
-            break;
-        }
-        if *e == creases.edges[ci] {
-            let m = (nv + k) as u32;
-            fine_creases.push([e[0], m]);
-            fine_creases.push([e[1], m]);
-            ci += 1;
-        }
-    }
-    fine_creases.sort_unstable();
-
+    let split = Split {
+        coarse_vertices: nv,
+        triangles: split_triangles(&mesh.triangles, &table.tri_edges, nv),
+        edges: table.edges,
+    };
+    let fine_creases = split.fine_creases(&creases);
     Ok((
         Mesh {
             positions,
-            triangles,
+            triangles: split.triangles,
         },
-        Creases {
-            edges: fine_creases,
-        },
+        fine_creases,
     ))
 }
 

@@ -5,27 +5,13 @@
 use std::f64::consts::{PI, TAU};
 
 use crate::contour::geometry::{Point2, Segment, Vector2};
+use crate::contour::segops;
+pub(crate) use crate::contour::segops::{cross, seg_end, seg_start};
 
 /// `x` reduced to [0, 2π).
 pub(crate) fn wrap_tau(x: f64) -> f64 {
     let r = x.rem_euclid(TAU);
     if r >= TAU { 0.0 } else { r }
-}
-
-pub(crate) fn cross(a: Vector2, b: Vector2) -> f64 {
-    a.x * b.y - a.y * b.x
-}
-
-pub(crate) fn seg_start(s: &Segment) -> Point2 {
-    match *s {
-        Segment::Line { start, .. } | Segment::Arc { start, .. } => start,
-    }
-}
-
-pub(crate) fn seg_end(s: &Segment) -> Point2 {
-    match *s {
-        Segment::Line { end, .. } | Segment::Arc { end, .. } => end,
-    }
 }
 
 /// Whether the direction from an arc's centre towards `q` lies within the arc's sweep
@@ -43,31 +29,7 @@ pub(crate) fn arc_param(center: Point2, start: Point2, sweep: f64, q: Point2) ->
 
 /// Distance from `p` to a segment.
 pub(crate) fn dist_point_segment(p: Point2, s: &Segment) -> f64 {
-    match *s {
-        Segment::Line { start, end } => {
-            let d = end - start;
-            let len2 = d.norm_squared();
-            if len2 == 0.0 {
-                return (p - start).norm();
-            }
-            let t = ((p - start).dot(&d) / len2).clamp(0.0, 1.0);
-            (p - (start + d * t)).norm()
-        }
-        Segment::Arc {
-            start,
-            end,
-            center,
-            radius,
-            sweep,
-        } => {
-            let (inside, _) = arc_param(center, start, sweep, p);
-            if inside && p != center {
-                ((p - center).norm() - radius).abs()
-            } else {
-                (p - start).norm().min((p - end).norm())
-            }
-        }
-    }
+    segops::point_distance(p, s).0
 }
 
 /// Unit tangent (direction of travel) of a segment at a point `q` on it.
@@ -98,20 +60,7 @@ pub(crate) fn tangent_at(s: &Segment, q: Point2) -> Vector2 {
 
 /// The point at fraction `f` of a segment's length.
 pub(crate) fn point_on_segment(s: &Segment, f: f64) -> Point2 {
-    match *s {
-        Segment::Line { start, end } => start + (end - start) * f,
-        Segment::Arc {
-            start,
-            center,
-            sweep,
-            ..
-        } => {
-            let r = start - center;
-            let a = sweep * f;
-            let (sn, cs) = a.sin_cos();
-            center + Vector2::new(r.x * cs - r.y * sn, r.x * sn + r.y * cs)
-        }
-    }
+    segops::point_at(s, f)
 }
 
 /// Signed curvature of a segment in its direction of travel (positive turning left).
@@ -124,31 +73,8 @@ pub(crate) fn curvature(s: &Segment) -> f64 {
 
 /// Axis-aligned bounding box `[xmin, ymin, xmax, ymax]` of a segment.
 pub(crate) fn seg_bbox(s: &Segment) -> [f64; 4] {
-    let (a, b) = (seg_start(s), seg_end(s));
-    let mut bb = [a.x.min(b.x), a.y.min(b.y), a.x.max(b.x), a.y.max(b.y)];
-    if let Segment::Arc {
-        start,
-        center,
-        radius,
-        sweep,
-        ..
-    } = *s
-    {
-        let a0 = (start.y - center.y).atan2(start.x - center.x);
-        for k in 0..4 {
-            let ang = k as f64 * PI / 2.0;
-            let rel = if sweep >= 0.0 {
-                wrap_tau(ang - a0)
-            } else {
-                wrap_tau(a0 - ang)
-            };
-            if rel <= sweep.abs() {
-                let (x, y) = (center.x + radius * ang.cos(), center.y + radius * ang.sin());
-                bb = [bb[0].min(x), bb[1].min(y), bb[2].max(x), bb[3].max(y)];
-            }
-        }
-    }
-    bb
+    let b = segops::bbox(s);
+    [b.min.x, b.min.y, b.max.x, b.max.y]
 }
 
 /// Angle subtended at `p` by the segment, exact for arcs: the chord's angle plus a full turn

@@ -9,8 +9,8 @@
 //!    feature vertices are input vertices, so each of its sharp edges follows a *run* of input
 //!    feature edges ([`feature_lines`]), and its sharp edges cut it into the same *charts*
 //!    (smooth patches) as the input's cut the input ([`charts`]);
-//! 2. level j+1 is the 1-to-4 split of level j ([`loop_step`] for the connectivity and the
-//!    creases) and *interpolates* it: even vertices keep their places on the input; an odd
+//! 2. level j+1 is the 1-to-4 split of level j ([`super::split()`], creases carried over) and
+//!    *interpolates* it: even vertices keep their places on the input; an odd
 //!    vertex on a sharp edge goes to the arc-length middle of the edge's run, one on a smooth
 //!    edge to the point of its face's chart closest to the edge's midpoint;
 //! 3. levels are added until the two-sided Hausdorff distance between the level and the input,
@@ -42,7 +42,7 @@ use charts::InputCharts;
 use feature_lines::FeatureSpans;
 
 use super::split::{VertexClass, classify_vertices};
-use super::{Creases, SimplifyOptions, loop_step, simplify};
+use super::{Creases, SimplifyOptions, simplify};
 
 /// How to build the hierarchy.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,9 +78,6 @@ pub enum RemeshError {
     /// The base mesh could not be made (non-manifold input, say where).
     #[error("base mesh: {0}")]
     Simplify(#[from] super::SimplifyError),
-    /// A level could not be subdivided.
-    #[error("subdivision: {0}")]
-    Subdivision(#[from] super::SubdivisionError),
     /// A sharp edge of the base does not follow the input's feature lines (input vertices).
     #[error("base mesh: sharp edge between input vertices {edge:?} follows no feature line")]
     FeatureLines {
@@ -157,21 +154,22 @@ impl Hierarchy {
             }
             let coarse = mesh.positions.len();
             let topology = super::split(&mesh.triangles, coarse);
-            let (mut fine, fine_creases) = loop_step(&mesh, &creases)?;
             // The level interpolates the one below: even vertices, already on the input, stay
             // where they were. Odd vertices start at their edge's midpoint (Loop's four-point
             // rule reaches across to opposite vertices, which on a sliver may sit on another
             // chart); sharp ones then go to the middle of their edge's run, smooth ones onto
             // their chart.
-            fine.positions[..coarse].copy_from_slice(&mesh.positions);
-            for (k, [a, b]) in topology.edges.iter().enumerate() {
-                fine.positions[coarse + k] =
-                    nalgebra::center(&mesh.positions[*a as usize], &mesh.positions[*b as usize]);
-            }
-            spans.split(&topology.edges, coarse, &mut fine.positions);
+            let mut positions = mesh.positions.clone();
+            positions.extend(topology.edges.iter().map(|&[a, b]| {
+                nalgebra::center(&mesh.positions[a as usize], &mesh.positions[b as usize])
+            }));
+            spans.split(&topology.edges, coarse, &mut positions);
             face_chart = face_chart.iter().flat_map(|&c| [c; 4]).collect();
-            mesh = fine;
-            creases = fine_creases;
+            creases = topology.fine_creases(&creases);
+            mesh = Mesh {
+                positions,
+                triangles: topology.triangles,
+            };
             project(&mut mesh, &creases, &face_chart, &charts, coarse);
             let fit = two_sided_hausdorff(&mesh, &target, &input_samples, spacing);
             levels.push(FittedLevel {
