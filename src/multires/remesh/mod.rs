@@ -78,6 +78,16 @@ pub enum RemeshError {
     /// The base mesh could not be made (non-manifold input, say where).
     #[error("base mesh: {0}")]
     Simplify(#[from] super::SimplifyError),
+    /// An option is out of range.
+    #[error("option {name} = {value} is out of range ({expected})")]
+    InvalidOption {
+        /// Field name in [`RemeshOptions`].
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The accepted range.
+        expected: &'static str,
+    },
     /// A sharp edge of the base does not follow the input's feature lines (input vertices).
     #[error("base mesh: sharp edge between input vertices {edge:?} follows no feature line")]
     FeatureLines {
@@ -113,6 +123,13 @@ impl Hierarchy {
     /// # Errors
     /// When the base mesh or a level cannot be made (non-manifold input).
     pub fn build(input: &Mesh, options: &RemeshOptions) -> Result<Hierarchy, RemeshError> {
+        if !(options.tolerance >= 0.0 && options.tolerance.is_finite()) {
+            return Err(RemeshError::InvalidOption {
+                name: "tolerance",
+                value: options.tolerance,
+                expected: "finite, >= 0 mm",
+            });
+        }
         let target = SurfaceDistance::new(input);
         let spacing = sample_spacing(input);
         let input_samples = surface_samples(input, spacing);
@@ -538,6 +555,23 @@ mod tests {
         assert!(h.finest().hausdorff <= 0.02, "fit {:?}", h.finest().fit);
         for w in h.levels.windows(2) {
             assert!(w[1].fit.level_to_input <= w[0].fit.level_to_input + 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_negative_or_nan_tolerance_is_refused_by_name() {
+        let input = uv_sphere(5.0, 8, 16);
+        for tolerance in [-1.0, f64::NAN, f64::INFINITY] {
+            let err = Hierarchy::build(
+                &input,
+                &RemeshOptions {
+                    tolerance,
+                    ..Default::default()
+                },
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(err.contains("tolerance"), "{err}");
         }
     }
 }
