@@ -49,8 +49,15 @@ use super::{Creases, SimplifyOptions, simplify};
 pub struct RemeshOptions {
     /// Two-sided Hausdorff distance the finest level must reach, mm. Default 0.01.
     pub tolerance: f64,
-    /// Triangles of the base mesh. Default 2000.
+    /// Triangles of the base mesh: the simplification's target. Default 2000. The base ends
+    /// up larger when `base_max_error` stops the simplification first.
     pub base_triangles: usize,
+    /// Stop simplifying the base when the cheapest collapse would move the surface farther
+    /// than this, mm (the quadric error of [`SimplifyOptions::max_error`]). A base that has
+    /// squashed a thin blade or cut across a fillet makes every level above it converge only
+    /// linearly; bounding the collapse error keeps the shape in the base. Default 0.03 (three
+    /// times the default tolerance); `None`: no bound, `base_triangles` alone decides.
+    pub base_max_error: Option<f64>,
     /// Edges whose faces meet at more than this angle are creases. Default 40°.
     pub crease_angle_deg: f64,
     /// Stop after this many levels even if the tolerance is not reached. Default 5.
@@ -65,6 +72,7 @@ impl Default for RemeshOptions {
         Self {
             tolerance: 0.01,
             base_triangles: 2000,
+            base_max_error: Some(0.03),
             crease_angle_deg: 40.0,
             max_levels: 5,
             max_triangles: 4_000_000,
@@ -130,6 +138,15 @@ impl Hierarchy {
                 expected: "finite, >= 0 mm",
             });
         }
+        if let Some(e) = options.base_max_error
+            && !(e >= 0.0 && e.is_finite())
+        {
+            return Err(RemeshError::InvalidOption {
+                name: "base_max_error",
+                value: e,
+                expected: "finite, >= 0 mm",
+            });
+        }
         let target = SurfaceDistance::new(input);
         let spacing = sample_spacing(input);
         let input_samples = surface_samples(input, spacing);
@@ -138,6 +155,7 @@ impl Hierarchy {
             &SimplifyOptions {
                 target_triangles: options.base_triangles,
                 crease_angle_deg: options.crease_angle_deg,
+                max_error: options.base_max_error,
                 ..SimplifyOptions::default()
             },
         )?;
@@ -433,6 +451,8 @@ mod tests {
             &RemeshOptions {
                 tolerance: 0.05,
                 base_triangles: 400,
+                // A coarse base, so that there are levels to compare.
+                base_max_error: None,
                 max_levels: 3,
                 ..Default::default()
             },
@@ -492,6 +512,8 @@ mod tests {
             &RemeshOptions {
                 tolerance: 0.01,
                 base_triangles: 150,
+                // A coarse base, so that several levels are built.
+                base_max_error: None,
                 max_levels: 5,
                 ..Default::default()
             },
@@ -558,6 +580,50 @@ mod tests {
         }
     }
 
+    /// A 10 mm cube with its edges rounded to 2 mm fillets: flat faces meeting curved strips
+    /// tangentially, no creases (the shape CAD exports are full of).
+    fn rounded_cube(cells: usize) -> Mesh {
+        let mut m = crate::multires::simplify::test_support::cube_grid(cells, 10.0);
+        let centre = Vector3::repeat(5.0);
+        for p in &mut m.positions {
+            let rel = p.coords - centre;
+            let core = rel.map(|c| c.clamp(-3.0, 3.0));
+            let out = rel - core;
+            *p = Point3::from(centre + core + out.normalize() * 2.0);
+        }
+        m
+    }
+
+    /// The vertex quadric alone lets a base triangle run from a flat face across a fillet (it
+    /// measures only where the merged vertex goes); the span measure bounds how far the new
+    /// triangles stray, so a bounded base keeps the fillets and fits to about its bound.
+    #[test]
+    fn base_error_bound_keeps_fillets_in_the_base() {
+        let input = rounded_cube(24);
+        let base_fit = |base_max_error| {
+            let h = Hierarchy::build(
+                &input,
+                &RemeshOptions {
+                    tolerance: 0.0,
+                    base_triangles: 40,
+                    base_max_error,
+                    max_levels: 0,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            (h.levels[0].hausdorff, h.levels[0].mesh.triangles.len())
+        };
+        let (unbounded, small) = base_fit(None);
+        let (bounded, large) = base_fit(Some(0.05));
+        assert!(
+            bounded <= 0.1,
+            "bounded base ({large} triangles) is {bounded} mm off"
+        );
+        assert!(unbounded > 2.0 * bounded, "{unbounded} vs {bounded}");
+        assert!(small < large, "{small} vs {large}");
+    }
+
     #[test]
     fn a_negative_or_nan_tolerance_is_refused_by_name() {
         let input = uv_sphere(5.0, 8, 16);
@@ -572,6 +638,16 @@ mod tests {
             .unwrap_err()
             .to_string();
             assert!(err.contains("tolerance"), "{err}");
+            let err = Hierarchy::build(
+                &input,
+                &RemeshOptions {
+                    base_max_error: Some(tolerance),
+                    ..Default::default()
+                },
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(err.contains("base_max_error"), "{err}");
         }
     }
 }

@@ -7,6 +7,7 @@ use std::collections::BinaryHeap;
 
 use nalgebra::{Point3, Vector3};
 
+use super::features::InitialQuadrics;
 use super::quadric::Quadric;
 use super::topology::Topology;
 use crate::mesh::Mesh;
@@ -115,6 +116,8 @@ struct State {
     /// Neighbours across sharp (boundary or crease) edges.
     sharp_neighbours: Vec<Vec<u32>>,
     quadrics: Vec<Quadric>,
+    /// Face planes only, summed like `quadrics` (see [`InitialQuadrics::surface`]).
+    surface_quadrics: Vec<Quadric>,
     version: Vec<u32>,
     vertex_alive: Vec<bool>,
     component_of_vertex: Vec<u32>,
@@ -133,7 +136,7 @@ pub(crate) fn run(
     mesh: &Mesh,
     topology: &Topology,
     sharp: &[[u32; 2]],
-    quadrics: Vec<Quadric>,
+    initial: InitialQuadrics,
     params: Params,
 ) -> Outcome {
     let n = mesh.positions.len();
@@ -166,7 +169,8 @@ pub(crate) fn run(
             .collect(),
         vertex_faces,
         sharp_neighbours,
-        quadrics,
+        quadrics: initial.quadrics,
+        surface_quadrics: initial.surface,
         version: vec![0; n],
         vertex_alive,
         component_of_vertex,
@@ -318,12 +322,72 @@ impl State {
         }
         self.fill_candidates(a, b);
         let candidates = std::mem::take(&mut self.candidates);
-        let found = candidates
-            .iter()
-            .find(|c| self.sharp_merge_ok(c) && self.geometry_ok(c))
-            .copied();
+        // Candidates come cheapest first by their vertex error, which a span error can only
+        // raise: stop once no later candidate can beat the best so far.
+        let mut best: Option<Candidate> = None;
+        for c in &candidates {
+            if best.is_some_and(|b| b.error <= c.error) {
+                break;
+            }
+            if !(self.sharp_merge_ok(c) && self.geometry_ok(c)) {
+                continue;
+            }
+            let error = c.error.max(self.span_error(c));
+            if best.is_none_or(|b| error < b.error) {
+                best = Some(Candidate { error, ..*c });
+            }
+        }
         self.candidates = candidates;
-        found
+        best
+    }
+
+    /// How far the triangles a collapse leaves around the merged vertex stray from the surface
+    /// they replace, in mm: each triangle's summed surface quadric (its corners' regions)
+    /// at its centroid and edge midpoints. The vertex quadric alone measures only the merged
+    /// vertex, so a long triangle from a flat face across a fillet costs nothing there; this
+    /// catches it, and makes the base finer where the part curves.
+    fn span_error(&self, c: &Candidate) -> f64 {
+        let merged =
+            self.surface_quadrics[c.keep as usize].sum(&self.surface_quadrics[c.remove as usize]);
+        let mut worst = 0.0_f64;
+        // A feature vertex does not move, so its own triangles keep their shape; and they may
+        // lie on the other side of its crease, off the planes `remove` brings.
+        let keep_moves = self.sharp_neighbours[c.keep as usize].is_empty();
+        let keep_faces: &[u32] = if keep_moves {
+            &self.vertex_faces[c.keep as usize]
+        } else {
+            &[]
+        };
+        let faces = self.vertex_faces[c.remove as usize]
+            .iter()
+            .chain(keep_faces);
+        for &f in faces {
+            let tri = self.faces[f as usize];
+            if tri.contains(&c.keep) && tri.contains(&c.remove) {
+                continue; // dies with the collapse
+            }
+            let mut q = merged;
+            let mut corners = [Point3::origin(); 3];
+            for (corner, &v) in corners.iter_mut().zip(&tri) {
+                if v == c.keep || v == c.remove {
+                    *corner = c.position;
+                } else {
+                    *corner = self.positions[v as usize];
+                    q.add(&self.surface_quadrics[v as usize]);
+                }
+            }
+            let [p0, p1, p2] = corners;
+            let points = [
+                Point3::from((p0.coords + p1.coords + p2.coords) / 3.0),
+                nalgebra::center(&p0, &p1),
+                nalgebra::center(&p1, &p2),
+                nalgebra::center(&p2, &p0),
+            ];
+            for p in &points {
+                worst = worst.max(self.error(&q, p));
+            }
+        }
+        worst
     }
 
     /// Moving `remove`'s sharp edges to `keep` must not merge two sharp edges into one (that
@@ -403,6 +467,11 @@ impl State {
         self.positions[keep as usize] = c.position;
         let q_remove = self.quadrics[remove as usize];
         self.quadrics[keep as usize].add(&q_remove);
+        // Feature vertices carry no surface quadric (see `InitialQuadrics::surface`).
+        if self.sharp_neighbours[keep as usize].is_empty() {
+            let s_remove = self.surface_quadrics[remove as usize];
+            self.surface_quadrics[keep as usize].add(&s_remove);
+        }
         // Sharp edges of `remove` move to `keep` (sharp_merge_ok rules out duplicates).
         self.sharp_neighbours[keep as usize].retain(|&x| x != remove);
         for x in std::mem::take(&mut self.sharp_neighbours[remove as usize]) {

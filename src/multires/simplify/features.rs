@@ -69,13 +69,25 @@ pub(crate) fn sharp_edges(
 /// (Garland & Heckbert 1997, §5). For each sharp edge, the plane through the edge and
 /// perpendicular to each adjacent valid face is added to both endpoints with weight
 /// [`CONSTRAINT_WEIGHT`]·length² (Garland & Heckbert 1997, §6.1).
+/// The per-vertex quadrics the collapse starts from.
+pub(crate) struct InitialQuadrics {
+    /// Face planes plus the constraint planes that hold sharp edges in place: the cost of
+    /// placing a vertex.
+    pub(crate) quadrics: Vec<Quadric>,
+    /// Face planes only, and only at smooth vertices (zero on feature lines): how far a point
+    /// of a triangle spanning several vertices' regions lies from the surface those regions
+    /// were. The constraint planes, or the two sides' planes a crease vertex sums, would
+    /// penalise any point off a crease line, which every triangle next to a crease has.
+    pub(crate) surface: Vec<Quadric>,
+}
+
 pub(crate) fn initial_quadrics(
     positions: &[Point3<f64>],
     origin: &Vector3<f64>,
     triangles: &[[u32; 3]],
     topology: &Topology,
     sharp: &[[u32; 2]],
-) -> Vec<Quadric> {
+) -> InitialQuadrics {
     let rel = |v: u32| positions[v as usize].coords - origin;
     let mut quadrics = vec![Quadric::default(); positions.len()];
     let mut face_normal = Vec::with_capacity(triangles.len());
@@ -95,6 +107,14 @@ pub(crate) fn initial_quadrics(
                 quadrics[v as usize].add(&q);
             }
         }
+    }
+    // A vertex on a crease or boundary sums the planes of both sides, and every point of a
+    // triangle next to the crease lies off the other side's plane: its surface quadric would
+    // forbid any triangle there. Feature vertices are held on the feature lines anyway; the
+    // span measure uses the smooth corners only.
+    let mut surface = quadrics.clone();
+    for &v in sharp.iter().flatten() {
+        surface[v as usize] = Quadric::default();
     }
     // Sharp edges are a subsequence of the sorted edge list: walk both.
     let mut k = 0;
@@ -124,5 +144,5 @@ pub(crate) fn initial_quadrics(
             }
         }
     }
-    quadrics
+    InitialQuadrics { quadrics, surface }
 }

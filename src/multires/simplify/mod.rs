@@ -52,7 +52,7 @@ mod quadric;
 mod topology;
 
 #[cfg(test)]
-mod test_support;
+pub(crate) mod test_support;
 #[cfg(test)]
 mod tests;
 
@@ -256,7 +256,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Si
         &topology,
         options.crease_angle_deg,
     );
-    let quadrics =
+    let initial =
         features::initial_quadrics(&mesh.positions, &origin, &mesh.triangles, &topology, &sharp);
     let params = collapse::Params {
         target_triangles: options.target_triangles,
@@ -267,7 +267,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Si
         // Normalising area floor: far below any real triangle of the model.
         area_floor: (1e-12 * diagonal * diagonal).max(f64::MIN_POSITIVE),
     };
-    let outcome = collapse::run(mesh, &topology, &sharp, quadrics, params);
+    let outcome = collapse::run(mesh, &topology, &sharp, initial, params);
     Ok(Simplified {
         mesh: outcome.mesh,
         creases: outcome.creases,

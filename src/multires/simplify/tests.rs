@@ -270,7 +270,7 @@ fn components_and_tetrahedra_survive() {
 #[test]
 fn max_error_stops_early() {
     let torus = torus(10.0, 3.0, 60, 24);
-    let limit = 0.05;
+    let limit = 0.2;
     let out = simplify(
         &torus,
         &SimplifyOptions::with_target(0).with_max_error(Some(limit)),
