@@ -26,6 +26,7 @@ pub mod remesh;
 pub mod simplify;
 pub mod split;
 pub mod subdivision;
+pub mod unsplit;
 pub mod wavelet;
 
 #[cfg(test)]
@@ -37,6 +38,7 @@ pub use remesh::{Fit, FittedLevel, Hierarchy, RemeshError, RemeshOptions};
 pub use simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
 pub use split::{Creases, Split, VertexClass, classify_vertices, split};
 pub use subdivision::{SubdivisionError, detect_creases, loop_step, loop_subdivide};
+pub use unsplit::{Unsplit, subdivision_depth, unsplit};
 pub use wavelet::{
     DetailStats, Deviation, LevelTopology, LevelWavelets, MultiresWavelets, WaveletError,
     WaveletHierarchy, WaveletOptions, analyse, detail_stats, synthesise,
