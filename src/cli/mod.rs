@@ -63,6 +63,10 @@ pub struct LevelsArgs {
     /// Triangles of the base (coarsest) mesh.
     #[arg(long, default_value_t = 2000)]
     pub base_triangles: usize,
+    /// Stop simplifying the base earlier when a collapse would move the surface more than
+    /// this, mm: keeps thin blades and fillets in the base [default: 3 × tolerance].
+    #[arg(long)]
+    pub base_max_error: Option<f64>,
     /// At most this many levels above the base.
     #[arg(long, default_value_t = 5)]
     pub max_levels: u32,
@@ -396,6 +400,7 @@ fn levels(args: &LevelsArgs) -> Result<()> {
     let options = multires::RemeshOptions {
         tolerance: args.tolerance,
         base_triangles: args.base_triangles.max(4),
+        base_max_error: Some(args.base_max_error.unwrap_or(3.0 * args.tolerance)),
         max_levels: args.max_levels,
         crease_angle_deg: args.crease_angle,
         ..Default::default()

@@ -17,6 +17,7 @@ pub struct Job {
     pub part: PartSection,
     pub tool: ToolSection,
     pub machine: MachineSection,
+    pub surface: SurfaceSection,
     pub strategy: StrategySection,
     pub feeds: FeedSection,
     pub safety: SafetySection,
@@ -125,6 +126,58 @@ impl Default for MachineSection {
             table_z: None,
             rapid_feed: 15000.0,
             max_rotary_speed: 7200.0,
+        }
+    }
+}
+
+/// The surface the passes are driven on: the part itself when it already has subdivision
+/// connectivity, else the finest level of its multiresolution hierarchy (DESIGN.md §3.2). The
+/// tool is always kept off the part as read, whichever surface drives it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SurfaceSection {
+    /// Remesh a part that is not semi-regular (default true); false drives on the part as read.
+    pub remesh: bool,
+    /// Two-sided Hausdorff distance the finest level must reach, mm.
+    pub tolerance: f64,
+    /// Triangles of the hierarchy's base mesh (a target: see `base_max_error`).
+    pub base_triangles: usize,
+    /// The base stops simplifying when a collapse would move the surface more than this, mm;
+    /// absent = 3 × `tolerance`.
+    pub base_max_error: Option<f64>,
+    /// At most this many levels above the base.
+    pub max_levels: u32,
+    /// No level larger than this many triangles.
+    pub max_triangles: usize,
+    /// Edges whose faces meet at more than this angle are feature lines, degrees.
+    pub crease_angle_deg: f64,
+}
+
+impl Default for SurfaceSection {
+    fn default() -> Self {
+        let r = crate::multires::RemeshOptions::default();
+        Self {
+            remesh: true,
+            tolerance: r.tolerance,
+            base_triangles: r.base_triangles,
+            base_max_error: None,
+            max_levels: r.max_levels,
+            max_triangles: 1_000_000,
+            crease_angle_deg: r.crease_angle_deg,
+        }
+    }
+}
+
+impl SurfaceSection {
+    /// The remeshing options these settings stand for.
+    pub fn remesh_options(&self) -> crate::multires::RemeshOptions {
+        crate::multires::RemeshOptions {
+            tolerance: self.tolerance,
+            base_triangles: self.base_triangles,
+            base_max_error: Some(self.base_max_error.unwrap_or(3.0 * self.tolerance)),
+            crease_angle_deg: self.crease_angle_deg,
+            max_levels: self.max_levels,
+            max_triangles: self.max_triangles,
         }
     }
 }
@@ -243,6 +296,24 @@ impl Job {
             }
         };
         self.tool.assembly().validate().map_err(|e| e.to_string())?;
+        positive("surface.tolerance", self.surface.tolerance)?;
+        if let Some(e) = self.surface.base_max_error {
+            non_negative("surface.base_max_error", e)?;
+        }
+        if !(0.0..=180.0).contains(&self.surface.crease_angle_deg) {
+            return Err(format!(
+                "surface.crease_angle_deg must be between 0 and 180, got {}",
+                self.surface.crease_angle_deg
+            ));
+        }
+        if self.surface.base_triangles < 4
+            || self.surface.max_triangles < self.surface.base_triangles
+        {
+            return Err(format!(
+                "surface.base_triangles must be at least 4 and at most surface.max_triangles, got {} and {}",
+                self.surface.base_triangles, self.surface.max_triangles
+            ));
+        }
         positive("strategy.scallop_height", self.strategy.scallop_height)?;
         positive("strategy.tolerance", self.strategy.tolerance)?;
         positive("strategy.max_step", self.strategy.max_step)?;

@@ -2,11 +2,12 @@
 //! passes, link, verify, post, preview. Each stage is a plain function of the stage before;
 //! this file only wires them and times them.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use super::config::Job;
+use super::config::{Job, SurfaceSection};
 use super::preview::preview;
 use super::report::*;
 use crate::access::RayScene;
@@ -15,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::geom::{Point3, Vector3, positive_zero};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, PrepareOptions, prepare};
+use crate::multires::Hierarchy;
 use crate::orient::{AxisChooser, AxisOptions};
 use crate::path::{
     self, FinishingContext, FinishingOptions, LinkOptions, MoveKind, ToolPose, Toolpath,
@@ -53,6 +55,48 @@ pub struct PlanOutput {
     /// What the independent re-check of the finished path found wrong, if anything. A path
     /// that fails must not be run; [`super::write_outputs`] then writes only the report.
     pub verification_failure: Option<String>,
+}
+
+/// The surface the passes are driven on: the part when it already has subdivision
+/// connectivity (or remeshing is off), else its hierarchy's finest level (DESIGN.md §3.2).
+fn drive_surface<'a>(
+    part: &'a Mesh,
+    settings: &SurfaceSection,
+) -> std::result::Result<(Cow<'a, Mesh>, SurfaceSummary), String> {
+    let depth = crate::multires::subdivision_depth(&part.triangles, part.positions.len(), 8);
+    let as_is = |source| SurfaceSummary {
+        source,
+        part_subdivision_levels: depth,
+        hierarchy_levels: 0,
+        base_triangles: part.triangles.len(),
+        triangles: part.triangles.len(),
+        hausdorff_to_part_mm: 0.0,
+        tolerance_mm: settings.tolerance,
+        tolerance_reached: true,
+    };
+    if depth > 0 {
+        return Ok((Cow::Borrowed(part), as_is("part (semi-regular)")));
+    }
+    if !settings.remesh {
+        return Ok((Cow::Borrowed(part), as_is("part (remeshing off)")));
+    }
+    let hierarchy = Hierarchy::build(part, &settings.remesh_options())
+        .map_err(|e| format!("remeshing for the drive surface: {e}"))?;
+    let finest = hierarchy.finest();
+    let summary = SurfaceSummary {
+        source: "hierarchy finest level",
+        part_subdivision_levels: 0,
+        hierarchy_levels: hierarchy.levels.len(),
+        base_triangles: hierarchy
+            .levels
+            .first()
+            .map_or(0, |l| l.mesh.triangles.len()),
+        triangles: finest.mesh.triangles.len(),
+        hausdorff_to_part_mm: finest.hausdorff,
+        tolerance_mm: settings.tolerance,
+        tolerance_reached: finest.hausdorff <= settings.tolerance,
+    };
+    Ok((Cow::Owned(finest.mesh.clone()), summary))
 }
 
 /// Reads a part file in the given units.
@@ -98,6 +142,11 @@ pub fn plan(
         )));
     }
     timings.prepare = ms(t);
+
+    let t = Instant::now();
+    observer.stage("drive surface", 0);
+    let (drive, surface) = drive_surface(&part, &job.surface).map_err(mesh_error)?;
+    timings.drive_surface = ms(t);
 
     let t = Instant::now();
     observer.stage("collision structures", 0);
@@ -182,7 +231,8 @@ pub fn plan(
         "finishing passes",
         (extent / stepover.max(1e-3)).ceil() as u64,
     );
-    let finishing = path::finishing_passes(&part, &ctx, &options, &|| observer.advance());
+    // Sections follow the drive surface; every pose is placed and checked against the part.
+    let finishing = path::finishing_passes(&drive, &ctx, &options, &|| observer.advance());
     timings.finishing_passes = ms(t);
 
     let t = Instant::now();
@@ -294,6 +344,7 @@ pub fn plan(
             table_z_mm: table_z,
             table_margin_mm: job.safety.table_margin,
         },
+        surface,
         strategy: StrategySummary {
             kind: "parallel-plane ball-end finishing",
             scallop_height_mm: options.scallop_height,
@@ -396,6 +447,40 @@ mod tests {
             warnings: Vec::new(),
         };
         plan(&raw, "block", "mm", &job, &Quiet).unwrap()
+    }
+
+    /// A part with subdivision connectivity drives as it is; any other is remeshed to its
+    /// hierarchy's finest level within the tolerance, unless remeshing is off.
+    #[test]
+    fn drive_surface_is_the_part_when_semi_regular_else_its_finest_level() {
+        let sphere = crate::mesh::fixtures::uv_sphere(10.0, 24, 48);
+        let settings = SurfaceSection {
+            tolerance: 0.02,
+            base_triangles: 300,
+            // Coarse enough that the tolerance needs levels above the base.
+            base_max_error: Some(1.0),
+            ..SurfaceSection::default()
+        };
+        let (drive, summary) = drive_surface(&sphere, &settings).unwrap();
+        assert!(matches!(drive, Cow::Owned(_)));
+        assert_eq!(summary.source, "hierarchy finest level");
+        assert_eq!(summary.triangles, drive.triangles.len());
+        assert!(summary.tolerance_reached && summary.hausdorff_to_part_mm <= 0.02);
+        assert!(summary.hierarchy_levels >= 2, "{summary:?}");
+
+        // The finest level is semi-regular itself: it drives as it is.
+        let finest = drive.into_owned();
+        let (again, summary) = drive_surface(&finest, &settings).unwrap();
+        assert!(matches!(again, Cow::Borrowed(_)));
+        assert_eq!(summary.source, "part (semi-regular)");
+        assert!(summary.part_subdivision_levels >= 1);
+        let off = SurfaceSection {
+            remesh: false,
+            ..settings
+        };
+        let (same, summary) = drive_surface(&sphere, &off).unwrap();
+        assert!(matches!(same, Cow::Borrowed(_)));
+        assert_eq!(summary.source, "part (remeshing off)");
     }
 
     #[test]

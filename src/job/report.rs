@@ -16,6 +16,7 @@ pub struct PlanReport {
     pub part: PartSummary,
     pub tool: ToolSummary,
     pub machine: MachineSummary,
+    pub surface: SurfaceSummary,
     pub strategy: StrategySummary,
     pub poses: PoseCounts,
     pub cutting_length_mm: f64,
@@ -42,6 +43,25 @@ pub struct PartSummary {
     pub problems: Vec<String>,
     #[serde(flatten)]
     pub mesh: MeshReport,
+}
+
+/// The surface the passes were driven on (`[surface]` of the job).
+#[derive(Clone, Debug, Serialize)]
+pub struct SurfaceSummary {
+    /// "part (semi-regular)", "part (remeshing off)" or "hierarchy finest level".
+    pub source: &'static str,
+    /// Times the part un-splits 1-to-4 (0: not semi-regular), up to 8.
+    pub part_subdivision_levels: usize,
+    /// Levels of the hierarchy built (0 when the part was used as it is).
+    pub hierarchy_levels: usize,
+    pub base_triangles: usize,
+    pub triangles: usize,
+    /// Two-sided Hausdorff distance of the drive surface to the part, on dense samples, mm
+    /// (0 when the part itself is the drive surface).
+    pub hausdorff_to_part_mm: f64,
+    pub tolerance_mm: f64,
+    /// Whether the fit reached the tolerance within the level and size limits.
+    pub tolerance_reached: bool,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -106,6 +126,7 @@ pub struct UnreachableSummary {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct StageTimings {
     pub prepare: f64,
+    pub drive_surface: f64,
     pub collision_structures: f64,
     pub finishing_passes: f64,
     pub linking: f64,

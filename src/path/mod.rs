@@ -152,7 +152,15 @@ pub fn finishing_passes(
                 ..Default::default()
             };
             for curve in plane_section(mesh, &face_normals, &normal, offset) {
-                let mut points = curve.resampled(options.max_step);
+                // Ball-centre chords within a quarter of the tolerance: the refinement that
+                // follows inserts poses where the chord still strays.
+                let mut points = curve
+                    .simplified(
+                        ctx.tool.ball_radius,
+                        0.25 * options.tolerance,
+                        options.max_step,
+                    )
+                    .resampled(options.max_step);
                 if k % 2 == 1 {
                     points.reverse(); // zig-zag: every other plane runs the other way
                 }

@@ -140,6 +140,64 @@ impl SectionCurve {
             .sum()
     }
 
+    /// The curve with the points a ball of `radius` does not need dropped: Douglas–Peucker on
+    /// the ball-centre polyline (point + radius·normal), keeping every point whose removal
+    /// would move that polyline more than `tolerance`, and never leaving a span longer than
+    /// `max_step` that had points inside. A finely remeshed surface crosses many small
+    /// triangles; their crossings add poses, not accuracy.
+    pub fn simplified(&self, radius: f64, tolerance: f64, max_step: f64) -> SectionCurve {
+        let n = self.points.len();
+        if n <= 2 {
+            return self.clone();
+        }
+        let centre: Vec<Point3> = self
+            .points
+            .iter()
+            .map(|p| p.point + p.normal * radius)
+            .collect();
+        let mut keep = vec![false; n];
+        keep[0] = true;
+        keep[n - 1] = true;
+        let mut spans = vec![(0usize, n - 1)];
+        while let Some((a, b)) = spans.pop() {
+            if b <= a + 1 {
+                continue;
+            }
+            let (ca, cb) = (centre[a], centre[b]);
+            let ab = cb - ca;
+            let len2 = ab.norm_squared();
+            let mut worst = (0.0, a + (b - a) / 2);
+            for (i, c) in centre.iter().enumerate().take(b).skip(a + 1) {
+                let t = if len2 > 0.0 {
+                    ((c - ca).dot(&ab) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let d = (c - (ca + ab * t)).norm();
+                if d > worst.0 {
+                    worst = (d, i);
+                }
+            }
+            // Splitting a too-long span at its farthest point (or its middle) keeps both rules.
+            let too_long = (self.points[b].point - self.points[a].point).norm() > max_step;
+            if worst.0 > tolerance || too_long {
+                keep[worst.1] = true;
+                spans.push((a, worst.1));
+                spans.push((worst.1, b));
+            }
+        }
+        SectionCurve {
+            points: self
+                .points
+                .iter()
+                .zip(&keep)
+                .filter(|(_, k)| **k)
+                .map(|(p, _)| *p)
+                .collect(),
+            closed: self.closed,
+        }
+    }
+
     /// Inserts points so that no two consecutive points are more than `step` apart, drops
     /// repeated points whose normals agree, and, for a closed curve, repeats the first point at
     /// the end so the pass returns to its start.
@@ -240,5 +298,46 @@ mod tests {
         assert_eq!(r.first().unwrap().point, r.last().unwrap().point);
         let len: f64 = r.windows(2).map(|w| (w[1].point - w[0].point).norm()).sum();
         assert!((len - c.length()).abs() < 1e-9);
+    }
+
+    /// Simplifying keeps every dropped ball centre within the tolerance of the kept chords
+    /// (brute force over all original points), keeps the ends, honours the step, and on a
+    /// fine sphere section drops a good part of them.
+    #[test]
+    fn simplified_section_keeps_ball_centres_within_tolerance() {
+        let m = uv_sphere(10.0, 96, 192);
+        let c = &plane_section(&m, &normals(&m), &Vector3::x(), 3.0)[0];
+        let (radius, tolerance, step) = (2.0, 0.002, 1.5);
+        let s = c.simplified(radius, tolerance, step);
+        assert!(
+            s.points.len() * 4 < c.points.len() * 3,
+            "{} of {}",
+            s.points.len(),
+            c.points.len()
+        );
+        assert_eq!(s.points.first(), c.points.first());
+        assert_eq!(s.points.last(), c.points.last());
+        assert!(
+            s.points
+                .windows(2)
+                .all(|w| (w[1].point - w[0].point).norm() <= step)
+        );
+        let centre = |p: &DrivePoint| p.point + p.normal * radius;
+        let chords: Vec<(Point3, Point3)> = s
+            .points
+            .windows(2)
+            .map(|w| (centre(&w[0]), centre(&w[1])))
+            .collect();
+        for p in &c.points {
+            let q = centre(p);
+            let d = chords
+                .iter()
+                .map(|(a, b)| (q - crate::geom::closest_point_on_segment(&q, a, b)).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                d <= tolerance + 1e-12,
+                "centre {q} is {d} from the kept path"
+            );
+        }
     }
 }
