@@ -22,6 +22,47 @@ struct Node {
     count: u32,
 }
 
+/// The traversal stack of a query: nodes with their box distance², on the call stack while
+/// the tree is shallow enough (it always is for a median-split tree of a real mesh), so a
+/// query allocates nothing.
+struct NodeStack {
+    inline: [(f64, u32); 64],
+    len: usize,
+    overflow: Vec<(f64, u32)>,
+}
+
+impl NodeStack {
+    fn new(first: (f64, u32)) -> Self {
+        let mut inline = [(0.0, 0); 64];
+        inline[0] = first;
+        Self {
+            inline,
+            len: 1,
+            overflow: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, item: (f64, u32)) {
+        if self.len < self.inline.len() {
+            self.inline[self.len] = item;
+            self.len += 1;
+        } else {
+            self.overflow.push(item);
+        }
+    }
+
+    fn pop(&mut self) -> Option<(f64, u32)> {
+        if let Some(item) = self.overflow.pop() {
+            return Some(item);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.inline[self.len])
+    }
+}
+
 /// The closest point of the surface to a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Closest {
@@ -152,7 +193,7 @@ impl SurfaceDistance {
         }
         let mut best: Option<Closest> = None;
         let mut best_d2 = max_distance * max_distance;
-        let mut stack: Vec<(f64, u32)> = vec![(self.nodes[0].aabb.distance_squared(p), 0)];
+        let mut stack = NodeStack::new((self.nodes[0].aabb.distance_squared(p), 0));
         while let Some((d2, ni)) = stack.pop() {
             if d2 > best_d2 {
                 continue;
@@ -197,6 +238,56 @@ impl SurfaceDistance {
             }
         }
         best
+    }
+
+    /// Whether some triangle comes strictly closer than `radius` to `p`. Stops at the first
+    /// one found: far cheaper than [`SurfaceDistance::closest`] when the answer is yes, which
+    /// is what a Hausdorff distance asks of almost every sample.
+    pub fn any_within(&self, p: &Point3, radius: f64) -> bool {
+        if self.nodes.is_empty() || radius.is_nan() || radius <= 0.0 {
+            return false;
+        }
+        let r2 = radius * radius;
+        let mut stack = NodeStack::new((self.nodes[0].aabb.distance_squared(p), 0));
+        while let Some((d2, ni)) = stack.pop() {
+            if d2 >= r2 {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
+            if node.count > 0 {
+                let leaf = &self.order[node.start as usize..(node.start + node.count) as usize];
+                // A corner inside the ball answers without the full triangle test.
+                let corner_inside = leaf.iter().any(|&t| {
+                    self.triangles[t as usize]
+                        .iter()
+                        .any(|&i| (self.positions[i as usize] - p).norm_squared() < r2)
+                });
+                if corner_inside {
+                    return true;
+                }
+                for &t in leaf {
+                    let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+                    let (q, _) = closest_point_on_triangle(p, &a, &b, &c);
+                    if (q - p).norm_squared() < r2 {
+                        return true;
+                    }
+                }
+            } else {
+                let (l, r) = (node.left, node.right);
+                let (dl, dr) = (
+                    self.nodes[l as usize].aabb.distance_squared(p),
+                    self.nodes[r as usize].aabb.distance_squared(p),
+                );
+                if dl <= dr {
+                    stack.push((dr, r));
+                    stack.push((dl, l));
+                } else {
+                    stack.push((dl, l));
+                    stack.push((dr, r));
+                }
+            }
+        }
+        false
     }
 
     /// The pseudo-normal at a closest point: its sign against `p - point` tells outside (>0)
@@ -270,6 +361,23 @@ mod tests {
             assert!((c.distance - brute_force(&m, &p)).abs() < 1e-12);
             assert!((c.point - p).norm() - c.distance < 1e-12);
         }
+    }
+
+    /// `any_within` answers exactly what the brute-force distance says, just above and just
+    /// below it, and refuses empty or non-positive radii.
+    #[test]
+    fn any_within_agrees_with_brute_force() {
+        let m = torus(20.0, 6.0, 40, 20);
+        let s = SurfaceDistance::new(&m);
+        for p in probe_points(300, 35.0) {
+            let d = brute_force(&m, &p);
+            assert!(s.any_within(&p, d * (1.0 + 1e-9) + 1e-12), "{p} at {d}");
+            assert!(!s.any_within(&p, d * (1.0 - 1e-9)), "{p} at {d}");
+        }
+        let on = m.positions[7];
+        assert!(!s.any_within(&on, 0.0));
+        assert!(!s.any_within(&on, f64::NAN));
+        assert!(s.any_within(&on, 1e-9));
     }
 
     /// Filtering by facing: from just inside a thin slab, the nearest face is the far side; the

@@ -285,17 +285,29 @@ fn two_sided_hausdorff(
     use rayon::prelude::*;
     let level_distance = SurfaceDistance::new(level);
     let level_samples = surface_samples(level, spacing);
-    // The farthest sample and where it is; ties go to the lower index so the answer does not
-    // depend on how rayon splits the work.
+    // The farthest sample and where it is. Samples go in fixed chunks, each scanned in order
+    // keeping its farthest so far: a sample that some triangle comes closer to than that
+    // cannot be the farthest, and `any_within` says so without finding the closest point.
+    // Fixed chunks and ties to the lower index keep the answer independent of the threads.
+    const CHUNK: usize = 2048;
     let one = |samples: &[Point3], to: &SurfaceDistance| {
         samples
-            .par_iter()
+            .par_chunks(CHUNK)
             .enumerate()
-            .map(|(i, p)| {
-                let d = to
-                    .closest(p, f64::INFINITY)
-                    .map_or(f64::INFINITY, |c| c.distance);
-                (d, i)
+            .map(|(c, chunk)| {
+                let mut best = (0.0, usize::MAX);
+                for (k, p) in chunk.iter().enumerate() {
+                    if best.1 != usize::MAX && to.any_within(p, best.0) {
+                        continue;
+                    }
+                    let d = to
+                        .closest(p, f64::INFINITY)
+                        .map_or(f64::INFINITY, |c| c.distance);
+                    if best.1 == usize::MAX || d > best.0 {
+                        best = (d, c * CHUNK + k);
+                    }
+                }
+                best
             })
             .reduce(
                 || (0.0, usize::MAX),
