@@ -145,3 +145,62 @@ fn non_manifold_input_is_refused_saying_where() {
         "the message must say where: {err}"
     );
 }
+
+/// Diagnostic for issue #3's question "does the k-disk update bring coarse levels closer to the
+/// part?": L∞ and RMS deviation of each truncated level from the finest, with plain lifting and
+/// with the least-squares update, on remeshed parts with several levels. Run with
+/// `cargo test --release --test multires_testdata kdisk -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn kdisk_update_on_remeshed_parts() {
+    use wavemill::multires::WaveletOptions;
+    let mut parts = vec![(
+        "sample impeller".to_string(),
+        common::repo_file("data/impeller.glb"),
+        "mm",
+    )];
+    if let Some(dir) = common::testdata() {
+        for (file, units) in [
+            ("impeller_blower_9blade__necro-nemesis_aero2205.stl", "mm"),
+            ("turbine_blade_with_root__dengwirda_jigsaw-models.stl", "m"),
+        ] {
+            parts.push((file.to_string(), dir.join("meshes").join(file), units));
+        }
+    }
+    for (label, path, units) in parts {
+        let raw = job::load_part(&path, units).unwrap();
+        let (mesh, _) = prepare(&raw.mesh, &PrepareOptions::default()).unwrap();
+        let h = Hierarchy::build(
+            &mesh,
+            &RemeshOptions {
+                tolerance: 0.0,
+                base_max_error: Some(0.3),
+                max_levels: 3,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let base = &h.levels[0];
+        for kdisk in [false, true] {
+            let wavelets = WaveletHierarchy::new_opt(
+                &base.mesh.triangles,
+                base.mesh.positions.len(),
+                &base.creases,
+                h.levels.len() - 1,
+                &WaveletOptions::default().with_kdisk_update(kdisk),
+            )
+            .unwrap();
+            let w = wavelets.analyse_all(&h.finest().mesh.positions).unwrap();
+            let per_level: Vec<String> = (0..h.levels.len() - 1)
+                .map(|j| {
+                    let d = wavelets.deviation_to_finest(&w, j).unwrap();
+                    let rms = (d.per_vertex.iter().map(|v| v.norm_squared()).sum::<f64>()
+                        / d.per_vertex.len().max(1) as f64)
+                        .sqrt();
+                    format!("level {j}: max {:.4} rms {:.4}", d.linf, rms)
+                })
+                .collect();
+            println!("{label} (k-disk {kdisk}): {}", per_level.join("; "));
+        }
+    }
+}

@@ -10,13 +10,16 @@ use super::samples::NamedFile;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::mesh::io::GlbBuilder;
-use crate::multires::{Hierarchy, RemeshOptions, WaveletHierarchy};
+use crate::multires::{Hierarchy, RemeshOptions, WaveletHierarchy, WaveletOptions};
 
 /// `levels.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct LevelsReport {
     pub input_triangles: usize,
     pub tolerance_mm: f64,
+    /// Whether the lifting has the k-disk least-squares update (seed 004 eqs. 2.22–2.24),
+    /// which brings the coarse levels closer to the part.
+    pub kdisk_update: bool,
     /// Two-sided Hausdorff distance of the finest level to the input (dense samples), mm.
     pub finest_hausdorff_mm: f64,
     /// max |synthesis(analysis(finest)) − finest|, mm: exact invertibility in practice.
@@ -74,6 +77,7 @@ pub struct LevelsTimings {
 pub fn levels(
     part: &Mesh,
     options: &RemeshOptions,
+    wavelet_options: &WaveletOptions,
     timings: bool,
 ) -> Result<(Vec<NamedFile>, LevelsReport)> {
     let ms = |t: Instant| (t.elapsed().as_secs_f64() * 1e4).round() / 10.0;
@@ -84,11 +88,12 @@ pub fn levels(
     let remesh_ms = ms(t);
     let base = &hierarchy.levels[0];
     let n = hierarchy.levels.len() - 1;
-    let wavelets = WaveletHierarchy::new(
+    let wavelets = WaveletHierarchy::new_opt(
         &base.mesh.triangles,
         base.mesh.positions.len(),
         &base.creases,
         n,
+        wavelet_options,
     )
     .map_err(wavelet_error)?;
     let finest = &hierarchy.finest().mesh;
@@ -169,6 +174,7 @@ pub fn levels(
     let report = LevelsReport {
         input_triangles: part.triangles.len(),
         tolerance_mm: options.tolerance,
+        kdisk_update: wavelet_options.kdisk_update,
         finest_hausdorff_mm: hierarchy.finest().hausdorff,
         reconstruction_error_mm: reconstruction_error,
         levels: summaries,
