@@ -76,10 +76,13 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         worst >= r - 1e-6,
         "gouge: ball centre {worst} mm from the part, radius {r}"
     );
-    // Every cut pose touches the part: the ball is not cutting air.
+    // Every cut pose touches the part: the ball is not cutting air. It rides on the drive
+    // surface (the hierarchy's finest level), which may lie up to its fit off the part.
+    let fit = report.surface.hausdorff_to_part_mm;
+    assert!(fit <= report.surface.tolerance_mm, "{:?}", report.surface);
     assert!(
-        farthest <= r + 1e-3,
-        "a cut pose floats {} mm above the part",
+        farthest <= r + fit + 1e-3,
+        "a cut pose floats {} mm above the part (drive surface fit {fit} mm)",
         farthest - r
     );
 
