@@ -30,6 +30,7 @@ pub mod error;
 pub mod gcode;
 pub mod geometry;
 pub mod input;
+pub mod multires;
 pub mod parallel;
 pub mod region;
 pub mod segops;
@@ -40,6 +41,9 @@ pub mod wavelet;
 pub use error::ContourError;
 pub use gcode::{MachineParams, Program, ProgramStats};
 pub use input::{OutlineError, OutlineOptions, read_outline};
+pub use multires::{MultiresOptions, MultiresPlan, MultiresReport, multires_paths};
 pub use parallel::{ParallelOptions, contour_parallel};
 pub use toolpath::{CenterPath, Link, Pass};
-pub use verify::{Clearance, PathStats, UncutArea, clearance, path_stats, uncut_area};
+pub use verify::{
+    Clearance, PassSpacing, PathStats, UncutArea, clearance, pass_spacing, path_stats, uncut_area,
+};
