@@ -190,7 +190,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
         let loops = offset_region(part, level, "part")?;
         let mut found = false;
         for l in &loops {
-            for pass in clip_loop(l, &[&clip_index], level)? {
+            for pass in clip_loop(l, &[(&clip_index, true)], level)? {
                 found = true;
                 pieces.push(Piece { level: k, pass });
             }
@@ -209,14 +209,19 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
 
 /// Splits a closed offset loop where it crosses the clip region's boundary and keeps the runs
 /// inside (midpoint test). A loop entirely inside stays one closed pass.
-/// With several clip regions, the runs inside ALL of them are kept (their intersection).
-pub(crate) fn clip_loop(c: &Contour, clips: &[&RegionIndex], offset: f64) -> Result<Vec<Pass>> {
+/// With several clip regions `(region, keep_inside)`, the runs inside every region marked
+/// `true` and outside every region marked `false` are kept.
+pub(crate) fn clip_loop(
+    c: &Contour,
+    clips: &[(&RegionIndex, bool)],
+    offset: f64,
+) -> Result<Vec<Pass>> {
     let segs: Vec<Segment> = c.segments().collect();
     // (segment index, t0, t1) pieces in loop order.
     let mut parts: Vec<(usize, f64, f64)> = Vec::new();
     for (i, seg) in segs.iter().enumerate() {
         let mut ts: Vec<f64> = Vec::new();
-        for clip in clips {
+        for (clip, _) in clips {
             let clip_segs = clip.boundary().segments();
             for j in clip.boundary().candidates_near(&bbox(seg), 0.0) {
                 for h in intersections(seg, &clip_segs[j]) {
@@ -238,7 +243,7 @@ pub(crate) fn clip_loop(c: &Contour, clips: &[&RegionIndex], offset: f64) -> Res
         .iter()
         .map(|&(i, t0, t1)| {
             let mid = point_at(&segs[i], 0.5 * (t0 + t1));
-            clips.iter().all(|clip| clip.contains(mid))
+            clips.iter().all(|(clip, inside)| clip.contains(mid) == *inside)
         })
         .collect();
     if inside.iter().all(|&b| b) {

@@ -21,6 +21,8 @@
 //!   at its corners (Fig. 4.4), gives the roughing passes outside H; the part levels k ≥ 1
 //!   are clipped to H (§4.2 — we clip the final line/arc passes exactly against the hull
 //!   instead of subdividing Bézier curves against the hull polygon).
+//! * The first hull pass (δ = r) is left out where it runs within η = 1 µm of the finishing
+//!   pass (where the part lies on its hull) — the material there is the finishing pass's.
 //! * Everything is clipped to the stock grown by r, like the baseline
 //!   ([`crate::contour::parallel`]), ordered far side first and linked by the baseline's
 //!   shared code.
@@ -62,6 +64,10 @@ use sample::sample_closed;
 /// Offset loops with at most this many segments are kept exact: a B-spline region becomes at
 /// least two arcs per Bézier span, so there is nothing to gain.
 const MIN_SEGMENTS_TO_SIMPLIFY: usize = 24;
+
+/// η: pieces of the first hull pass closer than r + η to the part duplicate the finishing
+/// pass and are dropped, mm.
+const DUPLICATE_TOL: f64 = 1e-3;
 
 /// Options of [`multires_paths`]; [`MultiresOptions::new`] gives the documented defaults.
 #[derive(Clone, Debug, PartialEq)]
@@ -215,10 +221,10 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
             report.used_segments += used.vertices.len();
             // Level 0 is the whole finishing pass: material within r of the part is swept by
             // the level-r point beyond it, which may lie outside H.
-            let clips: &[&RegionIndex] = if k == 0 {
-                &[&clip_index]
+            let clips: &[(&RegionIndex, bool)] = if k == 0 {
+                &[(&clip_index, true)]
             } else {
-                &[&clip_index, &hull_clip]
+                &[(&clip_index, true), (&hull_clip, true)]
             };
             for pass in clip_loop(&used, clips, level)? {
                 found = true;
@@ -240,6 +246,9 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         .iter()
         .flat_map(|c| c.vertices.iter().map(|v| v.point))
         .collect();
+    let finish_zone = RegionIndex::new(&Shape {
+        contours: offset_region(part, r + DUPLICATE_TOL, "part")?,
+    });
     let base = k;
     let mut m = 0;
     loop {
@@ -252,7 +261,15 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         let delta = r + m as f64 * s;
         let ring = hull::hull_offset(&loose, delta);
         let mut found = false;
-        for pass in clip_loop(&ring, &[&clip_index], delta)? {
+        // Where the part lies on the hull, the first hull pass runs along the finishing pass:
+        // its points within r + η of the part are within η of the finishing pass (they are
+        // outside the part grown by r), so they are left out.
+        let clips: &[(&RegionIndex, bool)] = if m == 0 {
+            &[(&clip_index, true), (&finish_zone, false)]
+        } else {
+            &[(&clip_index, true)]
+        };
+        for pass in clip_loop(&ring, clips, delta)? {
             found = true;
             pieces.push(Piece {
                 level: base + m,
