@@ -43,7 +43,13 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    for f in ["wavelet.nc", "contour_parallel.nc", "compare.json", "paths.svg", "paths.png"] {
+    for f in [
+        "wavelet.nc",
+        "contour_parallel.nc",
+        "compare.json",
+        "paths.svg",
+        "paths.png",
+    ] {
         let (x, y) = (
             std::fs::read(a.join(f)).expect("output"),
             std::fs::read(b.join(f)).expect("output"),
@@ -54,7 +60,10 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
     let png = std::fs::read(a.join("paths.png")).expect("png");
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     let gcode = std::fs::read_to_string(a.join("wavelet.nc")).expect("nc");
-    assert!(gcode.contains("G2") || gcode.contains("G3"), "no arcs in wavelet.nc");
+    assert!(
+        gcode.contains("G2") || gcode.contains("G3"),
+        "no arcs in wavelet.nc"
+    );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(a.join("compare.json")).expect("json"))
             .expect("compare.json parses");
@@ -83,7 +92,14 @@ fn bad_inputs_exit_1_naming_the_problem() {
     let dir = std::env::temp_dir().join(format!("wavemill-contour-bad-{}", std::process::id()));
     let out = dir.to_str().expect("utf-8 path");
     let o = wavemill(&[
-        "contour", "/nonexistent/part.svg", "--tool", "flat:6", "--stock", "margin:5", "--out", out,
+        "contour",
+        "/nonexistent/part.svg",
+        "--tool",
+        "flat:6",
+        "--stock",
+        "margin:5",
+        "--out",
+        out,
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("part.svg: cannot read"));
@@ -122,14 +138,22 @@ fn shared_outlines_no_overcut_no_more_uncut() {
         let c = contour_compare(&data.join("outlines").join(file), &opts).expect(file);
         let r = &c.report;
         for m in [&r.wavelet, &r.contour_parallel] {
-            assert!(m.min_clearance_minus_r_mm >= -1e-6, "{file}: overcut {}", m.min_clearance_minus_r_mm);
+            assert!(
+                m.min_clearance_minus_r_mm >= -1e-6,
+                "{file}: overcut {}",
+                m.min_clearance_minus_r_mm
+            );
         }
         assert!(
-            r.wavelet.uncut_area_mm2 <= r.contour_parallel.uncut_area_mm2 + 2.0 * r.uncut_row_step_mm,
+            r.wavelet.uncut_area_mm2
+                <= r.contour_parallel.uncut_area_mm2 + 2.0 * r.uncut_row_step_mm,
             "{file}: uncut {} vs {}",
             r.wavelet.uncut_area_mm2,
             r.contour_parallel.uncut_area_mm2
         );
-        assert!(r.wavelet.nc_blocks < r.contour_parallel.nc_blocks, "{file}: blocks");
+        assert!(
+            r.wavelet.nc_blocks < r.contour_parallel.nc_blocks,
+            "{file}: blocks"
+        );
     }
 }

@@ -245,7 +245,10 @@ fn contour(args: &ContourArgs) -> Result<()> {
         job::write_atomically(&args.out.join("wavelet.nc"), c.wavelet_nc.as_bytes())?;
     }
     let r = &c.report;
-    for (name, f) in [("contour-parallel", &r.contour_parallel), ("wavelet", &r.wavelet)] {
+    for (name, f) in [
+        ("contour-parallel", &r.contour_parallel),
+        ("wavelet", &r.wavelet),
+    ] {
         say!(
             "{name:>16}: {:9.1} mm cut, {:6} blocks, {:7.2} min, uncut {:8.2} mm², clearance − r {:+.6} mm, spacing ≤ {:.3} mm",
             f.cutting_length_mm,

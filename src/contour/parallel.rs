@@ -243,7 +243,9 @@ pub(crate) fn clip_loop(
         .iter()
         .map(|&(i, t0, t1)| {
             let mid = point_at(&segs[i], 0.5 * (t0 + t1));
-            clips.iter().all(|(clip, inside)| clip.contains(mid) == *inside)
+            clips
+                .iter()
+                .all(|(clip, inside)| clip.contains(mid) == *inside)
         })
         .collect();
     if inside.iter().all(|&b| b) {
@@ -421,7 +423,12 @@ fn restart_closed(pass: &Pass, seg: usize, t: f64) -> Pass {
 }
 
 /// Joins ordered passes: a feed link when short and clear of the part, else retract/rapid.
-pub(crate) fn link(passes: Vec<Pass>, part: &RegionIndex, r: f64, max_feed_link: f64) -> Result<CenterPath> {
+pub(crate) fn link(
+    passes: Vec<Pass>,
+    part: &RegionIndex,
+    r: f64,
+    max_feed_link: f64,
+) -> Result<CenterPath> {
     let links = passes
         .windows(2)
         .map(|w| {

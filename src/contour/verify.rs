@@ -451,7 +451,12 @@ pub struct PassSpacing {
 /// there. Points of the other passes are the closest points of their segments (exact), so a
 /// pass whose closest point is not nearer the part is not counted at that sample. Sampled,
 /// for reports: use `margin` ≈ a quarter of the stepover.
-pub fn pass_spacing(path: &CenterPath, part: &Shape, step: f64, margin: f64) -> Result<PassSpacing> {
+pub fn pass_spacing(
+    path: &CenterPath,
+    part: &Shape,
+    step: f64,
+    margin: f64,
+) -> Result<PassSpacing> {
     validate_shape(part, "part")?;
     if !(step.is_finite() && step > 0.0 && margin.is_finite() && margin >= 0.0) {
         return Err(ContourError::InvalidOption {
@@ -502,7 +507,11 @@ pub fn pass_spacing(path: &CenterPath, part: &Shape, step: f64, margin: f64) -> 
     let n = gaps.len();
     Ok(PassSpacing {
         max: gaps.last().copied().unwrap_or(0.0),
-        p95: if n == 0 { 0.0 } else { gaps[((0.95 * (n - 1) as f64).round() as usize).min(n - 1)] },
+        p95: if n == 0 {
+            0.0
+        } else {
+            gaps[((0.95 * (n - 1) as f64).round() as usize).min(n - 1)]
+        },
         samples: n,
     })
 }
@@ -805,5 +814,24 @@ mod tests {
         let ua = uncut_area(&a, &part2, &stock, Some(0.01)).expect("u");
         let ub = uncut_area(&b, &part2, &stock, Some(0.01)).expect("u");
         assert_eq!(ua.uncut.to_bits(), ub.uncut.to_bits());
+    }
+
+    /// The baseline's concentric circles are exactly one stepover apart.
+    #[test]
+    fn pass_spacing_of_concentric_offsets_is_the_stepover() {
+        use crate::contour::parallel::tests::{circle, rect};
+        use crate::contour::parallel::{ParallelOptions, contour_parallel};
+        let part = Shape {
+            contours: vec![circle(0.0, 0.0, 10.0, true)],
+        };
+        let stock = Shape {
+            contours: vec![rect(-16.0, -16.0, 16.0, 16.0, true)],
+        };
+        let path = contour_parallel(&part, &stock, &ParallelOptions::new(2.0, 1.5)).expect("plan");
+        let sp = pass_spacing(&path, &part, 0.5, 0.4).expect("spacing");
+        assert!(sp.samples > 100);
+        assert!((sp.p95 - 1.5).abs() < 1e-9, "p95 {}", sp.p95);
+        assert!((sp.max - 1.5).abs() < 1e-9, "max {}", sp.max);
+        assert!(pass_spacing(&path, &part, 0.0, 0.4).is_err());
     }
 }

@@ -278,7 +278,12 @@ pub fn deviation_bound(detail: &Controls) -> Result<f64> {
         .ok_or_else(|| ContourError::BadPath(format!("bound: {rows} coefficients")))?;
     let e = bezier_matrix(j) * synthesis_q(j) * detail;
     Ok((0..e.nrows())
-        .map(|r| (0..e.ncols()).map(|c| e[(r, c)].powi(2)).sum::<f64>().sqrt())
+        .map(|r| {
+            (0..e.ncols())
+                .map(|c| e[(r, c)].powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
         .fold(0.0, f64::max))
 }
 
@@ -319,9 +324,7 @@ pub fn fit(points: &[Point2], params: &[f64], j: u32) -> Result<Controls> {
     let x = ata
         .cholesky()
         .map(|ch| ch.solve(&atb))
-        .ok_or_else(|| {
-            ContourError::BadPath(format!("fit: samples too sparse for level {j}"))
-        })?;
+        .ok_or_else(|| ContourError::BadPath(format!("fit: samples too sparse for level {j}")))?;
     let mut c = DMatrix::zeros(n, 2);
     c[(0, 0)] = first.x;
     c[(0, 1)] = first.y;
@@ -566,7 +569,11 @@ mod tests {
     fn wiggly(j: u32) -> Controls {
         DMatrix::from_fn(count(j), 2, |r, c| {
             let x = r as f64;
-            if c == 0 { x + (1.3 * x).sin() } else { (0.7 * x).cos() * 3.0 + 0.1 * x * x }
+            if c == 0 {
+                x + (1.3 * x).sin()
+            } else {
+                (0.7 * x).cos() * 3.0 + 0.1 * x * x
+            }
         })
     }
 
@@ -636,7 +643,12 @@ mod tests {
         for s in 0..8 {
             for k in 0..=10 {
                 let t = k as f64 / 10.0;
-                let w = [(1.0 - t).powi(3), 3.0 * t * (1.0 - t).powi(2), 3.0 * t * t * (1.0 - t), t.powi(3)];
+                let w = [
+                    (1.0 - t).powi(3),
+                    3.0 * t * (1.0 - t).powi(2),
+                    3.0 * t * t * (1.0 - t),
+                    t.powi(3),
+                ];
                 let mut p = Point2::origin();
                 for (i, wi) in w.iter().enumerate() {
                     p.x += wi * bez[(4 * s + i, 0)];

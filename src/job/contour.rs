@@ -16,8 +16,8 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::output::write_atomically;
-use crate::contour::geometry::{Point2, Shape};
 use crate::contour::geometry::{Contour, Vertex};
+use crate::contour::geometry::{Point2, Shape};
 use crate::contour::region::RegionIndex;
 use crate::contour::{
     CenterPath, ContourError, MachineParams, MultiresOptions, MultiresReport, OutlineOptions,
@@ -59,7 +59,11 @@ impl ContourJobOptions {
 
 /// Parses `flat:D` (D in mm > 0) into the tool diameter.
 pub fn parse_flat_tool(spec: &str) -> Result<f64> {
-    let bad = || Error::Job(format!("--tool {spec}: expected flat:D with D > 0 mm (e.g. flat:6)"));
+    let bad = || {
+        Error::Job(format!(
+            "--tool {spec}: expected flat:D with D > 0 mm (e.g. flat:6)"
+        ))
+    };
     let (kind, d) = spec.split_once(':').ok_or_else(bad)?;
     let d: f64 = d.trim().parse().map_err(|_| bad())?;
     if kind.trim() != "flat" || !(d.is_finite() && d > 0.0) {
@@ -70,7 +74,11 @@ pub fn parse_flat_tool(spec: &str) -> Result<f64> {
 
 /// Parses `margin:M` (M in mm ≥ 0) into the stock margin.
 pub fn parse_stock_margin(spec: &str) -> Result<f64> {
-    let bad = || Error::Job(format!("--stock {spec}: expected margin:M with M ≥ 0 mm (e.g. margin:10)"));
+    let bad = || {
+        Error::Job(format!(
+            "--stock {spec}: expected margin:M with M ≥ 0 mm (e.g. margin:10)"
+        ))
+    };
     let (kind, m) = spec.split_once(':').ok_or_else(bad)?;
     let m: f64 = m.trim().parse().map_err(|_| bad())?;
     if kind.trim() != "margin" || !(m.is_finite() && m >= 0.0) {
@@ -209,10 +217,15 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
     let r = 0.5 * d;
     let s = opts.stepover.unwrap_or(0.4 * d);
     if !(s.is_finite() && s > 0.0 && s <= d) {
-        return Err(Error::Job(format!("--stepover {s}: must satisfy 0 < stepover ≤ tool diameter {d}")));
+        return Err(Error::Job(format!(
+            "--stepover {s}: must satisfy 0 < stepover ≤ tool diameter {d}"
+        )));
     }
     if !(opts.stock_margin.is_finite() && opts.stock_margin >= 0.0) {
-        return Err(Error::Job(format!("stock margin {}: must be ≥ 0 mm", opts.stock_margin)));
+        return Err(Error::Job(format!(
+            "stock margin {}: must be ≥ 0 mm",
+            opts.stock_margin
+        )));
     }
     let t = Instant::now();
     let outline_opts = OutlineOptions {
@@ -225,10 +238,12 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
     let t_read = ms(t);
 
     let t = Instant::now();
-    let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).map_err(contour_error(&file))?;
+    let plan =
+        multires_paths(&part, &stock, &MultiresOptions::new(r, s)).map_err(contour_error(&file))?;
     let t_wavelet = ms(t);
     let t = Instant::now();
-    let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).map_err(contour_error(&file))?;
+    let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s))
+        .map_err(contour_error(&file))?;
     let t_parallel = ms(t);
 
     let t = Instant::now();
@@ -301,7 +316,8 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
             verify: t_verify,
         }),
     };
-    let picture = super::contour_picture::Picture::new(&part, &stock, &base, &plan.path, &plan.loose_hull);
+    let picture =
+        super::contour_picture::Picture::new(&part, &stock, &base, &plan.path, &plan.loose_hull);
     Ok(ContourComparison {
         wavelet_nc,
         parallel_nc,
@@ -348,4 +364,3 @@ fn stock_around(part: &Shape, margin: f64) -> Option<Shape> {
         }],
     })
 }
-

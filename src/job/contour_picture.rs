@@ -41,7 +41,9 @@ impl<'a> Picture<'a> {
         // Everything the tool centre reaches: the stock grown by r plus a little.
         let r = wavelet.tool_radius().max(parallel.tool_radius());
         let b = RegionIndex::new(stock).boundary().bounds();
-        let (lo, hi) = b.map_or((Point2::origin(), Point2::new(1.0, 1.0)), |b| (b.min, b.max));
+        let (lo, hi) = b.map_or((Point2::origin(), Point2::new(1.0, 1.0)), |b| {
+            (b.min, b.max)
+        });
         let pad = 1.2 * r;
         Self {
             part,
@@ -200,7 +202,15 @@ impl<'a> Picture<'a> {
                     start: l.from(),
                     end: l.to(),
                 };
-                img.segment(&seg, &to_px, if matches!(l, Link::Feed { .. }) { FEED } else { RAPID });
+                img.segment(
+                    &seg,
+                    &to_px,
+                    if matches!(l, Link::Feed { .. }) {
+                        FEED
+                    } else {
+                        RAPID
+                    },
+                );
             }
         }
         img.encode()
@@ -339,7 +349,11 @@ fn crc32(data: &[u8]) -> u32 {
     for &x in data {
         crc ^= x as u32;
         for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
         }
     }
     !crc

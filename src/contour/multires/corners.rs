@@ -43,7 +43,9 @@ fn curvatures(points: &[Point2], scales: u32) -> Vec<Vec<f64>> {
         let smooth = |v: &[f64]| -> Vec<f64> {
             (0..n)
                 .map(|k| {
-                    let at = |o: isize| v[(k as isize + o * hole as isize).rem_euclid(n as isize) as usize];
+                    let at = |o: isize| {
+                        v[(k as isize + o * hole as isize).rem_euclid(n as isize) as usize]
+                    };
                     (at(-2) + 4.0 * at(-1) + 6.0 * at(0) + 4.0 * at(1) + at(2)) / 16.0
                 })
                 .collect()
@@ -219,7 +221,10 @@ mod tests {
         let mut turned = c.clone();
         turned.vertices.rotate_left(3);
         for v in &mut turned.vertices {
-            v.point = Point2::new(co * v.point.x - s * v.point.y, s * v.point.x + co * v.point.y);
+            v.point = Point2::new(
+                co * v.point.x - s * v.point.y,
+                s * v.point.x + co * v.point.y,
+            );
         }
         let pts: Vec<Point2> = sample_closed(&turned, 0.1).iter().map(|s| s.0).collect();
         assert_eq!(detect_corners(&pts, &CornerOptions::default()).len(), 2);
@@ -236,9 +241,21 @@ mod tests {
         assert_eq!(
             r,
             vec![
-                Region { from: 0.0, to: 40.0, smooth: true },
-                Region { from: 40.0, to: 50.0, smooth: false },
-                Region { from: 50.0, to: 100.0, smooth: true },
+                Region {
+                    from: 0.0,
+                    to: 40.0,
+                    smooth: true
+                },
+                Region {
+                    from: 40.0,
+                    to: 50.0,
+                    smooth: false
+                },
+                Region {
+                    from: 50.0,
+                    to: 100.0,
+                    smooth: true
+                },
             ]
         );
         let total: f64 = r.iter().map(|g| g.to - g.from).sum();

@@ -7,7 +7,8 @@
 //! * [`loose_hull`] — algorithm *LooseConvexHull*: legs shorter than `min_leg` are deleted
 //!   (the neighbouring legs extended to meet, Fig. 4.2a) or, when adjacent short legs form a
 //!   run, combined into one leg perpendicular to the run's mean normal through its extreme
-//!   vertex (Fig. 4.2b–d), repeatedly until nothing changes. Every new line is a supporting
+//!   vertex (Fig. 4.2b–d), repeatedly until nothing changes; a run that cannot be replaced
+//!   as a whole is tried by pairs and single legs. Every new line is a supporting
 //!   line of the polygon, so the loose hull still encloses the part. Unlike the seed, each
 //!   change must keep the loose hull within `max_growth` of the true hull (a bound on how much
 //!   air the roughing passes cut), and convex;
@@ -70,8 +71,10 @@ pub fn convex_hull(points: &[Point2]) -> Vec<Point2> {
         };
         for &q in iter {
             while hull.len() >= start + 2
-                && cross(hull[hull.len() - 1] - hull[hull.len() - 2], q - hull[hull.len() - 1])
-                    <= 0.0
+                && cross(
+                    hull[hull.len() - 1] - hull[hull.len() - 2],
+                    q - hull[hull.len() - 1],
+                ) <= 0.0
             {
                 hull.pop();
             }
@@ -158,7 +161,16 @@ pub fn loose_hull(hull: &[Point2], min_leg: f64, max_growth: f64) -> Vec<Point2>
             let lb: f64 = (0..b.1).map(|t| leg(&poly, b.0 + t)).sum();
             la.total_cmp(&lb).then(a.0.cmp(&b.0))
         });
-        for &(first, len) in &runs {
+        // When a whole run cannot go (too much growth), try its pairs and single legs.
+        let mut candidates = runs.clone();
+        for width in [2, 1] {
+            for &(first, len) in &runs {
+                if len > width {
+                    candidates.extend((0..=len - width).map(|t| ((first + t) % n, width)));
+                }
+            }
+        }
+        for &(first, len) in &candidates {
             if len + 2 >= n {
                 continue;
             }
@@ -286,7 +298,10 @@ mod tests {
         ];
         let l = loose_hull(&chamfered, 2.0, 1.0);
         assert_eq!(l.len(), 4);
-        assert!(l.iter().any(|p| (p - Point2::new(10.0, 10.0)).norm() < 1e-12));
+        assert!(
+            l.iter()
+                .any(|p| (p - Point2::new(10.0, 10.0)).norm() < 1e-12)
+        );
     }
 
     #[test]

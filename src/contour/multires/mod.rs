@@ -156,8 +156,8 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
             reason: "must be a finite number of mm ≥ 0",
         });
     }
-    let min_leg = opts.hull_min_leg.unwrap_or(2.0 * s);
-    let max_growth = opts.hull_max_growth.unwrap_or(0.5 * s);
+    let min_leg = opts.hull_min_leg.unwrap_or(4.0 * s);
+    let max_growth = opts.hull_max_growth.unwrap_or(s);
     for (name, value) in [("hull_min_leg", min_leg), ("hull_max_growth", max_growth)] {
         if !(value.is_finite() && value >= 0.0) {
             return Err(ContourError::InvalidOption {
@@ -314,7 +314,9 @@ fn approximate_checked(
         return exact.clone();
     }
     // Sampling step: fine enough for the tolerance and for corners at the stepover's scale.
-    let step = (0.25 * s).min(exact.length() / 64.0).max(exact.length() / 20_000.0);
+    let step = (0.25 * s)
+        .min(exact.length() / 64.0)
+        .max(exact.length() / 20_000.0);
     let (approx, stats) = smooth::approximate_loop(exact, tol, step, &opts.corners);
     // Already simpler than any approximation (a few lines and arcs): keep it exact.
     if approx.vertices.len() >= exact.vertices.len() {

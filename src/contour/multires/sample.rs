@@ -23,7 +23,11 @@ pub fn sample_closed(c: &Contour, step: f64) -> Vec<(Point2, f64)> {
             seg += 1;
         }
         let len = segs[seg].length();
-        let t = if len > 0.0 { (a - seg_start) / len } else { 0.0 };
+        let t = if len > 0.0 {
+            (a - seg_start) / len
+        } else {
+            0.0
+        };
         out.push((point_at(&segs[seg], t), a));
     }
     out
@@ -57,14 +61,20 @@ pub fn sub_chain(c: &Contour, from: f64, to: f64) -> Vec<Vertex> {
             }
             if b >= to {
                 if let Some(q) = last {
-                    out.push(Vertex { point: q, bulge: 0.0 });
+                    out.push(Vertex {
+                        point: q,
+                        bulge: 0.0,
+                    });
                 }
                 return out;
             }
         }
     }
     if let Some(q) = last {
-        out.push(Vertex { point: q, bulge: 0.0 });
+        out.push(Vertex {
+            point: q,
+            bulge: 0.0,
+        });
     }
     out
 }

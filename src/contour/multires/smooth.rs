@@ -7,14 +7,17 @@
 //! by lines and arcs (biarcs, [`crate::contour::input::curves::fit_curve`]).
 //!
 //! The error budget of a region: sampled fit error + Σ eq. 3.1 bounds of the dropped levels
-//! ≤ ¾ tol, biarcs ≤ ¼ tol. The caller checks the result exactly against the part and falls
+//! ≤ ¾ tol, biarcs the rest (≥ ¼ tol). A region whose exact piece has fewer segments than its
+//! approximation is kept exact. The caller checks the result exactly against the part and falls
 //! back to the exact curve where the check fails (never trusting the bound alone).
 
 use super::corners::{CornerOptions, Region, detect_corners, segment};
 use super::sample::{sample_closed, sub_chain};
 use crate::contour::geometry::{Contour, Point2, Vertex};
 use crate::contour::input::curves::{Cubic, fit_curve};
-use crate::contour::wavelet::{Controls, bezier_matrix, count, decompose, deviation_bound, evaluate, fit};
+use crate::contour::wavelet::{
+    Controls, bezier_matrix, count, decompose, deviation_bound, evaluate, fit,
+};
 
 /// Finest wavelet level fitted to one region (2^6 + 3 control points): finer fits would give
 /// more arcs than the exact offsets have.
@@ -26,7 +29,8 @@ pub struct LoopStats {
     pub corners: usize,
     pub smooth_regions: usize,
     pub non_smooth_regions: usize,
-    /// Regions kept exact because no level up to [`MAX_LEVEL`] fitted them.
+    /// Regions kept exact: no level up to [`MAX_LEVEL`] fitted them, or the exact piece had
+    /// fewer segments.
     pub exact_regions: usize,
     /// Levels removed by decomposition, over all non-smooth regions.
     pub levels_dropped: u32,
@@ -60,11 +64,13 @@ pub fn approximate_loop(
         } else {
             stats.non_smooth_regions += 1;
         }
+        // A region whose exact piece has fewer segments than its approximation stays exact.
+        let exact = sub_chain(c, region.from, region.to);
         let piece = match approximate_region(c, region, tol, step, &mut stats) {
-            Some(v) => v,
-            None => {
+            Some(v) if v.len() < exact.len() => v,
+            _ => {
                 stats.exact_regions += 1;
-                sub_chain(c, region.from, region.to)
+                exact
             }
         };
         // Each piece ends where the next begins: drop its end vertex.
@@ -117,7 +123,11 @@ fn approximate_region(
             .fold(0.0, f64::max)
     };
     // Non-smooth regions start finer, to leave room for the decomposition.
-    let fit_budget = if region.smooth { 0.75 * tol } else { 0.25 * tol };
+    let fit_budget = if region.smooth {
+        0.75 * tol
+    } else {
+        0.25 * tol
+    };
     let mut fitted = None;
     for j in 1..=MAX_LEVEL {
         if count(j) * 2 > points.len() {
@@ -155,7 +165,7 @@ fn approximate_region(
         let cubic = Cubic {
             p: [p(0), p(1), p(2), p(3)],
         };
-        out.extend(fit_curve(&cubic, 0.0, 1.0, 0.25 * tol));
+        out.extend(fit_curve(&cubic, 0.0, 1.0, (tol - used).max(0.25 * tol)));
     }
     out.push(Vertex {
         point: chain.last()?.point,
@@ -171,7 +181,11 @@ fn point_along(piece: &Contour, a: f64) -> Point2 {
     for (i, seg) in piece.segments().enumerate().take(n.saturating_sub(1)) {
         let len = seg.length();
         if start + len >= a || i + 2 == n {
-            let t = if len > 0.0 { ((a - start) / len).clamp(0.0, 1.0) } else { 0.0 };
+            let t = if len > 0.0 {
+                ((a - start) / len).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             return crate::contour::segops::point_at(&seg, t);
         }
         start += len;
@@ -197,7 +211,11 @@ mod tests {
             .collect();
         let c = Contour { vertices };
         let (approx, stats) = approximate_loop(&c, 0.05, 0.5, &CornerOptions::default());
-        assert!(approx.vertices.len() < 300, "{} segments", approx.vertices.len());
+        assert!(
+            approx.vertices.len() < 300,
+            "{} segments",
+            approx.vertices.len()
+        );
         assert_eq!(stats.exact_regions, 0);
         let exact = SegmentBvh::new(c.segments().collect());
         let mine = SegmentBvh::new(approx.segments().collect());

@@ -9,7 +9,16 @@ use crate::contour::verify::{clearance, path_stats, uncut_area};
 /// A "mountain" range: a base with five peaks of different heights, some rounded.
 pub(crate) fn mountain() -> Shape {
     let mut v = vec![Vertex::line(0.0, 0.0), Vertex::line(100.0, 0.0)];
-    let peaks = [(90.0, 30.0), (80.0, 14.0), (70.0, 40.0), (58.0, 20.0), (45.0, 48.0), (30.0, 18.0), (18.0, 35.0), (8.0, 12.0)];
+    let peaks = [
+        (90.0, 30.0),
+        (80.0, 14.0),
+        (70.0, 40.0),
+        (58.0, 20.0),
+        (45.0, 48.0),
+        (30.0, 18.0),
+        (18.0, 35.0),
+        (8.0, 12.0),
+    ];
     v.push(Vertex::line(100.0, 10.0));
     for (i, (x, y)) in peaks.iter().enumerate() {
         // Every other vertex starts a slightly curved segment.
@@ -33,7 +42,13 @@ fn stock_around(part: &Shape, margin: f64) -> Shape {
         hi = Point2::new(hi.x.max(p.x), hi.y.max(p.y));
     }
     Shape {
-        contours: vec![rect(lo.x - margin, lo.y - margin, hi.x + margin, hi.y + margin, true)],
+        contours: vec![rect(
+            lo.x - margin,
+            lo.y - margin,
+            hi.x + margin,
+            hi.y + margin,
+            true,
+        )],
     }
 }
 
@@ -98,7 +113,10 @@ fn mountain_no_overcut_no_more_uncut() {
     let (r, s) = (3.0, 2.4);
     let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).expect("plan");
     let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).expect("baseline");
-    let (m, b) = (measure(&plan.path, &part, &stock), measure(&base, &part, &stock));
+    let (m, b) = (
+        measure(&plan.path, &part, &stock),
+        measure(&base, &part, &stock),
+    );
     eprintln!(
         "mountain: length {:.1} vs {:.1}, segments {} vs {}, uncut {:.2} vs {:.2}, {:?}",
         m.length, b.length, m.segments, b.segments, m.uncut, b.uncut, plan.report
@@ -106,7 +124,12 @@ fn mountain_no_overcut_no_more_uncut() {
     assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
     assert!(b.clearance >= -1e-6);
     // One row of the scanline is 0.05 mm: allow that much area per mm of stock width.
-    assert!(m.uncut <= b.uncut + 0.05 * 130.0, "uncut {} vs {}", m.uncut, b.uncut);
+    assert!(
+        m.uncut <= b.uncut + 0.05 * 130.0,
+        "uncut {} vs {}",
+        m.uncut,
+        b.uncut
+    );
     assert!(plan.report.hull_levels > 0 && plan.report.part_levels > 0);
     // The finishing pass is the exact offset at r: the path touches r somewhere.
     assert!(m.clearance <= 1e-6);
@@ -119,15 +142,22 @@ fn mountain_no_overcut_no_more_uncut() {
 #[test]
 fn loose_hull_encloses_the_part_with_no_more_legs() {
     let part = mountain();
-    let plan = multires_paths(&part, &stock_around(&part, 8.0), &MultiresOptions::new(3.0, 2.4))
-        .expect("plan");
+    let plan = multires_paths(
+        &part,
+        &stock_around(&part, 8.0),
+        &MultiresOptions::new(3.0, 2.4),
+    )
+    .expect("plan");
     assert!(plan.report.loose_hull_legs <= plan.report.hull_legs);
     let hull = &plan.loose_hull;
     let n = hull.len();
     for p in hull::enclosing_points(&part) {
         for i in 0..n {
             let (a, b) = (hull[i], hull[(i + 1) % n]);
-            assert!(crate::contour::segops::cross(b - a, p - a) >= -1e-9, "{p:?} outside");
+            assert!(
+                crate::contour::segops::cross(b - a, p - a) >= -1e-9,
+                "{p:?} outside"
+            );
         }
     }
 }
@@ -140,7 +170,11 @@ fn rotation_and_mirroring_keep_the_figures() {
     let stock = stock_around(&part, 10.0);
     let plan = multires_paths(&part, &stock, &opts).expect("plan");
     let m0 = measure(&plan.path, &part, &stock);
-    for (angle, mirror) in [(37f64.to_radians(), false), (0.0, true), (37f64.to_radians(), true)] {
+    for (angle, mirror) in [
+        (37f64.to_radians(), false),
+        (0.0, true),
+        (37f64.to_radians(), true),
+    ] {
         let p = transformed(&part, angle, mirror);
         // The stock turns with the part (a rectangle around the turned part would be another
         // problem).
@@ -148,7 +182,11 @@ fn rotation_and_mirroring_keep_the_figures() {
         assert!(p.contours[0].signed_area() > 0.0);
         let plan = multires_paths(&p, &st, &opts).expect("plan");
         let m = measure(&plan.path, &p, &st);
-        assert!(m.clearance >= -1e-6, "{angle} {mirror}: overcut {}", m.clearance);
+        assert!(
+            m.clearance >= -1e-6,
+            "{angle} {mirror}: overcut {}",
+            m.clearance
+        );
         assert!(
             (m.length - m0.length).abs() <= 0.03 * m0.length,
             "{angle} {mirror}: length {} vs {}",
@@ -156,7 +194,12 @@ fn rotation_and_mirroring_keep_the_figures() {
             m0.length
         );
         let ds = m.segments.abs_diff(m0.segments) as f64;
-        assert!(ds <= 0.1 * m0.segments as f64, "{angle} {mirror}: segments {} vs {}", m.segments, m0.segments);
+        assert!(
+            ds <= 0.1 * m0.segments as f64,
+            "{angle} {mirror}: segments {} vs {}",
+            m.segments,
+            m0.segments
+        );
         assert!(
             (m.uncut - m0.uncut).abs() <= 0.02 * 130.0 * 80.0 * 0.01 + 0.1 * m0.uncut,
             "{angle} {mirror}: uncut {} vs {}",
