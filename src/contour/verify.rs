@@ -16,6 +16,9 @@
 //!   is their exact difference. Areas are the midpoint rule over rows of spacing h (reported), so
 //!   the only approximation is in y; the region's own area is reported for comparison with its
 //!   exact value.
+//! * **Pass spacing** ([`pass_spacing`]) = sampled distance from each pass to the nearest
+//!   pass on its part side: how far apart consecutive passes really are, so that a method
+//!   is not credited for a larger effective stepover.
 //!
 //! Why the contour-parallel levels cover (used by [`crate::contour::parallel`]): let x be at distance t
 //! from the part, p its nearest part point. On the segment x→p the distance to the part falls at

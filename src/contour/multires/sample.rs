@@ -40,7 +40,7 @@ pub fn sub_chain(c: &Contour, from: f64, to: f64) -> Vec<Vertex> {
     let segs: Vec<Segment> = c.segments().collect();
     let total = c.length();
     let mut out: Vec<Vertex> = Vec::new();
-    if !(total > 0.0) || to <= from {
+    if total.is_nan() || total <= 0.0 || to <= from {
         return out;
     }
     let mut start = 0.0;

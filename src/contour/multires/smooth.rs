@@ -47,7 +47,7 @@ pub fn approximate_loop(
     let mut stats = LoopStats::default();
     let samples = sample_closed(c, step);
     let length = c.length();
-    if samples.len() < 16 || !(tol > 0.0) {
+    if samples.len() < 16 || tol.is_nan() || tol <= 0.0 {
         return (c.clone(), stats);
     }
     let pts: Vec<Point2> = samples.iter().map(|s| s.0).collect();
