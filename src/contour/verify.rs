@@ -442,6 +442,8 @@ pub fn path_stats(path: &CenterPath) -> PathStats {
 pub struct PassSpacing {
     /// Largest gap found between a pass and the nearest pass on its part side, mm.
     pub max: f64,
+    /// Where on a pass the largest gap was found.
+    pub max_at: Point2,
     /// 95th percentile of the same gaps, mm.
     pub p95: f64,
     /// Number of pass samples that had a pass on their part side.
@@ -481,6 +483,7 @@ pub fn pass_spacing(
     let bvh = crate::contour::bvh::SegmentBvh::new(segs);
     let reach = 4.0 * r + 2.0 * margin;
     let mut gaps: Vec<f64> = Vec::new();
+    let (mut max_at, mut largest) = (Point2::origin(), f64::NEG_INFINITY);
     for (i, pass) in path.passes().iter().enumerate() {
         for seg in pass.segments() {
             let count = (seg.length() / step).ceil().max(1.0) as usize;
@@ -501,6 +504,9 @@ pub fn pass_spacing(
                     }
                 }
                 if best.is_finite() {
+                    if best > largest {
+                        (largest, max_at) = (best, x);
+                    }
                     gaps.push(best);
                 }
             }
@@ -510,6 +516,7 @@ pub fn pass_spacing(
     let n = gaps.len();
     Ok(PassSpacing {
         max: gaps.last().copied().unwrap_or(0.0),
+        max_at,
         p95: if n == 0 {
             0.0
         } else {

@@ -102,7 +102,14 @@ pub struct MethodFigures {
     /// Largest and 95th-percentile distance between a pass and the next pass toward the
     /// part, mm (sampled; see `verify::pass_spacing`).
     pub pass_spacing_max_mm: f64,
+    pub pass_spacing_max_at: [f64; 2],
     pub pass_spacing_p95_mm: f64,
+    /// Links made by retract, rapid and plunge (each 3 blocks and a plunge at feed).
+    pub rapid_links: usize,
+    /// The time split of the model: feed (cut, feed links, plunges), rapid, block dwell.
+    pub feed_min: f64,
+    pub rapid_min: f64,
+    pub dwell_min: f64,
 }
 
 /// Relative differences, wavelet vs contour-parallel, percent (negative = wavelet smaller).
@@ -266,7 +273,12 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
                 nc_blocks: st.blocks,
                 machining_time_min: st.total_minutes,
                 pass_spacing_max_mm: sp.max,
+                pass_spacing_max_at: [sp.max_at.x, sp.max_at.y],
                 pass_spacing_p95_mm: sp.p95,
+                rapid_links: ps.rapid_links,
+                feed_min: st.feed_minutes,
+                rapid_min: st.rapid_minutes,
+                dwell_min: st.dwell_minutes,
             },
             program.to_gcode(),
             u.region,
