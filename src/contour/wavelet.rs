@@ -226,7 +226,8 @@ pub fn fractional(coarse: &Controls, detail: &Controls, t: f64) -> Result<Contro
     Ok(synthesis_p(m + 1) * coarse + synthesis_q(m + 1) * detail * t)
 }
 
-/// Point of the level-j curve with control points `c` at parameter u ∈ [0, 1].
+/// Point of the level-j curve with control points `c` (2^j + 3 rows; any other row count is
+/// read as level 0, using its first four rows) at parameter u ∈ [0, 1].
 pub fn evaluate(c: &Controls, u: f64) -> Point2 {
     let j = level_of(c, "evaluate").unwrap_or(0);
     let b = basis(j, u.clamp(0.0, 1.0));
@@ -252,9 +253,10 @@ pub fn bezier_matrix(j: u32) -> DMatrix<f64> {
         let binom = [1.0, 3.0, 3.0, 1.0][i];
         binom * t.powi(i as i32) * (1.0 - t).powi(3 - i as i32)
     });
+    // invariant: the cubic Bernstein basis at four distinct points is a basis of the cubics.
     let inv = bern
         .try_inverse()
-        .unwrap_or_else(|| DMatrix::identity(4, 4));
+        .expect("the cubic Bernstein matrix at 0, 1/3, 2/3, 1 is invertible");
     let mut m = DMatrix::zeros(4 * spans, n);
     for s in 0..spans {
         let values = DMatrix::from_fn(4, n, |k, i| {
