@@ -230,3 +230,41 @@ fn options_are_validated() {
     let e = multires_paths(&part, &stock, &MultiresOptions::new(2.0, 5.0)).unwrap_err();
     assert!(e.to_string().contains("stepover"), "{e}");
 }
+
+/// A part outlined by many short lines (as from a scanned or finely tessellated drawing): its
+/// offsets have hundreds of segments, the wavelet approximation replaces them by a few arcs
+/// within the band, and the path still never cuts the part nor leaves more material.
+#[test]
+fn many_segment_part_gets_wavelet_passes() {
+    let vertices: Vec<Vertex> = (0..360)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 360.0;
+            let rho = 30.0 + 10.0 * (5.0 * a).sin();
+            Vertex::line(rho * a.cos(), rho * a.sin())
+        })
+        .collect();
+    let part = Shape {
+        contours: vec![Contour { vertices }],
+    };
+    let stock = stock_around(&part, 8.0);
+    let (r, s) = (3.0, 2.0);
+    let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).expect("plan");
+    let rep = &plan.report;
+    // Deep bays between the lobes: several part levels inside the hull, simplified.
+    assert!(rep.part_levels >= 3 && rep.wavelet_loops >= 2, "{rep:?}");
+    assert!(rep.used_segments < rep.exact_segments, "{rep:?}");
+    assert!((rep.tolerance - 0.5).abs() < 1e-12);
+    let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).expect("baseline");
+    let (m, b) = (
+        measure(&plan.path, &part, &stock),
+        measure(&base, &part, &stock),
+    );
+    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
+    assert!(
+        m.uncut <= b.uncut + 0.05 * 100.0,
+        "uncut {} vs {}",
+        m.uncut,
+        b.uncut
+    );
+    assert!(m.segments < b.segments, "{} vs {}", m.segments, b.segments);
+}
