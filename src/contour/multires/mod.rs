@@ -45,6 +45,15 @@
 //! is at most s + 2τ ≤ r by construction, so no adaptive curve is needed and none is added
 //! (the fractional levels of eq. 3.2 are in [`crate::contour::wavelet::fractional`]). The
 //! uncut area is measured by the `contour` command against the baseline's.
+//!
+//! # Pass spacing
+//!
+//! Consecutive part levels are at most s + 2τ apart, consecutive hull passes s. Where a part
+//! level is cut off at H, the next pass outward is the first hull pass, r outside H: the
+//! geometric gap there reaches about r + s (reported as `pass_spacing_max_mm` by the `contour`
+//! command; its 95th percentile stays s). Coverage does not suffer (see above), and since the
+//! hull passes are cut first (far side first) the band between them and H is already cleared
+//! when the part levels are cut.
 
 pub mod corners;
 pub mod hull;
@@ -81,9 +90,10 @@ pub struct MultiresOptions {
     pub tolerance: Option<f64>,
     /// Corner detection (§3.1).
     pub corners: CornerOptions,
-    /// Hull legs shorter than this are deleted or combined (§4.1), mm; `None` = 2s.
+    /// Hull legs shorter than this are deleted or combined (§4.1), mm; `None` = 4s.
     pub hull_min_leg: Option<f64>,
-    /// How far the loose hull may reach beyond the convex hull, mm; `None` = s / 2.
+    /// How far the loose hull may reach beyond the convex hull, mm; `None` = s (one more
+    /// pass of air at most).
     pub hull_max_growth: Option<f64>,
     /// Longest straight link made at cutting depth, mm; `None` = 2r.
     pub max_feed_link: Option<f64>,
