@@ -57,6 +57,24 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
         assert!(!x.is_empty(), "{f} is empty");
         assert!(x == y, "{f} differs between two identical runs");
     }
+    // Without --compare: the same wavelet.nc and nothing else.
+    let c = dir.join("c");
+    let o = wavemill(&[
+        "contour",
+        sample.to_str().expect("utf-8 path"),
+        "--tool",
+        "flat:6",
+        "--stock",
+        "margin:10",
+        "--out",
+        c.to_str().expect("utf-8 path"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        std::fs::read(c.join("wavelet.nc")).expect("nc")
+            == std::fs::read(a.join("wavelet.nc")).expect("nc")
+    );
+    assert!(!c.join("contour_parallel.nc").exists() && !c.join("compare.json").exists());
     let png = std::fs::read(a.join("paths.png")).expect("png");
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     let gcode = std::fs::read_to_string(a.join("wavelet.nc")).expect("nc");

@@ -234,21 +234,7 @@ fn contour(args: &ContourArgs) -> Result<()> {
     options.stepover = args.stepover;
     options.scale = args.scale;
     options.timings = !args.no_timings;
-    let c = job::contour_compare(&args.outline, &options)?;
-    if args.compare {
-        job::write_contour_outputs(&args.out, &c)?;
-    } else {
-        std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
-            path: args.out.display().to_string(),
-            source,
-        })?;
-        job::write_atomically(&args.out.join("wavelet.nc"), c.wavelet_nc.as_bytes())?;
-    }
-    let r = &c.report;
-    for (name, f) in [
-        ("contour-parallel", &r.contour_parallel),
-        ("wavelet", &r.wavelet),
-    ] {
+    let figures_line = |name: &str, f: &job::MethodFigures| {
         say!(
             "{name:>16}: {:9.1} mm cut, {:6} blocks, {:7.2} min, uncut {:8.2} mm², clearance − r {:+.6} mm, spacing ≤ {:.3} mm",
             f.cutting_length_mm,
@@ -258,7 +244,23 @@ fn contour(args: &ContourArgs) -> Result<()> {
             f.min_clearance_minus_r_mm,
             f.pass_spacing_max_mm
         );
+    };
+    if !args.compare {
+        let (nc, figures) = job::contour_wavelet(&args.outline, &options)?;
+        std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
+            path: args.out.display().to_string(),
+            source,
+        })?;
+        job::write_atomically(&args.out.join("wavelet.nc"), nc.as_bytes())?;
+        figures_line("wavelet", &figures);
+        say!("-> {}", args.out.join("wavelet.nc").display());
+        return Ok(());
     }
+    let c = job::contour_compare(&args.outline, &options)?;
+    job::write_contour_outputs(&args.out, &c)?;
+    let r = &c.report;
+    figures_line("contour-parallel", &r.contour_parallel);
+    figures_line("wavelet", &r.wavelet);
     let d = &r.wavelet_vs_parallel;
     say!(
         "wavelet vs contour-parallel: length {:+.1} %, blocks {:+.1} %, time {:+.1} % -> {}",

@@ -27,8 +27,7 @@
 //!
 //! Still to come (issue #6): Z-sections of meshes as outlines; the adaptive curves of §3.5
 //! (eq. 3.2 is in [`wavelet`], eq. 3.3 is not; the band construction of [`multires`] needs
-//! neither);
-//! a `contour` without `--compare` that skips planning the baseline.
+//! neither).
 
 pub mod bvh;
 pub mod cavc;

@@ -214,14 +214,23 @@ fn contour_error(file: &str) -> impl Fn(ContourError) -> Error + '_ {
     move |e| Error::Job(format!("{file}: {e}"))
 }
 
-/// Reads `outline`, plans both methods, verifies and compares them.
-pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<ContourComparison> {
+/// The inputs of a run, read and checked.
+struct Prepared {
+    file: String,
+    part: Shape,
+    stock: Shape,
+    r: f64,
+    s: f64,
+    row_step: f64,
+    read_ms: f64,
+}
+
+fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
     let file = outline.display().to_string();
     let d = opts.tool_diameter;
     if !(d.is_finite() && d > 0.0) {
         return Err(Error::Job(format!("tool diameter {d}: must be > 0 mm")));
     }
-    let r = 0.5 * d;
     let s = opts.stepover.unwrap_or(0.4 * d);
     if !(s.is_finite() && s > 0.0 && s <= d) {
         return Err(Error::Job(format!(
@@ -242,59 +251,91 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
     let part = read_outline(outline, &outline_opts).map_err(|e| Error::Job(e.to_string()))?;
     let stock = stock_around(&part, opts.stock_margin)
         .ok_or_else(|| Error::Job(format!("{file}: the outline has no points")))?;
-    let t_read = ms(t);
+    let bounds = stock_bounds(&stock);
+    Ok(Prepared {
+        file,
+        part,
+        stock,
+        r: 0.5 * d,
+        s,
+        row_step: (bounds.1.x - bounds.0.x).max(bounds.1.y - bounds.0.y) / 4000.0,
+        read_ms: ms(t),
+    })
+}
 
+/// Verifies and measures one path; refuses a path that cuts into the part. Returns the
+/// figures, the G-code and the (stock − part) area of the uncut-area quadrature.
+fn method_figures(
+    p: &Prepared,
+    path: &CenterPath,
+    machine: &MachineParams,
+    name: &str,
+) -> Result<(MethodFigures, String, f64)> {
+    let file = p.file.as_str();
+    let program = Program::new(path, machine).map_err(contour_error(file))?;
+    let st = program.stats();
+    let c = clearance(path, &p.part).map_err(contour_error(file))?;
+    if c.clearance < -1e-6 {
+        return Err(Error::Verification(format!(
+            "{file}: the {name} path cuts {:.6} mm into the part at ({:.4}, {:.4})",
+            -c.clearance, c.at.x, c.at.y
+        )));
+    }
+    let u = uncut_area(path, &p.part, &p.stock, Some(p.row_step)).map_err(contour_error(file))?;
+    let sp = pass_spacing(path, &p.part, 0.5 * p.s, 0.25 * p.s).map_err(contour_error(file))?;
+    let ps = path_stats(path);
+    Ok((
+        MethodFigures {
+            min_clearance_minus_r_mm: c.clearance,
+            uncut_area_mm2: u.uncut,
+            cutting_length_mm: ps.cut_length,
+            feed_link_length_mm: ps.feed_link_length,
+            passes: ps.passes,
+            nc_blocks: st.blocks,
+            machining_time_min: st.total_minutes,
+            pass_spacing_max_mm: sp.max,
+            pass_spacing_max_at: [sp.max_at.x, sp.max_at.y],
+            pass_spacing_p95_mm: sp.p95,
+            rapid_links: ps.rapid_links,
+            feed_min: st.feed_minutes,
+            rapid_min: st.rapid_minutes,
+            dwell_min: st.dwell_minutes,
+        },
+        program.to_gcode(),
+        u.region,
+    ))
+}
+
+/// Reads `outline` and plans, verifies and posts the multiresolution path only (no baseline):
+/// its G-code and figures.
+pub fn contour_wavelet(
+    outline: &Path,
+    opts: &ContourJobOptions,
+) -> Result<(String, MethodFigures)> {
+    let p = prepare(outline, opts)?;
+    let plan = multires_paths(&p.part, &p.stock, &MultiresOptions::new(p.r, p.s))
+        .map_err(contour_error(&p.file))?;
+    let (figures, nc, _) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;
+    Ok((nc, figures))
+}
+
+/// Reads `outline`, plans both methods, verifies and compares them.
+pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<ContourComparison> {
+    let p = prepare(outline, opts)?;
+    let (file, part, stock, r, s) = (&p.file, &p.part, &p.stock, p.r, p.s);
     let t = Instant::now();
     let plan =
-        multires_paths(&part, &stock, &MultiresOptions::new(r, s)).map_err(contour_error(&file))?;
+        multires_paths(part, stock, &MultiresOptions::new(r, s)).map_err(contour_error(file))?;
     let t_wavelet = ms(t);
     let t = Instant::now();
-    let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s))
-        .map_err(contour_error(&file))?;
+    let base =
+        contour_parallel(part, stock, &ParallelOptions::new(r, s)).map_err(contour_error(file))?;
     let t_parallel = ms(t);
 
     let t = Instant::now();
-    let bounds = stock_bounds(&stock);
-    let row_step = (bounds.1.x - bounds.0.x).max(bounds.1.y - bounds.0.y) / 4000.0;
-    let figures = |path: &CenterPath| -> Result<(MethodFigures, String, f64)> {
-        let program = Program::new(path, &opts.machine).map_err(contour_error(&file))?;
-        let st = program.stats();
-        let c = clearance(path, &part).map_err(contour_error(&file))?;
-        let u = uncut_area(path, &part, &stock, Some(row_step)).map_err(contour_error(&file))?;
-        let sp = pass_spacing(path, &part, 0.5 * s, 0.25 * s).map_err(contour_error(&file))?;
-        let ps = path_stats(path);
-        Ok((
-            MethodFigures {
-                min_clearance_minus_r_mm: c.clearance,
-                uncut_area_mm2: u.uncut,
-                cutting_length_mm: ps.cut_length,
-                feed_link_length_mm: ps.feed_link_length,
-                passes: ps.passes,
-                nc_blocks: st.blocks,
-                machining_time_min: st.total_minutes,
-                pass_spacing_max_mm: sp.max,
-                pass_spacing_max_at: [sp.max_at.x, sp.max_at.y],
-                pass_spacing_p95_mm: sp.p95,
-                rapid_links: ps.rapid_links,
-                feed_min: st.feed_minutes,
-                rapid_min: st.rapid_minutes,
-                dwell_min: st.dwell_minutes,
-            },
-            program.to_gcode(),
-            u.region,
-        ))
-    };
-    let (wf, wavelet_nc, region) = figures(&plan.path)?;
-    let (pf, parallel_nc, _) = figures(&base)?;
+    let (wf, wavelet_nc, region) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;
+    let (pf, parallel_nc, _) = method_figures(&p, &base, &opts.machine, "contour-parallel")?;
     let t_verify = ms(t);
-    for (name, f) in [("wavelet", &wf), ("contour-parallel", &pf)] {
-        if f.min_clearance_minus_r_mm < -1e-6 {
-            return Err(Error::Verification(format!(
-                "{file}: the {name} path cuts {:.6} mm into the part",
-                -f.min_clearance_minus_r_mm
-            )));
-        }
-    }
     let pct = |a: f64, b: f64| if b != 0.0 { 100.0 * (a - b) / b } else { 0.0 };
     let diff = Differences {
         cutting_length_pct: pct(wf.cutting_length_mm, pf.cutting_length_mm),
@@ -307,7 +348,7 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default(),
-        tool_diameter_mm: d,
+        tool_diameter_mm: 2.0 * r,
         stepover_mm: s,
         stock_margin_mm: opts.stock_margin,
         scale: opts.scale,
@@ -316,20 +357,20 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
         feed_mm_per_min: opts.machine.feed,
         dwell_s_per_block: opts.machine.dwell_per_block,
         rapid_mm_per_min: opts.machine.rapid,
-        uncut_row_step_mm: row_step,
+        uncut_row_step_mm: p.row_step,
         contour_parallel: pf,
         wavelet: wf,
         wavelet_vs_parallel: diff,
         wavelet_planner: PlannerFigures::from(&plan.report),
         timings_ms: opts.timings.then_some(ContourTimings {
-            read: t_read,
+            read: p.read_ms,
             wavelet: t_wavelet,
             contour_parallel: t_parallel,
             verify: t_verify,
         }),
     };
     let picture =
-        super::contour_picture::Picture::new(&part, &stock, &base, &plan.path, &plan.loose_hull);
+        super::contour_picture::Picture::new(part, stock, &base, &plan.path, &plan.loose_hull);
     Ok(ContourComparison {
         wavelet_nc,
         parallel_nc,
