@@ -48,6 +48,39 @@ pub enum Command {
     Subdivide(SubdivideArgs),
     /// Remesh a part to a rough-to-fine hierarchy, analyse it with wavelets, write every level.
     Levels(LevelsArgs),
+    /// 2.5D profile: multiresolution wavelet + loose convex hull paths (seed 004 ch. 3–4),
+    /// verified, as G-code; with --compare also the contour-parallel baseline side by side.
+    Contour(ContourArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct ContourArgs {
+    /// Outline file (.svg or .dxf): one or more closed paths, the part to machine around.
+    pub outline: PathBuf,
+    /// Flat end mill, `flat:D` with the diameter D in mm.
+    #[arg(long)]
+    pub tool: String,
+    /// Stock: `margin:M`, the outline's bounding box grown by M mm.
+    #[arg(long)]
+    pub stock: String,
+    /// Stepover between passes, mm (0 < S ≤ D). Default 0.4 × D: below the tool radius, so
+    /// contour-parallel offsets leave no reachable material and the wavelet passes have a
+    /// band of 0.05 × D each side of their level to be simplified in.
+    #[arg(long)]
+    pub stepover: Option<f64>,
+    /// One outline unit is this many mm.
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f64,
+    /// Also write the contour-parallel baseline (contour_parallel.nc), compare.json and
+    /// paths.svg / paths.png with both paths side by side.
+    #[arg(long)]
+    pub compare: bool,
+    /// Leave the run-dependent timings out of compare.json (byte-identical outputs).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -190,6 +223,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Plan(a) => plan(&a),
         Command::Subdivide(a) => subdivide(&a),
         Command::Levels(a) => levels(&a),
+        Command::Contour(a) => contour(&a),
     };
     match result {
         Ok(()) => 0,
@@ -198,6 +232,52 @@ pub fn run(cli: Cli) -> i32 {
             e.exit_code()
         }
     }
+}
+
+fn contour(args: &ContourArgs) -> Result<()> {
+    let mut options = job::ContourJobOptions::new(
+        job::parse_flat_tool(&args.tool)?,
+        job::parse_stock_margin(&args.stock)?,
+    );
+    options.stepover = args.stepover;
+    options.scale = args.scale;
+    options.timings = !args.no_timings;
+    let figures_line = |name: &str, f: &job::MethodFigures| {
+        say!(
+            "{name:>16}: {:9.1} mm cut, {:6} blocks, {:7.2} min, uncut {:8.2} mm², clearance − r {:+.6} mm, spacing ≤ {:.3} mm",
+            f.cutting_length_mm,
+            f.nc_blocks,
+            f.machining_time_min,
+            f.uncut_area_mm2,
+            f.min_clearance_minus_r_mm,
+            f.pass_spacing_max_mm
+        );
+    };
+    if !args.compare {
+        let (nc, figures) = job::contour_wavelet(&args.outline, &options)?;
+        std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
+            path: args.out.display().to_string(),
+            source,
+        })?;
+        job::write_atomically(&args.out.join("wavelet.nc"), nc.as_bytes())?;
+        figures_line("wavelet", &figures);
+        say!("-> {}", args.out.join("wavelet.nc").display());
+        return Ok(());
+    }
+    let c = job::contour_compare(&args.outline, &options)?;
+    job::write_contour_outputs(&args.out, &c)?;
+    let r = &c.report;
+    figures_line("contour-parallel", &r.contour_parallel);
+    figures_line("wavelet", &r.wavelet);
+    let d = &r.wavelet_vs_parallel;
+    say!(
+        "wavelet vs contour-parallel: length {:+.1} %, blocks {:+.1} %, time {:+.1} % -> {}",
+        d.cutting_length_pct,
+        d.nc_blocks_pct,
+        d.machining_time_pct,
+        args.out.display()
+    );
+    Ok(())
 }
 
 fn info(args: &InfoArgs) -> Result<()> {

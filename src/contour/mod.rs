@@ -8,7 +8,12 @@
 //!   [`geometry::Shape`]; curves that are not circles become biarcs within a tolerance;
 //!   crossing paths are refused, naming both and where they cross;
 //! * [`wavelet`] — the endpoint-interpolating cubic B-spline wavelet filters P^j and Q^j
-//!   (seed 004 §2.2, figs. 2.5–2.6);
+//!   (seed 004 §2.2, figs. 2.5–2.6), decomposition (eq. 2.16), reconstruction (eq. 2.17),
+//!   fractional levels (eq. 3.2), least-squares fitting and the eq. 3.1 deviation bound;
+//! * [`multires`] — the multiresolution method of seed 004 ch. 3–4: corners by multi-scale
+//!   curvature (§3.1), ν = l/m segmentation (§3.2), wavelet-approximated offsets checked
+//!   exactly against the part (§3.3–3.4), the loose convex hull and its offsets (§4.1), the
+//!   part levels clipped to it (§4.2);
 //! * [`parallel`] — the contour-parallel baseline the seed compares against (tables 3.1,
 //!   4.1): exact line/arc offsets of the part at r, r + s, …, clipped to the stock
 //!   (cavalier_contours), ordered from the far side toward the part and linked;
@@ -20,9 +25,9 @@
 //! * helpers: [`segops`] (exact segment geometry), [`bvh`] (segment BVH), [`region`]
 //!   (point-in-shape, scanline crossings), [`cavc`] (the cavalier_contours bridge).
 //!
-//! Still to come (issue #6): Z-sections of meshes, stock minus part, the wavelet decomposition and fitting of outlines,
-//! the multiresolution method itself (corners, segmentation, offsets with the eq. 3.1 bound,
-//! adaptive curves, loose convex hull) and the `contour` command.
+//! Still to come (issue #6): Z-sections of meshes as outlines; the adaptive curves of §3.5
+//! (eq. 3.2 is in [`wavelet`], eq. 3.3 is not; the band construction of [`multires`] needs
+//! neither).
 
 pub mod bvh;
 pub mod cavc;
@@ -30,6 +35,7 @@ pub mod error;
 pub mod gcode;
 pub mod geometry;
 pub mod input;
+pub mod multires;
 pub mod parallel;
 pub mod region;
 pub mod segops;
@@ -40,6 +46,9 @@ pub mod wavelet;
 pub use error::ContourError;
 pub use gcode::{MachineParams, Program, ProgramStats};
 pub use input::{OutlineError, OutlineOptions, read_outline};
+pub use multires::{MultiresOptions, MultiresPlan, MultiresReport, multires_paths};
 pub use parallel::{ParallelOptions, contour_parallel};
 pub use toolpath::{CenterPath, Link, Pass};
-pub use verify::{Clearance, PathStats, UncutArea, clearance, path_stats, uncut_area};
+pub use verify::{
+    Clearance, PassSpacing, PathStats, UncutArea, clearance, pass_spacing, path_stats, uncut_area,
+};

@@ -92,17 +92,28 @@ impl ParallelOptions {
     }
 }
 
-/// A clipped level piece awaiting ordering.
-struct Piece {
-    level: usize,
-    pass: Pass,
+/// A clipped level piece awaiting ordering: `level` counts outward from the part (0 = the
+/// finishing level), consecutive levels at most one stepover apart.
+pub(crate) struct Piece {
+    pub(crate) level: usize,
+    pub(crate) pass: Pass,
 }
 
-/// Plans the contour-parallel path that removes `stock − part` (see the module docs for the
-/// variant, ordering and linking).
-pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> Result<CenterPath> {
-    let r = opts.tool_radius;
-    let s = opts.stepover;
+/// What both planners need first: validated options and shapes, the part index and the stock
+/// clip region (the stock grown by r − [`CLIP_EPS`]).
+pub(crate) struct Setup {
+    pub(crate) max_feed_link: f64,
+    pub(crate) part_index: RegionIndex,
+    pub(crate) clip_index: RegionIndex,
+}
+
+pub(crate) fn setup(
+    part: &Shape,
+    stock: &Shape,
+    r: f64,
+    s: f64,
+    max_feed_link: Option<f64>,
+) -> Result<Setup> {
     if !(r.is_finite() && r > 0.0) {
         return Err(ContourError::InvalidOption {
             name: "tool_radius",
@@ -117,7 +128,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
             reason: "must satisfy 0 < stepover ≤ 2 × tool_radius",
         });
     }
-    let max_feed_link = opts.max_feed_link.unwrap_or(2.0 * r);
+    let max_feed_link = max_feed_link.unwrap_or(2.0 * r);
     if max_feed_link.is_nan() || max_feed_link < 0.0 {
         return Err(ContourError::InvalidOption {
             name: "max_feed_link",
@@ -133,6 +144,24 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
         contours: offset_region(stock, (r - CLIP_EPS).max(0.5 * r), "stock")?,
     };
     let clip_index = RegionIndex::new(&clip);
+
+    Ok(Setup {
+        max_feed_link,
+        part_index,
+        clip_index,
+    })
+}
+
+/// Plans the contour-parallel path that removes `stock − part` (see the module docs for the
+/// variant, ordering and linking).
+pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> Result<CenterPath> {
+    let r = opts.tool_radius;
+    let s = opts.stepover;
+    let Setup {
+        max_feed_link,
+        part_index,
+        clip_index,
+    } = setup(part, stock, r, s, opts.max_feed_link)?;
 
     // Far bound of the stock from the part: every stock point is within `reach` of the part's
     // first vertex, hence of the part.
@@ -161,7 +190,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
         let loops = offset_region(part, level, "part")?;
         let mut found = false;
         for l in &loops {
-            for pass in clip_loop(l, &clip_index, level)? {
+            for pass in clip_loop(l, &[(&clip_index, true)], level)? {
                 found = true;
                 pieces.push(Piece { level: k, pass });
             }
@@ -180,17 +209,25 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
 
 /// Splits a closed offset loop where it crosses the clip region's boundary and keeps the runs
 /// inside (midpoint test). A loop entirely inside stays one closed pass.
-fn clip_loop(c: &Contour, clip: &RegionIndex, offset: f64) -> Result<Vec<Pass>> {
+/// With several clip regions `(region, keep_inside)`, the runs inside every region marked
+/// `true` and outside every region marked `false` are kept.
+pub(crate) fn clip_loop(
+    c: &Contour,
+    clips: &[(&RegionIndex, bool)],
+    offset: f64,
+) -> Result<Vec<Pass>> {
     let segs: Vec<Segment> = c.segments().collect();
-    let clip_segs = clip.boundary().segments();
     // (segment index, t0, t1) pieces in loop order.
     let mut parts: Vec<(usize, f64, f64)> = Vec::new();
     for (i, seg) in segs.iter().enumerate() {
         let mut ts: Vec<f64> = Vec::new();
-        for j in clip.boundary().candidates_near(&bbox(seg), 0.0) {
-            for h in intersections(seg, &clip_segs[j]) {
-                if h.ta > 1e-12 && h.ta < 1.0 - 1e-12 {
-                    ts.push(h.ta);
+        for (clip, _) in clips {
+            let clip_segs = clip.boundary().segments();
+            for j in clip.boundary().candidates_near(&bbox(seg), 0.0) {
+                for h in intersections(seg, &clip_segs[j]) {
+                    if h.ta > 1e-12 && h.ta < 1.0 - 1e-12 {
+                        ts.push(h.ta);
+                    }
                 }
             }
         }
@@ -204,7 +241,12 @@ fn clip_loop(c: &Contour, clip: &RegionIndex, offset: f64) -> Result<Vec<Pass>> 
     }
     let inside: Vec<bool> = parts
         .iter()
-        .map(|&(i, t0, t1)| clip.contains(point_at(&segs[i], 0.5 * (t0 + t1))))
+        .map(|&(i, t0, t1)| {
+            let mid = point_at(&segs[i], 0.5 * (t0 + t1));
+            clips
+                .iter()
+                .all(|(clip, inside)| clip.contains(mid) == *inside)
+        })
         .collect();
     if inside.iter().all(|&b| b) {
         return Ok(vec![Pass::closed(c.vertices.clone(), offset)?]);
@@ -247,7 +289,7 @@ fn run_to_pass(segs: &[Segment], run: &[(usize, f64, f64)], offset: f64) -> Resu
 
 /// Orders pieces far-side first (a piece waits for every piece one level farther within s of
 /// it), nearest entry next; closed passes are re-started at their point nearest to the tool.
-fn order_pieces(pieces: Vec<Piece>, s: f64) -> Vec<Pass> {
+pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64) -> Vec<Pass> {
     let n = pieces.len();
     if n == 0 {
         return Vec::new();
@@ -381,7 +423,12 @@ fn restart_closed(pass: &Pass, seg: usize, t: f64) -> Pass {
 }
 
 /// Joins ordered passes: a feed link when short and clear of the part, else retract/rapid.
-fn link(passes: Vec<Pass>, part: &RegionIndex, r: f64, max_feed_link: f64) -> Result<CenterPath> {
+pub(crate) fn link(
+    passes: Vec<Pass>,
+    part: &RegionIndex,
+    r: f64,
+    max_feed_link: f64,
+) -> Result<CenterPath> {
     let links = passes
         .windows(2)
         .map(|w| {

@@ -16,6 +16,9 @@
 //!   is their exact difference. Areas are the midpoint rule over rows of spacing h (reported), so
 //!   the only approximation is in y; the region's own area is reported for comparison with its
 //!   exact value.
+//! * **Pass spacing** ([`pass_spacing`]) = sampled distance from each pass to the nearest
+//!   pass on its part side: how far apart consecutive passes really are, so that a method
+//!   is not credited for a larger effective stepover.
 //!
 //! Why the contour-parallel levels cover (used by [`crate::contour::parallel`]): let x be at distance t
 //! from the part, p its nearest part point. On the segment x→p the distance to the part falls at
@@ -434,6 +437,95 @@ pub fn path_stats(path: &CenterPath) -> PathStats {
     st
 }
 
+/// Result of [`pass_spacing`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassSpacing {
+    /// Largest gap found between a pass and the nearest pass on its part side, mm.
+    pub max: f64,
+    /// Where on a pass the largest gap was found.
+    pub max_at: Point2,
+    /// 95th percentile of the same gaps, mm.
+    pub p95: f64,
+    /// Number of pass samples that had a pass on their part side.
+    pub samples: usize,
+}
+
+/// How far apart consecutive passes are: every `step` mm along each pass (except where it is
+/// within `margin` of the finishing distance r), the distance to the nearest point of another
+/// pass that is at least `margin` nearer to the part — the radial engagement the tool meets
+/// there. Points of the other passes are the closest points of their segments (exact), so a
+/// pass whose closest point is not nearer the part is not counted at that sample. Sampled,
+/// for reports: use `margin` ≈ a quarter of the stepover.
+pub fn pass_spacing(
+    path: &CenterPath,
+    part: &Shape,
+    step: f64,
+    margin: f64,
+) -> Result<PassSpacing> {
+    validate_shape(part, "part")?;
+    if !(step.is_finite() && step > 0.0 && margin.is_finite() && margin >= 0.0) {
+        return Err(ContourError::InvalidOption {
+            name: "step",
+            value: step,
+            reason: "step must be a positive and margin a non-negative number of mm",
+        });
+    }
+    let r = path.tool_radius();
+    let idx = RegionIndex::new(part);
+    let mut segs = Vec::new();
+    let mut owner = Vec::new();
+    for (i, p) in path.passes().iter().enumerate() {
+        for seg in p.segments() {
+            segs.push(seg);
+            owner.push(i);
+        }
+    }
+    let bvh = crate::contour::bvh::SegmentBvh::new(segs);
+    let reach = 4.0 * r + 2.0 * margin;
+    let mut gaps: Vec<f64> = Vec::new();
+    let (mut max_at, mut largest) = (Point2::origin(), f64::NEG_INFINITY);
+    for (i, pass) in path.passes().iter().enumerate() {
+        for seg in pass.segments() {
+            let count = (seg.length() / step).ceil().max(1.0) as usize;
+            for k in 0..count {
+                let x = crate::contour::segops::point_at(&seg, (k as f64 + 0.5) / count as f64);
+                let dx = idx.boundary_distance(x);
+                if dx <= r + margin {
+                    continue;
+                }
+                let mut best = f64::INFINITY;
+                for j in bvh.candidates_near(&crate::contour::segops::Aabb::point(x), reach) {
+                    if owner[j] == i {
+                        continue;
+                    }
+                    let (d, q) = crate::contour::segops::point_distance(x, &bvh.segments()[j]);
+                    if d < best && idx.boundary_distance(q) <= dx - margin {
+                        best = d;
+                    }
+                }
+                if best.is_finite() {
+                    if best > largest {
+                        (largest, max_at) = (best, x);
+                    }
+                    gaps.push(best);
+                }
+            }
+        }
+    }
+    gaps.sort_by(f64::total_cmp);
+    let n = gaps.len();
+    Ok(PassSpacing {
+        max: gaps.last().copied().unwrap_or(0.0),
+        max_at,
+        p95: if n == 0 {
+            0.0
+        } else {
+            gaps[((0.95 * (n - 1) as f64).round() as usize).min(n - 1)]
+        },
+        samples: n,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -732,5 +824,24 @@ mod tests {
         let ua = uncut_area(&a, &part2, &stock, Some(0.01)).expect("u");
         let ub = uncut_area(&b, &part2, &stock, Some(0.01)).expect("u");
         assert_eq!(ua.uncut.to_bits(), ub.uncut.to_bits());
+    }
+
+    /// The baseline's concentric circles are exactly one stepover apart.
+    #[test]
+    fn pass_spacing_of_concentric_offsets_is_the_stepover() {
+        use crate::contour::parallel::tests::{circle, rect};
+        use crate::contour::parallel::{ParallelOptions, contour_parallel};
+        let part = Shape {
+            contours: vec![circle(0.0, 0.0, 10.0, true)],
+        };
+        let stock = Shape {
+            contours: vec![rect(-16.0, -16.0, 16.0, 16.0, true)],
+        };
+        let path = contour_parallel(&part, &stock, &ParallelOptions::new(2.0, 1.5)).expect("plan");
+        let sp = pass_spacing(&path, &part, 0.5, 0.4).expect("spacing");
+        assert!(sp.samples > 100);
+        assert!((sp.p95 - 1.5).abs() < 1e-9, "p95 {}", sp.p95);
+        assert!((sp.max - 1.5).abs() < 1e-9, "max {}", sp.max);
+        assert!(pass_spacing(&path, &part, 0.0, 0.4).is_err());
     }
 }

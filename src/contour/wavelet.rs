@@ -12,7 +12,20 @@
 //!
 //! Inner products are exact: B-spline products are degree-6 polynomials on each knot
 //! interval, integrated by 4-point Gauss–Legendre.
+//!
+//! On top of the filters, the multiresolution operations of seed 004 on planar curves whose
+//! control points are the rows of an n × 2 matrix:
+//! * [`decompose`] — c^{j−1}, d^{j−1} from c^j by solving [P^j | Q^j] [c; d] = c^j (eq. 2.16);
+//! * [`reconstruct`] — c^j = P^j c^{j−1} + Q^j d^{j−1} (eq. 2.17);
+//! * [`fractional`] — the in-between curve c^{m+t} = P^{m+1} c^m + t Q^{m+1} d^m (eq. 3.2);
+//! * [`bezier_matrix`] — M^j, the B-spline → Bézier conversion, and [`deviation_bound`], the
+//!   largest entry of E^j = M^j Q^j D^{j−1} (eq. 3.1): by the convex-hull property of the
+//!   Bézier pieces of C^j − C^{j−1}, no point of the level-j curve is farther than that from
+//!   the level-(j−1) curve at the same parameter;
+//! * [`fit`] — least-squares fit of 2^j + 3 control points to samples (the ends interpolated).
 
+use crate::contour::error::{ContourError, Result};
+use crate::contour::geometry::Point2;
 use nalgebra::{DMatrix, DVector};
 
 /// Knots of level j: four zeros, the interior knots i/2^j, four ones.
@@ -151,6 +164,176 @@ pub fn synthesis_q(j: u32) -> DMatrix<f64> {
         }
     }
     q
+}
+
+/// Control points of a planar curve: one row per point, columns x and y.
+pub type Controls = DMatrix<f64>;
+
+/// Number of control points of level j.
+pub fn count(j: u32) -> usize {
+    (1usize << j) + 3
+}
+
+fn level_of(c: &Controls, what: &str) -> Result<u32> {
+    let n = c.nrows();
+    (0..=20)
+        .find(|&j| count(j) == n)
+        .ok_or_else(|| ContourError::BadPath(format!("{what}: {n} control points is not 2^j + 3")))
+}
+
+/// Splits the level-j control points `c` into the coarse points c^{j−1} and the wavelet
+/// coefficients d^{j−1} (eq. 2.16, solved by LU of the square matrix [P^j | Q^j]).
+pub fn decompose(c: &Controls) -> Result<(Controls, Controls)> {
+    let j = level_of(c, "decompose")?;
+    if j == 0 {
+        return Err(ContourError::BadPath(
+            "decompose: level 0 has no coarser level".into(),
+        ));
+    }
+    let (p, q) = (synthesis_p(j), synthesis_q(j));
+    let pq = DMatrix::from_fn(p.nrows(), p.ncols() + q.ncols(), |r, col| {
+        if col < p.ncols() {
+            p[(r, col)]
+        } else {
+            q[(r, col - p.ncols())]
+        }
+    });
+    let x = pq
+        .lu()
+        .solve(c)
+        .ok_or_else(|| ContourError::BadPath(format!("decompose: [P{j}|Q{j}] is singular")))?;
+    let coarse = x.rows(0, p.ncols()).into_owned();
+    let detail = x.rows(p.ncols(), q.ncols()).into_owned();
+    Ok((coarse, detail))
+}
+
+/// c^j = P^j c^{j−1} + Q^j d^{j−1} (eq. 2.17).
+pub fn reconstruct(coarse: &Controls, detail: &Controls) -> Result<Controls> {
+    fractional(coarse, detail, 1.0)
+}
+
+/// The fractional level c^{m+t} = P^{m+1} c^m + t Q^{m+1} d^m (eq. 3.2): t = 0 is the coarse
+/// curve written on the finer knots, t = 1 the fine curve.
+pub fn fractional(coarse: &Controls, detail: &Controls, t: f64) -> Result<Controls> {
+    let m = level_of(coarse, "reconstruct")?;
+    if detail.nrows() != 1usize << m || detail.ncols() != coarse.ncols() {
+        return Err(ContourError::BadPath(format!(
+            "reconstruct: level {m} needs {} wavelet coefficients, got {}",
+            1usize << m,
+            detail.nrows()
+        )));
+    }
+    Ok(synthesis_p(m + 1) * coarse + synthesis_q(m + 1) * detail * t)
+}
+
+/// Point of the level-j curve with control points `c` (2^j + 3 rows; any other row count is
+/// read as level 0, using its first four rows) at parameter u ∈ [0, 1].
+pub fn evaluate(c: &Controls, u: f64) -> Point2 {
+    let j = level_of(c, "evaluate").unwrap_or(0);
+    let b = basis(j, u.clamp(0.0, 1.0));
+    let mut p = Point2::origin();
+    for (i, w) in b.iter().enumerate().filter(|(_, w)| **w != 0.0) {
+        if i < c.nrows() {
+            p.x += w * c[(i, 0)];
+            p.y += w * c[(i, 1)];
+        }
+    }
+    p
+}
+
+/// M^j: rows 4s..4s+3 are the Bézier control points of knot span s of a level-j curve, as
+/// combinations of its 2^j + 3 B-spline control points. Each span's polynomial is sampled at
+/// u = 0, 1/3, 2/3, 1 of the span and the cubic Bernstein matrix inverted (exact).
+pub fn bezier_matrix(j: u32) -> DMatrix<f64> {
+    let spans = 1usize << j;
+    let n = count(j);
+    // Inverse of the cubic Bernstein matrix at t = 0, 1/3, 2/3, 1.
+    let bern = DMatrix::from_fn(4, 4, |k, i| {
+        let t = k as f64 / 3.0;
+        let binom = [1.0, 3.0, 3.0, 1.0][i];
+        binom * t.powi(i as i32) * (1.0 - t).powi(3 - i as i32)
+    });
+    // invariant: the cubic Bernstein basis at four distinct points is a basis of the cubics.
+    let inv = bern
+        .try_inverse()
+        .expect("the cubic Bernstein matrix at 0, 1/3, 2/3, 1 is invertible");
+    let mut m = DMatrix::zeros(4 * spans, n);
+    for s in 0..spans {
+        let values = DMatrix::from_fn(4, n, |k, i| {
+            let u = (s as f64 + k as f64 / 3.0) / spans as f64;
+            // The value at the span's right end must come from this span's polynomial: the
+            // basis is continuous, so evaluating at the end point is the same.
+            basis(j, u)[i]
+        });
+        let block = &inv * values;
+        m.view_mut((4 * s, 0), (4, n)).copy_from(&block);
+    }
+    m
+}
+
+/// The eq. 3.1 bound: max over the rows of E^j = M^j Q^j D^{j−1} of their length, where
+/// `detail` = D^{j−1} are the wavelet coefficients removed when going from level j to j − 1.
+pub fn deviation_bound(detail: &Controls) -> Result<f64> {
+    let rows = detail.nrows();
+    let j = (1..=20)
+        .find(|&j| 1usize << (j - 1) == rows)
+        .ok_or_else(|| ContourError::BadPath(format!("bound: {rows} coefficients")))?;
+    let e = bezier_matrix(j) * synthesis_q(j) * detail;
+    Ok((0..e.nrows())
+        .map(|r| {
+            (0..e.ncols())
+                .map(|c| e[(r, c)].powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max))
+}
+
+/// Least-squares fit of a level-j curve to `points` at parameters `params` (∈ [0, 1]), with
+/// the first and last control points fixed at the first and last sample (end interpolation,
+/// so pieces fitted separately meet exactly).
+pub fn fit(points: &[Point2], params: &[f64], j: u32) -> Result<Controls> {
+    let n = count(j);
+    if points.len() != params.len() || points.len() < n {
+        return Err(ContourError::BadPath(format!(
+            "fit: {} samples for {} control points",
+            points.len(),
+            n
+        )));
+    }
+    let (first, last) = (points[0], points[points.len() - 1]);
+    // Normal equations on the interior control points; B is banded (4 non-zeros a row).
+    let inner = n - 2;
+    let mut ata = DMatrix::zeros(inner, inner);
+    let mut atb = DMatrix::zeros(inner, 2);
+    for (p, &u) in points.iter().zip(params) {
+        let b = basis(j, u.clamp(0.0, 1.0));
+        let fixed = first.coords * b[0] + last.coords * b[n - 1];
+        let rhs = p.coords - fixed;
+        for a in 1..n - 1 {
+            if b[a] == 0.0 {
+                continue;
+            }
+            atb[(a - 1, 0)] += b[a] * rhs.x;
+            atb[(a - 1, 1)] += b[a] * rhs.y;
+            for c in 1..n - 1 {
+                if b[c] != 0.0 {
+                    ata[(a - 1, c - 1)] += b[a] * b[c];
+                }
+            }
+        }
+    }
+    let x = ata
+        .cholesky()
+        .map(|ch| ch.solve(&atb))
+        .ok_or_else(|| ContourError::BadPath(format!("fit: samples too sparse for level {j}")))?;
+    let mut c = DMatrix::zeros(n, 2);
+    c[(0, 0)] = first.x;
+    c[(0, 1)] = first.y;
+    c[(n - 1, 0)] = last.x;
+    c[(n - 1, 1)] = last.y;
+    c.view_mut((1, 0), (inner, 2)).copy_from(&x);
+    Ok(c)
 }
 
 #[cfg(test)]
@@ -383,5 +566,120 @@ mod tests {
             assert_eq!(basis(j, 0.0)[0], 1.0);
             assert_eq!(*basis(j, 1.0).last().unwrap(), 1.0);
         }
+    }
+
+    fn wiggly(j: u32) -> Controls {
+        DMatrix::from_fn(count(j), 2, |r, c| {
+            let x = r as f64;
+            if c == 0 {
+                x + (1.3 * x).sin()
+            } else {
+                (0.7 * x).cos() * 3.0 + 0.1 * x * x
+            }
+        })
+    }
+
+    #[test]
+    fn decomposition_then_reconstruction_is_exact() {
+        for j in 1..=6 {
+            let c = wiggly(j);
+            let (coarse, detail) = decompose(&c).expect("decompose");
+            assert_eq!(coarse.nrows(), count(j - 1));
+            assert_eq!(detail.nrows(), 1 << (j - 1));
+            let back = reconstruct(&coarse, &detail).expect("reconstruct");
+            assert!((back - &c).amax() < 1e-12 * c.amax().max(1.0), "level {j}");
+            // t = 0 is the coarse curve, pointwise the same as on its own knots.
+            let half = fractional(&coarse, &detail, 0.0).expect("fractional");
+            for s in 0..=40 {
+                let u = s as f64 / 40.0;
+                assert!((evaluate(&half, u) - evaluate(&coarse, u)).norm() < 1e-12);
+            }
+        }
+        assert!(decompose(&DMatrix::zeros(6, 2)).is_err());
+    }
+
+    #[test]
+    fn coarse_curve_is_the_least_squares_projection() {
+        // Orthogonality (eq. 2.15) makes c^{j−1} the L2-best level-(j−1) curve: perturbing
+        // any coarse control point can only increase the L2 distance to the fine curve.
+        let c = wiggly(4);
+        let (coarse, _) = decompose(&c).expect("decompose");
+        let l2 = |a: &Controls| {
+            (0..2000)
+                .map(|s| {
+                    let u = (s as f64 + 0.5) / 2000.0;
+                    (evaluate(a, u) - evaluate(&c, u)).norm_squared()
+                })
+                .sum::<f64>()
+        };
+        let base = l2(&coarse);
+        for k in 0..coarse.nrows() {
+            let mut other = coarse.clone();
+            other[(k, 0)] += 0.05;
+            assert!(l2(&other) > base, "control point {k}");
+        }
+    }
+
+    #[test]
+    fn eq_3_1_bounds_the_sampled_deviation_between_levels() {
+        for j in 2..=6 {
+            let c = wiggly(j);
+            let (coarse, detail) = decompose(&c).expect("decompose");
+            let bound = deviation_bound(&detail).expect("bound");
+            let worst = (0..=4000)
+                .map(|s| {
+                    let u = s as f64 / 4000.0;
+                    (evaluate(&c, u) - evaluate(&coarse, u)).norm()
+                })
+                .fold(0.0, f64::max);
+            assert!(worst <= bound + 1e-12, "level {j}: {worst} > {bound}");
+            // Conservative, not absurd.
+            assert!(bound < 4.0 * worst, "level {j}: bound {bound} vs {worst}");
+        }
+    }
+
+    #[test]
+    fn bezier_matrix_reproduces_the_curve() {
+        let c = wiggly(3);
+        let bez = bezier_matrix(3) * &c;
+        for s in 0..8 {
+            for k in 0..=10 {
+                let t = k as f64 / 10.0;
+                let w = [
+                    (1.0 - t).powi(3),
+                    3.0 * t * (1.0 - t).powi(2),
+                    3.0 * t * t * (1.0 - t),
+                    t.powi(3),
+                ];
+                let mut p = Point2::origin();
+                for (i, wi) in w.iter().enumerate() {
+                    p.x += wi * bez[(4 * s + i, 0)];
+                    p.y += wi * bez[(4 * s + i, 1)];
+                }
+                let u = (s as f64 + t) / 8.0;
+                assert!((p - evaluate(&c, u)).norm() < 1e-10, "span {s} t {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn fit_recovers_a_curve_of_its_own_level_and_interpolates_the_ends() {
+        let c = wiggly(3);
+        let params: Vec<f64> = (0..=200).map(|s| s as f64 / 200.0).collect();
+        let pts: Vec<Point2> = params.iter().map(|&u| evaluate(&c, u)).collect();
+        let f = fit(&pts, &params, 3).expect("fit");
+        assert!((f - &c).amax() < 1e-9);
+        // A circle quarter at a coarse level: within a small distance, ends exact.
+        let pts: Vec<Point2> = params
+            .iter()
+            .map(|u| Point2::new((u * 1.5).cos() * 10.0, (u * 1.5).sin() * 10.0))
+            .collect();
+        let f = fit(&pts, &params, 1).expect("fit");
+        assert_eq!(evaluate(&f, 0.0), pts[0]);
+        assert_eq!(evaluate(&f, 1.0), pts[200]);
+        for (p, u) in pts.iter().zip(&params) {
+            assert!((evaluate(&f, *u) - p).norm() < 0.01);
+        }
+        assert!(fit(&pts[..3], &params[..3], 3).is_err());
     }
 }

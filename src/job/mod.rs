@@ -4,6 +4,8 @@
 //! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
 
 mod config;
+mod contour;
+mod contour_picture;
 mod levels;
 mod output;
 mod pipeline;
@@ -13,6 +15,10 @@ mod samples;
 
 pub use config::{
     FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
+};
+pub use contour::{
+    CompareReport, ContourComparison, ContourJobOptions, MethodFigures, contour_compare,
+    contour_wavelet, parse_flat_tool, parse_stock_margin, write_contour_outputs,
 };
 pub use levels::{LevelSummary, LevelsReport, levels};
 pub use output::{write_atomically, write_outputs};

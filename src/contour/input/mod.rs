@@ -19,7 +19,7 @@
 //! Crossing or overlapping contours are reported as errors naming both contours and the point;
 //! they are not resolved by polygon booleans.
 
-mod curves;
+pub(crate) mod curves;
 mod dxf;
 mod fill;
 mod segmath;

@@ -1,0 +1,270 @@
+//! Properties of the multiresolution planner on small shapes with known geometry.
+
+use super::*;
+use crate::contour::geometry::Vertex;
+use crate::contour::parallel::tests::rect;
+use crate::contour::parallel::{ParallelOptions, contour_parallel};
+use crate::contour::verify::{clearance, path_stats, uncut_area};
+
+/// A "mountain" range: a base with five peaks of different heights, some rounded.
+pub(crate) fn mountain() -> Shape {
+    let mut v = vec![Vertex::line(0.0, 0.0), Vertex::line(100.0, 0.0)];
+    let peaks = [
+        (90.0, 30.0),
+        (80.0, 14.0),
+        (70.0, 40.0),
+        (58.0, 20.0),
+        (45.0, 48.0),
+        (30.0, 18.0),
+        (18.0, 35.0),
+        (8.0, 12.0),
+    ];
+    v.push(Vertex::line(100.0, 10.0));
+    for (i, (x, y)) in peaks.iter().enumerate() {
+        // Every other vertex starts a slightly curved segment.
+        let bulge = if i % 2 == 0 { 0.15 } else { 0.0 };
+        v.push(Vertex {
+            point: Point2::new(*x, *y),
+            bulge,
+        });
+    }
+    v.push(Vertex::line(0.0, 8.0));
+    Shape {
+        contours: vec![Contour { vertices: v }],
+    }
+}
+
+fn stock_around(part: &Shape, margin: f64) -> Shape {
+    let pts: Vec<Point2> = hull::enclosing_points(part);
+    let (mut lo, mut hi) = (pts[0], pts[0]);
+    for p in &pts {
+        lo = Point2::new(lo.x.min(p.x), lo.y.min(p.y));
+        hi = Point2::new(hi.x.max(p.x), hi.y.max(p.y));
+    }
+    Shape {
+        contours: vec![rect(
+            lo.x - margin,
+            lo.y - margin,
+            hi.x + margin,
+            hi.y + margin,
+            true,
+        )],
+    }
+}
+
+fn transformed(shape: &Shape, angle: f64, mirror: bool) -> Shape {
+    let (s, c) = angle.sin_cos();
+    let contours = shape
+        .contours
+        .iter()
+        .map(|ct| {
+            let mut vs: Vec<Vertex> = ct
+                .vertices
+                .iter()
+                .map(|v| {
+                    let x = if mirror { -v.point.x } else { v.point.x };
+                    Vertex {
+                        point: Point2::new(c * x - s * v.point.y, s * x + c * v.point.y),
+                        bulge: if mirror { -v.bulge } else { v.bulge },
+                    }
+                })
+                .collect();
+            if mirror {
+                // Mirroring flips the orientation: reverse, moving each bulge to its segment's
+                // new start vertex.
+                let n = vs.len();
+                let bulges: Vec<f64> = vs.iter().map(|v| v.bulge).collect();
+                vs.reverse();
+                for (i, v) in vs.iter_mut().enumerate() {
+                    // New segment i runs from old vertex n−1−i to old vertex n−2−i: the old
+                    // segment n−2−i reversed.
+                    v.bulge = -bulges[(2 * n - 2 - i) % n];
+                }
+            }
+            Contour { vertices: vs }
+        })
+        .collect();
+    Shape { contours }
+}
+
+struct Measured {
+    clearance: f64,
+    uncut: f64,
+    length: f64,
+    segments: usize,
+}
+
+fn measure(path: &CenterPath, part: &Shape, stock: &Shape) -> Measured {
+    let c = clearance(path, part).expect("clearance");
+    let u = uncut_area(path, part, stock, Some(0.05)).expect("uncut");
+    let st = path_stats(path);
+    Measured {
+        clearance: c.clearance,
+        uncut: u.uncut,
+        length: st.cut_length,
+        segments: st.segments,
+    }
+}
+
+#[test]
+fn mountain_no_overcut_no_more_uncut() {
+    let part = mountain();
+    let stock = stock_around(&part, 10.0);
+    let (r, s) = (3.0, 2.4);
+    let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).expect("plan");
+    let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).expect("baseline");
+    let (m, b) = (
+        measure(&plan.path, &part, &stock),
+        measure(&base, &part, &stock),
+    );
+    eprintln!(
+        "mountain: length {:.1} vs {:.1}, segments {} vs {}, uncut {:.2} vs {:.2}, {:?}",
+        m.length, b.length, m.segments, b.segments, m.uncut, b.uncut, plan.report
+    );
+    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
+    assert!(b.clearance >= -1e-6);
+    // One row of the scanline is 0.05 mm: allow that much area per mm of stock width.
+    assert!(
+        m.uncut <= b.uncut + 0.05 * 130.0,
+        "uncut {} vs {}",
+        m.uncut,
+        b.uncut
+    );
+    assert!(plan.report.hull_levels > 0 && plan.report.part_levels > 0);
+    // The finishing pass is the exact offset at r: the path touches r somewhere.
+    assert!(m.clearance <= 1e-6);
+    eprintln!(
+        "mountain: length {:.1} vs {:.1}, segments {} vs {}, uncut {:.2} vs {:.2}, {:?}",
+        m.length, b.length, m.segments, b.segments, m.uncut, b.uncut, plan.report
+    );
+}
+
+#[test]
+fn loose_hull_encloses_the_part_with_no_more_legs() {
+    let part = mountain();
+    let plan = multires_paths(
+        &part,
+        &stock_around(&part, 8.0),
+        &MultiresOptions::new(3.0, 2.4),
+    )
+    .expect("plan");
+    assert!(plan.report.loose_hull_legs <= plan.report.hull_legs);
+    let hull = &plan.loose_hull;
+    let n = hull.len();
+    for p in hull::enclosing_points(&part) {
+        for i in 0..n {
+            let (a, b) = (hull[i], hull[(i + 1) % n]);
+            assert!(
+                crate::contour::segops::cross(b - a, p - a) >= -1e-9,
+                "{p:?} outside"
+            );
+        }
+    }
+}
+
+#[test]
+fn rotation_and_mirroring_keep_the_figures() {
+    let part = mountain();
+    let (r, s) = (3.0, 2.4);
+    let opts = MultiresOptions::new(r, s);
+    let stock = stock_around(&part, 10.0);
+    let plan = multires_paths(&part, &stock, &opts).expect("plan");
+    let m0 = measure(&plan.path, &part, &stock);
+    for (angle, mirror) in [
+        (37f64.to_radians(), false),
+        (0.0, true),
+        (37f64.to_radians(), true),
+    ] {
+        let p = transformed(&part, angle, mirror);
+        // The stock turns with the part (a rectangle around the turned part would be another
+        // problem).
+        let st = transformed(&stock, angle, mirror);
+        assert!(p.contours[0].signed_area() > 0.0);
+        let plan = multires_paths(&p, &st, &opts).expect("plan");
+        let m = measure(&plan.path, &p, &st);
+        assert!(
+            m.clearance >= -1e-6,
+            "{angle} {mirror}: overcut {}",
+            m.clearance
+        );
+        assert!(
+            (m.length - m0.length).abs() <= 0.03 * m0.length,
+            "{angle} {mirror}: length {} vs {}",
+            m.length,
+            m0.length
+        );
+        let ds = m.segments.abs_diff(m0.segments) as f64;
+        assert!(
+            ds <= 0.1 * m0.segments as f64,
+            "{angle} {mirror}: segments {} vs {}",
+            m.segments,
+            m0.segments
+        );
+        assert!(
+            (m.uncut - m0.uncut).abs() <= 0.02 * 130.0 * 80.0 * 0.01 + 0.1 * m0.uncut,
+            "{angle} {mirror}: uncut {} vs {}",
+            m.uncut,
+            m0.uncut
+        );
+    }
+}
+
+#[test]
+fn same_input_same_path() {
+    let part = mountain();
+    let stock = stock_around(&part, 6.0);
+    let opts = MultiresOptions::new(2.0, 1.5);
+    let a = multires_paths(&part, &stock, &opts).expect("plan");
+    let b = multires_paths(&part, &stock, &opts).expect("plan");
+    assert_eq!(a, b);
+}
+
+#[test]
+fn options_are_validated() {
+    let part = mountain();
+    let stock = stock_around(&part, 6.0);
+    let mut o = MultiresOptions::new(2.0, 1.5);
+    o.tolerance = Some(f64::NAN);
+    let e = multires_paths(&part, &stock, &o).unwrap_err();
+    assert!(e.to_string().contains("tolerance"), "{e}");
+    let e = multires_paths(&part, &stock, &MultiresOptions::new(2.0, 5.0)).unwrap_err();
+    assert!(e.to_string().contains("stepover"), "{e}");
+}
+
+/// A part outlined by many short lines (as from a scanned or finely tessellated drawing): its
+/// offsets have hundreds of segments, the wavelet approximation replaces them by a few arcs
+/// within the band, and the path still never cuts the part nor leaves more material.
+#[test]
+fn many_segment_part_gets_wavelet_passes() {
+    let vertices: Vec<Vertex> = (0..360)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 360.0;
+            let rho = 30.0 + 10.0 * (5.0 * a).sin();
+            Vertex::line(rho * a.cos(), rho * a.sin())
+        })
+        .collect();
+    let part = Shape {
+        contours: vec![Contour { vertices }],
+    };
+    let stock = stock_around(&part, 8.0);
+    let (r, s) = (3.0, 2.0);
+    let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).expect("plan");
+    let rep = &plan.report;
+    // Deep bays between the lobes: several part levels inside the hull, simplified.
+    assert!(rep.part_levels >= 3 && rep.wavelet_loops >= 2, "{rep:?}");
+    assert!(rep.used_segments < rep.exact_segments, "{rep:?}");
+    assert!((rep.tolerance - 0.5).abs() < 1e-12);
+    let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).expect("baseline");
+    let (m, b) = (
+        measure(&plan.path, &part, &stock),
+        measure(&base, &part, &stock),
+    );
+    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
+    assert!(
+        m.uncut <= b.uncut + 0.05 * 100.0,
+        "uncut {} vs {}",
+        m.uncut,
+        b.uncut
+    );
+    assert!(m.segments < b.segments, "{} vs {}", m.segments, b.segments);
+}

@@ -1,0 +1,419 @@
+//! `wavemill contour`: one 2.5D outline machined two ways — the multiresolution wavelet + loose
+//! convex hull paths of seed 004 ch. 3–4 ([`crate::contour::multires`]) and the
+//! contour-parallel baseline ([`crate::contour::parallel`]) — with the same tool, stock and
+//! stepover, verified and compared side by side (issue #6).
+//!
+//! Outputs (all in memory; [`write_contour_outputs`] writes them atomically): `wavelet.nc`,
+//! `contour_parallel.nc`, `compare.json`, `paths.svg`, `paths.png`.
+//!
+//! Default stepover: 0.4 × D. Below r = D/2, so the baseline leaves no reachable material
+//! (see [`crate::contour::parallel`]) and the wavelet passes get a band of (r − s)/2 = 0.05 × D
+//! on each side of their nominal level to be simplified in.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::output::write_atomically;
+use crate::contour::geometry::{Contour, Vertex};
+use crate::contour::geometry::{Point2, Shape};
+use crate::contour::region::RegionIndex;
+use crate::contour::{
+    CenterPath, ContourError, MachineParams, MultiresOptions, MultiresReport, OutlineOptions,
+    ParallelOptions, Program, clearance, contour_parallel, multires_paths, pass_spacing,
+    path_stats, read_outline, uncut_area,
+};
+use crate::error::{Error, Result};
+
+/// Options of [`contour_compare`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContourJobOptions {
+    /// Flat end mill diameter D, mm.
+    pub tool_diameter: f64,
+    /// Rectangular stock: the part's bounding box grown by this margin, mm.
+    pub stock_margin: f64,
+    /// Stepover, mm; `None` = 0.4 × D (see the module docs).
+    pub stepover: Option<f64>,
+    /// Outline scale (one outline unit = `scale` mm).
+    pub scale: f64,
+    /// Machine parameters and the time model.
+    pub machine: MachineParams,
+    /// Keep the run-dependent `timings_ms` in `compare.json`.
+    pub timings: bool,
+}
+
+impl ContourJobOptions {
+    /// Tool diameter and stock margin; default stepover, scale 1, default machine, timings on.
+    pub fn new(tool_diameter: f64, stock_margin: f64) -> Self {
+        Self {
+            tool_diameter,
+            stock_margin,
+            stepover: None,
+            scale: 1.0,
+            machine: MachineParams::default(),
+            timings: true,
+        }
+    }
+}
+
+/// Parses `flat:D` (D in mm > 0) into the tool diameter.
+pub fn parse_flat_tool(spec: &str) -> Result<f64> {
+    let bad = || {
+        Error::Job(format!(
+            "--tool {spec}: expected flat:D with D > 0 mm (e.g. flat:6)"
+        ))
+    };
+    let (kind, d) = spec.split_once(':').ok_or_else(bad)?;
+    let d: f64 = d.trim().parse().map_err(|_| bad())?;
+    if kind.trim() != "flat" || !(d.is_finite() && d > 0.0) {
+        return Err(bad());
+    }
+    Ok(d)
+}
+
+/// Parses `margin:M` (M in mm ≥ 0) into the stock margin.
+pub fn parse_stock_margin(spec: &str) -> Result<f64> {
+    let bad = || {
+        Error::Job(format!(
+            "--stock {spec}: expected margin:M with M ≥ 0 mm (e.g. margin:10)"
+        ))
+    };
+    let (kind, m) = spec.split_once(':').ok_or_else(bad)?;
+    let m: f64 = m.trim().parse().map_err(|_| bad())?;
+    if kind.trim() != "margin" || !(m.is_finite() && m >= 0.0) {
+        return Err(bad());
+    }
+    Ok(m)
+}
+
+/// The figures of one method in `compare.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodFigures {
+    /// min distance tool centre → part − r over the cutting moves, mm (≥ −1e-6: no overcut).
+    pub min_clearance_minus_r_mm: f64,
+    pub uncut_area_mm2: f64,
+    /// Pass length, mm (feed links are reported apart).
+    pub cutting_length_mm: f64,
+    pub feed_link_length_mm: f64,
+    pub passes: usize,
+    pub nc_blocks: usize,
+    pub machining_time_min: f64,
+    /// Largest and 95th-percentile distance between a pass and the next pass toward the
+    /// part, mm (sampled; see `verify::pass_spacing`).
+    pub pass_spacing_max_mm: f64,
+    pub pass_spacing_max_at: [f64; 2],
+    pub pass_spacing_p95_mm: f64,
+    /// Links made by retract, rapid and plunge (each 3 blocks and a plunge at feed).
+    pub rapid_links: usize,
+    /// The time split of the model: feed (cut, feed links, plunges), rapid, block dwell.
+    pub feed_min: f64,
+    pub rapid_min: f64,
+    pub dwell_min: f64,
+}
+
+/// Relative differences, wavelet vs contour-parallel, percent (negative = wavelet smaller).
+#[derive(Clone, Debug, Serialize)]
+pub struct Differences {
+    pub cutting_length_pct: f64,
+    pub nc_blocks_pct: f64,
+    pub machining_time_pct: f64,
+    pub uncut_area_mm2: f64,
+}
+
+/// Milliseconds per stage; the only run-dependent part of `compare.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContourTimings {
+    pub read: f64,
+    pub wavelet: f64,
+    pub contour_parallel: f64,
+    pub verify: f64,
+}
+
+/// `compare.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareReport {
+    pub outline: String,
+    pub tool_diameter_mm: f64,
+    pub stepover_mm: f64,
+    pub stock_margin_mm: f64,
+    pub scale: f64,
+    /// (stock − part) area, mm², and that area divided by the stepover: the length a path
+    /// with passes exactly one stepover apart would need, mm.
+    pub region_area_mm2: f64,
+    pub area_over_stepover_mm: f64,
+    /// Machine model: feed mm/min, dwell s per block, rapid mm/min.
+    pub feed_mm_per_min: f64,
+    pub dwell_s_per_block: f64,
+    pub rapid_mm_per_min: f64,
+    pub uncut_row_step_mm: f64,
+    pub contour_parallel: MethodFigures,
+    pub wavelet: MethodFigures,
+    pub wavelet_vs_parallel: Differences,
+    pub wavelet_planner: PlannerFigures,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timings_ms: Option<ContourTimings>,
+}
+
+/// What the multiresolution planner did.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlannerFigures {
+    pub band_tolerance_mm: f64,
+    pub part_levels: usize,
+    pub hull_levels: usize,
+    pub hull_legs: usize,
+    pub loose_hull_legs: usize,
+    pub wavelet_loops: usize,
+    pub exact_loops: usize,
+    pub corners: usize,
+    pub smooth_regions: usize,
+    pub non_smooth_regions: usize,
+    pub wavelet_levels_dropped: u32,
+}
+
+impl From<&MultiresReport> for PlannerFigures {
+    fn from(r: &MultiresReport) -> Self {
+        Self {
+            band_tolerance_mm: r.tolerance,
+            part_levels: r.part_levels,
+            hull_levels: r.hull_levels,
+            hull_legs: r.hull_legs,
+            loose_hull_legs: r.loose_hull_legs,
+            wavelet_loops: r.wavelet_loops,
+            exact_loops: r.exact_fallbacks,
+            corners: r.corners,
+            smooth_regions: r.smooth_regions,
+            non_smooth_regions: r.non_smooth_regions,
+            wavelet_levels_dropped: r.levels_dropped,
+        }
+    }
+}
+
+/// Everything `wavemill contour --compare` writes, in memory.
+#[derive(Clone, Debug)]
+pub struct ContourComparison {
+    pub wavelet_nc: String,
+    pub parallel_nc: String,
+    pub report: CompareReport,
+    pub svg: String,
+    pub png: Vec<u8>,
+}
+
+impl ContourComparison {
+    /// `compare.json` text.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(&self.report).unwrap_or_default() + "\n"
+    }
+}
+
+fn ms(t: Instant) -> f64 {
+    (t.elapsed().as_secs_f64() * 1e5).round() / 100.0
+}
+
+fn contour_error(file: &str) -> impl Fn(ContourError) -> Error + '_ {
+    move |e| Error::Job(format!("{file}: {e}"))
+}
+
+/// The inputs of a run, read and checked.
+struct Prepared {
+    file: String,
+    part: Shape,
+    stock: Shape,
+    r: f64,
+    s: f64,
+    row_step: f64,
+    read_ms: f64,
+}
+
+fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
+    let file = outline.display().to_string();
+    let d = opts.tool_diameter;
+    if !(d.is_finite() && d > 0.0) {
+        return Err(Error::Job(format!("tool diameter {d}: must be > 0 mm")));
+    }
+    let s = opts.stepover.unwrap_or(0.4 * d);
+    if !(s.is_finite() && s > 0.0 && s <= d) {
+        return Err(Error::Job(format!(
+            "--stepover {s}: must satisfy 0 < stepover ≤ tool diameter {d}"
+        )));
+    }
+    if !(opts.stock_margin.is_finite() && opts.stock_margin >= 0.0) {
+        return Err(Error::Job(format!(
+            "stock margin {}: must be ≥ 0 mm",
+            opts.stock_margin
+        )));
+    }
+    let t = Instant::now();
+    let outline_opts = OutlineOptions {
+        scale: opts.scale,
+        ..Default::default()
+    };
+    let part = read_outline(outline, &outline_opts).map_err(|e| Error::Job(e.to_string()))?;
+    let stock = stock_around(&part, opts.stock_margin)
+        .ok_or_else(|| Error::Job(format!("{file}: the outline has no points")))?;
+    let bounds = stock_bounds(&stock);
+    Ok(Prepared {
+        file,
+        part,
+        stock,
+        r: 0.5 * d,
+        s,
+        row_step: (bounds.1.x - bounds.0.x).max(bounds.1.y - bounds.0.y) / 4000.0,
+        read_ms: ms(t),
+    })
+}
+
+/// Verifies and measures one path; refuses a path that cuts into the part. Returns the
+/// figures, the G-code and the (stock − part) area of the uncut-area quadrature.
+fn method_figures(
+    p: &Prepared,
+    path: &CenterPath,
+    machine: &MachineParams,
+    name: &str,
+) -> Result<(MethodFigures, String, f64)> {
+    let file = p.file.as_str();
+    let program = Program::new(path, machine).map_err(contour_error(file))?;
+    let st = program.stats();
+    let c = clearance(path, &p.part).map_err(contour_error(file))?;
+    if c.clearance < -1e-6 {
+        return Err(Error::Verification(format!(
+            "{file}: the {name} path cuts {:.6} mm into the part at ({:.4}, {:.4})",
+            -c.clearance, c.at.x, c.at.y
+        )));
+    }
+    let u = uncut_area(path, &p.part, &p.stock, Some(p.row_step)).map_err(contour_error(file))?;
+    let sp = pass_spacing(path, &p.part, 0.5 * p.s, 0.25 * p.s).map_err(contour_error(file))?;
+    let ps = path_stats(path);
+    Ok((
+        MethodFigures {
+            min_clearance_minus_r_mm: c.clearance,
+            uncut_area_mm2: u.uncut,
+            cutting_length_mm: ps.cut_length,
+            feed_link_length_mm: ps.feed_link_length,
+            passes: ps.passes,
+            nc_blocks: st.blocks,
+            machining_time_min: st.total_minutes,
+            pass_spacing_max_mm: sp.max,
+            pass_spacing_max_at: [sp.max_at.x, sp.max_at.y],
+            pass_spacing_p95_mm: sp.p95,
+            rapid_links: ps.rapid_links,
+            feed_min: st.feed_minutes,
+            rapid_min: st.rapid_minutes,
+            dwell_min: st.dwell_minutes,
+        },
+        program.to_gcode(),
+        u.region,
+    ))
+}
+
+/// Reads `outline` and plans, verifies and posts the multiresolution path only (no baseline):
+/// its G-code and figures.
+pub fn contour_wavelet(
+    outline: &Path,
+    opts: &ContourJobOptions,
+) -> Result<(String, MethodFigures)> {
+    let p = prepare(outline, opts)?;
+    let plan = multires_paths(&p.part, &p.stock, &MultiresOptions::new(p.r, p.s))
+        .map_err(contour_error(&p.file))?;
+    let (figures, nc, _) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;
+    Ok((nc, figures))
+}
+
+/// Reads `outline`, plans both methods, verifies and compares them.
+pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<ContourComparison> {
+    let p = prepare(outline, opts)?;
+    let (file, part, stock, r, s) = (&p.file, &p.part, &p.stock, p.r, p.s);
+    let t = Instant::now();
+    let plan =
+        multires_paths(part, stock, &MultiresOptions::new(r, s)).map_err(contour_error(file))?;
+    let t_wavelet = ms(t);
+    let t = Instant::now();
+    let base =
+        contour_parallel(part, stock, &ParallelOptions::new(r, s)).map_err(contour_error(file))?;
+    let t_parallel = ms(t);
+
+    let t = Instant::now();
+    let (wf, wavelet_nc, region) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;
+    let (pf, parallel_nc, _) = method_figures(&p, &base, &opts.machine, "contour-parallel")?;
+    let t_verify = ms(t);
+    let pct = |a: f64, b: f64| if b != 0.0 { 100.0 * (a - b) / b } else { 0.0 };
+    let diff = Differences {
+        cutting_length_pct: pct(wf.cutting_length_mm, pf.cutting_length_mm),
+        nc_blocks_pct: pct(wf.nc_blocks as f64, pf.nc_blocks as f64),
+        machining_time_pct: pct(wf.machining_time_min, pf.machining_time_min),
+        uncut_area_mm2: wf.uncut_area_mm2 - pf.uncut_area_mm2,
+    };
+    let report = CompareReport {
+        outline: outline
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        tool_diameter_mm: 2.0 * r,
+        stepover_mm: s,
+        stock_margin_mm: opts.stock_margin,
+        scale: opts.scale,
+        region_area_mm2: region,
+        area_over_stepover_mm: region / s,
+        feed_mm_per_min: opts.machine.feed,
+        dwell_s_per_block: opts.machine.dwell_per_block,
+        rapid_mm_per_min: opts.machine.rapid,
+        uncut_row_step_mm: p.row_step,
+        contour_parallel: pf,
+        wavelet: wf,
+        wavelet_vs_parallel: diff,
+        wavelet_planner: PlannerFigures::from(&plan.report),
+        timings_ms: opts.timings.then_some(ContourTimings {
+            read: p.read_ms,
+            wavelet: t_wavelet,
+            contour_parallel: t_parallel,
+            verify: t_verify,
+        }),
+    };
+    let picture =
+        super::contour_picture::Picture::new(part, stock, &base, &plan.path, &plan.loose_hull);
+    Ok(ContourComparison {
+        wavelet_nc,
+        parallel_nc,
+        report,
+        svg: picture.svg(),
+        png: picture.png(1600),
+    })
+}
+
+/// Writes the five outputs of [`contour_compare`] into `dir` (created if missing).
+pub fn write_contour_outputs(dir: &Path, c: &ContourComparison) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        path: dir.display().to_string(),
+        source,
+    })?;
+    write_atomically(&dir.join("wavelet.nc"), c.wavelet_nc.as_bytes())?;
+    write_atomically(&dir.join("contour_parallel.nc"), c.parallel_nc.as_bytes())?;
+    write_atomically(&dir.join("compare.json"), c.json().as_bytes())?;
+    write_atomically(&dir.join("paths.svg"), c.svg.as_bytes())?;
+    write_atomically(&dir.join("paths.png"), &c.png)
+}
+
+fn stock_bounds(stock: &Shape) -> (Point2, Point2) {
+    let idx = RegionIndex::new(stock);
+    idx.boundary()
+        .bounds()
+        .map_or((Point2::origin(), Point2::origin()), |b| (b.min, b.max))
+}
+
+/// The part's bounding box (exact for arcs) grown by `margin`, as a counter-clockwise
+/// rectangle.
+fn stock_around(part: &Shape, margin: f64) -> Option<Shape> {
+    let b = RegionIndex::new(part).boundary().bounds()?;
+    let (lo, hi) = (b.min, b.max);
+    let (x0, y0, x1, y1) = (lo.x - margin, lo.y - margin, hi.x + margin, hi.y + margin);
+    Some(Shape {
+        contours: vec![Contour {
+            vertices: vec![
+                Vertex::line(x0, y0),
+                Vertex::line(x1, y0),
+                Vertex::line(x1, y1),
+                Vertex::line(x0, y1),
+            ],
+        }],
+    })
+}
