@@ -244,10 +244,27 @@ impl SurfaceDistance {
     /// one found: far cheaper than [`SurfaceDistance::closest`] when the answer is yes, which
     /// is what a Hausdorff distance asks of almost every sample.
     pub fn any_within(&self, p: &Point3, radius: f64) -> bool {
+        self.any_within_from(p, radius, &mut None)
+    }
+
+    /// [`SurfaceDistance::any_within`], trying the triangle `hint` first and leaving in it the
+    /// triangle that answered yes. Queries in a coherent order (samples along an edge, over a
+    /// triangle) mostly answer at the hint without walking the tree.
+    pub fn any_within_from(&self, p: &Point3, radius: f64, hint: &mut Option<u32>) -> bool {
         if self.nodes.is_empty() || radius.is_nan() || radius <= 0.0 {
             return false;
         }
         let r2 = radius * radius;
+        let near = |t: u32| {
+            let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+            (closest_point_on_triangle(p, &a, &b, &c).0 - p).norm_squared() < r2
+        };
+        if let Some(t) = *hint
+            && (t as usize) < self.triangles.len()
+            && near(t)
+        {
+            return true;
+        }
         let mut stack = NodeStack::new((self.nodes[0].aabb.distance_squared(p), 0));
         while let Some((d2, ni)) = stack.pop() {
             if d2 >= r2 {
@@ -257,20 +274,17 @@ impl SurfaceDistance {
             if node.count > 0 {
                 let leaf = &self.order[node.start as usize..(node.start + node.count) as usize];
                 // A corner inside the ball answers without the full triangle test.
-                let corner_inside = leaf.iter().any(|&t| {
+                if let Some(&t) = leaf.iter().find(|&&t| {
                     self.triangles[t as usize]
                         .iter()
                         .any(|&i| (self.positions[i as usize] - p).norm_squared() < r2)
-                });
-                if corner_inside {
+                }) {
+                    *hint = Some(t);
                     return true;
                 }
-                for &t in leaf {
-                    let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
-                    let (q, _) = closest_point_on_triangle(p, &a, &b, &c);
-                    if (q - p).norm_squared() < r2 {
-                        return true;
-                    }
+                if let Some(&t) = leaf.iter().find(|&&t| near(t)) {
+                    *hint = Some(t);
+                    return true;
                 }
             } else {
                 let (l, r) = (node.left, node.right);
@@ -369,10 +383,15 @@ mod tests {
     fn any_within_agrees_with_brute_force() {
         let m = torus(20.0, 6.0, 40, 20);
         let s = SurfaceDistance::new(&m);
+        // With a hint carried from query to query (often a wrong one), the same answers.
+        let mut hint = Some(u32::MAX);
         for p in probe_points(300, 35.0) {
             let d = brute_force(&m, &p);
             assert!(s.any_within(&p, d * (1.0 + 1e-9) + 1e-12), "{p} at {d}");
             assert!(!s.any_within(&p, d * (1.0 - 1e-9)), "{p} at {d}");
+            assert!(s.any_within_from(&p, d * (1.0 + 1e-9) + 1e-12, &mut hint));
+            assert!(hint.is_some_and(|t| (t as usize) < m.triangles.len()));
+            assert!(!s.any_within_from(&p, d * (1.0 - 1e-9), &mut hint));
         }
         let on = m.positions[7];
         assert!(!s.any_within(&on, 0.0));

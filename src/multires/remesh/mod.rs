@@ -296,8 +296,9 @@ fn two_sided_hausdorff(
             .enumerate()
             .map(|(c, chunk)| {
                 let mut best = (0.0, usize::MAX);
+                let mut hint = None;
                 for (k, p) in chunk.iter().enumerate() {
-                    if best.1 != usize::MAX && to.any_within(p, best.0) {
+                    if best.1 != usize::MAX && to.any_within_from(p, best.0, &mut hint) {
                         continue;
                     }
                     let d = to
