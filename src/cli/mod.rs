@@ -107,6 +107,10 @@ pub struct LevelsArgs {
     /// exactly by every level.
     #[arg(long, default_value_t = 40.0)]
     pub crease_angle: f64,
+    /// Tangential relaxation passes over each level's new vertices (each followed by
+    /// re-projection onto the part); off by default: it evens the triangles but loosens the fit.
+    #[arg(long, default_value_t = 0)]
+    pub relax_passes: u32,
     /// Plain lifting, without the k-disk least-squares update that brings the coarse levels
     /// closer to the part (measured: L∞ deviation of the base 2-4x smaller with it).
     #[arg(long)]
@@ -485,6 +489,7 @@ fn levels(args: &LevelsArgs) -> Result<()> {
         tolerance: args.tolerance,
         base_triangles: args.base_triangles.max(4),
         base_max_error: Some(args.base_max_error.unwrap_or(3.0 * args.tolerance)),
+        relax_passes: args.relax_passes,
         max_levels: args.max_levels,
         crease_angle_deg: args.crease_angle,
         ..Default::default()

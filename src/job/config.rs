@@ -178,6 +178,7 @@ impl SurfaceSection {
             crease_angle_deg: self.crease_angle_deg,
             max_levels: self.max_levels,
             max_triangles: self.max_triangles,
+            ..crate::multires::RemeshOptions::default()
         }
     }
 }

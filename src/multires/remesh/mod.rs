@@ -65,6 +65,12 @@ pub struct RemeshOptions {
     /// Do not make a level of more triangles than this. Default 4,000,000 (about 1 GB of
     /// hierarchy and fitting structures).
     pub max_triangles: usize,
+    /// Tangential relaxation passes per level over the level's new (odd) smooth vertices,
+    /// each followed by re-projection onto their chart. Even vertices never move, so the
+    /// levels still interpolate each other. Default 0: measured, one pass evens the triangles
+    /// (level-to-part distance halves) but pulls vertices off the part's curvature peaks, so
+    /// the part-to-level distance grows 5-20x (turbine blade level 1: 0.016 -> 0.079 mm).
+    pub relax_passes: u32,
 }
 
 impl Default for RemeshOptions {
@@ -76,6 +82,7 @@ impl Default for RemeshOptions {
             crease_angle_deg: 40.0,
             max_levels: 5,
             max_triangles: 4_000_000,
+            relax_passes: 0,
         }
     }
 }
@@ -206,6 +213,10 @@ impl Hierarchy {
                 triangles: topology.triangles,
             };
             project(&mut mesh, &creases, &face_chart, &charts, coarse);
+            for _ in 0..options.relax_passes {
+                relax_tangentially(&mut mesh, &creases, coarse);
+                project(&mut mesh, &creases, &face_chart, &charts, coarse);
+            }
             let fit = two_sided_hausdorff(&mesh, &target, &input_samples, spacing);
             levels.push(FittedLevel {
                 mesh: mesh.clone(),
@@ -390,6 +401,39 @@ fn project(
         });
 }
 
+/// Moves every smooth vertex from `first` on half-way to the centroid of its neighbours,
+/// within its tangent plane (Botsch–Kobbelt style): evens out the triangles that projecting
+/// edge midpoints onto a curved part leaves uneven, without pulling the surface inward.
+/// Jacobi (all targets from the old positions), so the result does not depend on the order.
+fn relax_tangentially(mesh: &mut Mesh, creases: &Creases, first: usize) {
+    use rayon::prelude::*;
+    let n = mesh.positions.len();
+    let normals = vertex_normals(mesh);
+    let classes = classify_vertices(&mesh.triangles, n, creases);
+    let mut sum = vec![Vector3::zeros(); n];
+    let mut count = vec![0u32; n];
+    for e in edges(&mesh.triangles) {
+        let [a, b] = e.vertices.map(|v| v as usize);
+        sum[a] += mesh.positions[b].coords;
+        sum[b] += mesh.positions[a].coords;
+        count[a] += 1;
+        count[b] += 1;
+    }
+    let moved: Vec<Point3> = (first..n)
+        .into_par_iter()
+        .map(|v| {
+            let p = mesh.positions[v];
+            if classes[v] != VertexClass::Smooth || count[v] == 0 {
+                return p;
+            }
+            let towards = sum[v] / f64::from(count[v]) - p.coords;
+            let normal = normals[v];
+            p + (towards - normal * normal.dot(&towards)) * 0.5
+        })
+        .collect();
+    mesh.positions[first..].copy_from_slice(&moved);
+}
+
 /// The sharp edges of a level: its creases and its boundary edges, `[min, max]`, sorted.
 fn sharp_edges(triangles: &[[u32; 3]], creases: &Creases) -> Vec<[u32; 2]> {
     let mut sharp: Vec<[u32; 2]> = edges(triangles)
@@ -566,6 +610,41 @@ mod tests {
                 assert_eq!(&level.mesh.positions[..n], &coarse.mesh.positions[..]);
                 assert!(level.hausdorff < coarse.hausdorff);
             }
+        }
+    }
+
+    /// Relaxation moves only the new smooth vertices: levels still interpolate, sharp vertices
+    /// stay on the rims, and the new vertices end on the part (re-projected).
+    #[test]
+    fn relaxation_keeps_levels_interpolating_and_on_the_part() {
+        let input = capped_cylinder(15.0, 20.0, 96, 12);
+        let options = RemeshOptions {
+            tolerance: 0.0,
+            base_triangles: 150,
+            base_max_error: None,
+            max_levels: 2,
+            relax_passes: 2,
+            ..Default::default()
+        };
+        let relaxed = Hierarchy::build(&input, &options).unwrap();
+        let plain = Hierarchy::build(
+            &input,
+            &RemeshOptions {
+                relax_passes: 0,
+                ..options
+            },
+        )
+        .unwrap();
+        let target = SurfaceDistance::new(&input);
+        for (j, level) in relaxed.levels.iter().enumerate().skip(1) {
+            let coarse = &relaxed.levels[j - 1].mesh.positions;
+            assert_eq!(&level.mesh.positions[..coarse.len()], &coarse[..]);
+            for p in &level.mesh.positions {
+                let d = target.closest(p, f64::INFINITY).unwrap().distance;
+                assert!(d < 1e-9, "level {j}: vertex {p} is {d} mm off the part");
+            }
+            // It did move them.
+            assert_ne!(level.mesh.positions, plain.levels[j].mesh.positions);
         }
     }
 
