@@ -127,6 +127,16 @@ pub enum Method {
     NormalOffset,
 }
 
+impl Method {
+    /// The name used in reports.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Method::DistanceGrid { .. } => "distance_grid",
+            Method::NormalOffset => "normal_offset",
+        }
+    }
+}
+
 /// The figures of one shape (issue 4 points 2–3), all in mm.
 #[derive(Clone, Debug, Serialize)]
 pub struct ShapeReport {
