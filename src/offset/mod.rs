@@ -40,7 +40,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::collide::SurfaceDistance;
-use crate::geom::Point3;
+use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
 
@@ -208,18 +208,24 @@ impl PartQuery {
 
     /// Distance from the part, negative inside when it is closed.
     fn signed_distance(&self, p: &Point3) -> f64 {
-        distance_to(&self.surface, self.closed, p)
+        self.signed_distance_and_away(p).0
     }
-}
 
-/// Signed (closed surface) or unsigned distance; +∞ for an empty surface.
-fn distance_to(surface: &SurfaceDistance, closed: bool, p: &Point3) -> f64 {
-    if closed {
-        surface.signed_distance(p).map_or(f64::INFINITY, |(d, _)| d)
-    } else {
-        surface
-            .closest(p, f64::INFINITY)
-            .map_or(f64::INFINITY, |c| c.distance)
+    /// The signed distance and the unit direction that leads away from the part at `p`
+    /// (from its closest point, or along the pseudo-normal when `p` is on it or inside).
+    fn signed_distance_and_away(&self, p: &Point3) -> (f64, Vector3) {
+        let Some(c) = self.surface.closest(p, f64::INFINITY) else {
+            return (f64::INFINITY, Vector3::zeros());
+        };
+        let normal = self.surface.pseudo_normal(&c);
+        let offset = p - c.point;
+        let inside = self.closed && offset.dot(&normal) < 0.0;
+        let away = if c.distance > 1e-12 && !inside {
+            offset / c.distance
+        } else {
+            normal / normal.norm().max(f64::MIN_POSITIVE)
+        };
+        (if inside { -c.distance } else { c.distance }, away)
     }
 }
 

@@ -9,16 +9,16 @@
 //!   against the shape, so the shape is checked as a continuous surface, not only at samples);
 //! * nesting: every sample of the next (finer) shape is strictly inside this one.
 //!
-//! A failing sample pushes the vertices of its triangle (shape samples) or of the shape
-//! triangle nearest to it (part and inner samples) out along their normals by 1.5× the
-//! deficit, and everything is checked again.
+//! A failing sample pushes the vertices of its triangle (shape samples: away from the part) or
+//! of the shape triangle nearest to it (part and inner samples: away from the sample) by 1.5×
+//! the deficit, and everything is checked again.
 
 use rayon::prelude::*;
 
 use super::PartQuery;
 use super::normal_offset::vertex_normals;
 use crate::collide::SurfaceDistance;
-use crate::geom::Point3;
+use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 
 /// A check passes within this (mm): ten times tighter than the 1e-6 mm the issue asks for, so
@@ -98,7 +98,14 @@ pub(super) struct Outcome {
     pub verified: bool,
 }
 
-/// One pass of the three checks: the figures and the failures as (shape triangle, deficit).
+/// A failed check: the shape triangle to move, by how much, and which way.
+struct Failure {
+    triangle: u32,
+    deficit: f64,
+    direction: Vector3,
+}
+
+/// One pass of the three checks: the figures and the failures.
 fn check(
     mesh: &Mesh,
     samples: &Samples,
@@ -106,30 +113,36 @@ fn check(
     part_samples: &Samples,
     inner: Option<&Samples>,
     clearance: f64,
-) -> (Stats, Vec<(u32, f64)>) {
+) -> (Stats, Vec<Failure>) {
     let shape = SurfaceDistance::new(mesh);
-    let margins: Vec<f64> = samples
+    let margins: Vec<(f64, Vector3)> = samples
         .points
         .par_iter()
-        .map(|p| part.signed_distance(p) - clearance)
+        .map(|p| {
+            let (d, away) = part.signed_distance_and_away(p);
+            (d - clearance, away)
+        })
         .collect();
-    // Depth of a point inside the shape (negative outside) and the shape triangle nearest to
-    // it. Inside by ray parity, not by pseudo-normals: extracted shapes may have non-manifold
-    // edges, where a pseudo-normal is not a reliable sign.
+    // Depth of a point inside the shape (negative outside), the shape triangle nearest to it
+    // and the way that triangle must move to put the point deeper. Inside by ray parity, not
+    // by pseudo-normals: extracted shapes may have non-manifold edges, where a pseudo-normal
+    // is not a reliable sign.
     let depth = |p: &Point3| {
         shape
             .closest(p, f64::INFINITY)
-            .map_or((f64::NEG_INFINITY, 0), |c| {
-                let side = if shape.contains_by_parity(p) {
-                    1.0
+            .map_or((f64::NEG_INFINITY, 0, Vector3::zeros()), |c| {
+                let side = if shape.contains_by_parity(p) { 1.0 } else { -1.0 };
+                let way = if c.distance > 1e-12 {
+                    (c.point - p) * (side / c.distance)
                 } else {
-                    -1.0
+                    shape.face_normal(c.triangle)
                 };
-                (side * c.distance, c.triangle)
+                (side * c.distance, c.triangle, way)
             })
     };
-    let part_depths: Vec<(f64, u32)> = part_samples.points.par_iter().map(depth).collect();
-    let inner_depths: Option<Vec<(f64, u32)>> =
+    let part_depths: Vec<(f64, u32, Vector3)> =
+        part_samples.points.par_iter().map(depth).collect();
+    let inner_depths: Option<Vec<(f64, u32, Vector3)>> =
         inner.map(|s| s.points.par_iter().map(depth).collect());
     let mut failures = Vec::new();
     let mut stats = Stats {
@@ -139,28 +152,40 @@ fn check(
         ..Stats::default()
     };
     let mut sum = 0.0;
-    for (&m, &t) in margins.iter().zip(&samples.triangles) {
+    for (&(m, away), &t) in margins.iter().zip(&samples.triangles) {
         stats.min_margin = stats.min_margin.min(m);
         stats.max_excess = stats.max_excess.max(m);
         sum += m;
         if m < -CLEARANCE_SLACK_MM {
-            failures.push((t, -m));
+            failures.push(Failure {
+                triangle: t,
+                deficit: -m,
+                direction: away,
+            });
         }
     }
     stats.mean_excess = sum / margins.len().max(1) as f64;
-    for &(d, t) in &part_depths {
+    for &(d, t, way) in &part_depths {
         let m = d - clearance;
         stats.min_part_depth = stats.min_part_depth.min(m);
         if m < -CLEARANCE_SLACK_MM {
-            failures.push((t, -m));
+            failures.push(Failure {
+                triangle: t,
+                deficit: -m,
+                direction: way,
+            });
         }
     }
     if let Some(depths) = &inner_depths {
         let mut least = f64::INFINITY;
-        for &(d, t) in depths {
+        for &(d, t, way) in depths {
             least = least.min(d);
             if d <= CLEARANCE_SLACK_MM {
-                failures.push((t, CLEARANCE_SLACK_MM - d));
+                failures.push(Failure {
+                    triangle: t,
+                    deficit: CLEARANCE_SLACK_MM - d,
+                    direction: way,
+                });
             }
         }
         stats.min_inner_depth = Some(least);
@@ -194,16 +219,21 @@ pub(super) fn verify_and_repair(
                 verified: failures.is_empty(),
             };
         }
-        let mut push = vec![0.0f64; mesh.positions.len()];
-        for (t, deficit) in failures {
-            for v in mesh.triangles[t as usize] {
-                push[v as usize] = push[v as usize].max(deficit);
+        // Each vertex moves by its largest deficit, the way that failure asks (away from the
+        // part, or past the point that should be inside), or along its normal without one.
+        let mut push = vec![(0.0f64, Vector3::zeros()); mesh.positions.len()];
+        for f in failures {
+            for v in mesh.triangles[f.triangle as usize] {
+                if f.deficit > push[v as usize].0 {
+                    push[v as usize] = (f.deficit, f.direction);
+                }
             }
         }
         let normals = vertex_normals(mesh);
-        for ((p, n), d) in mesh.positions.iter_mut().zip(&normals).zip(&push) {
+        for ((p, n), (d, way)) in mesh.positions.iter_mut().zip(&normals).zip(&push) {
             if *d > 0.0 {
-                *p += n * (PUSH_FACTOR * d + PUSH_EXTRA_MM);
+                let way = if *way == Vector3::zeros() { *n } else { *way };
+                *p += way * (PUSH_FACTOR * d + PUSH_EXTRA_MM);
             }
         }
         rounds += 1;
