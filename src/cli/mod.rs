@@ -480,7 +480,7 @@ fn offsets(args: &OffsetsArgs) -> Result<()> {
         ..Default::default()
     };
     let options = crate::offset::OffsetOptions::default().with_tool_radius(tool_radius);
-    let (files, report) =
+    let job::OffsetsOutput { files, report, .. } =
         job::offsets(&mesh, &remesh, &args.allowances, &options, !args.no_timings)?;
     create_dir(&args.out)?;
     for (file, bytes) in &files {

@@ -129,8 +129,17 @@ pub fn shape_glb(name: &str, shape: &OffsetShape) -> Result<Vec<u8>> {
     Ok(glb.build())
 }
 
+/// What `offsets` makes: the shapes, their files and the report.
+#[derive(Clone, Debug)]
+pub struct OffsetsOutput {
+    pub shapes: Vec<OffsetShape>,
+    /// `offset-<j>.glb`.
+    pub files: Vec<NamedFile>,
+    pub report: OffsetsReport,
+}
+
 /// Builds the shapes of `part` (prepared: welded, manifold, oriented) for `allowances`
-/// (strictly decreasing, mm) and returns `offset-<j>.glb` files and the report. A shape that
+/// (strictly decreasing, mm) with their `offset-<j>.glb` files and the report. A shape that
 /// failed its verification is in the report with `verified: false`; the caller decides.
 pub fn offsets(
     part: &Mesh,
@@ -138,7 +147,7 @@ pub fn offsets(
     allowances: &[f64],
     options: &OffsetOptions,
     timings: bool,
-) -> Result<(Vec<NamedFile>, OffsetsReport)> {
+) -> Result<OffsetsOutput> {
     if allowances.is_empty() {
         return Err(Error::Job(
             "--allowances: give at least one allowance".into(),
@@ -180,5 +189,9 @@ pub fn offsets(
             offsets: offsets_ms,
         }),
     };
-    Ok((files, report))
+    Ok(OffsetsOutput {
+        shapes,
+        files,
+        report,
+    })
 }

@@ -31,10 +31,19 @@ fn assert_guarantees(shapes: &[OffsetShape]) {
     for (j, s) in shapes.iter().enumerate() {
         let r = &s.report;
         assert!(r.verified, "shape {j}: {r:?}");
-        assert!(r.min_clearance_minus_allowance_mm >= -1e-6, "shape {j}: {r:?}");
-        assert!(r.min_part_depth_minus_allowance_mm >= -1e-6, "shape {j}: {r:?}");
+        assert!(
+            r.min_clearance_minus_allowance_mm >= -1e-6,
+            "shape {j}: {r:?}"
+        );
+        assert!(
+            r.min_part_depth_minus_allowance_mm >= -1e-6,
+            "shape {j}: {r:?}"
+        );
         if j + 1 < shapes.len() {
-            assert!(r.min_inner_depth_mm.is_some_and(|d| d > 0.0), "shape {j}: {r:?}");
+            assert!(
+                r.min_inner_depth_mm.is_some_and(|d| d > 0.0),
+                "shape {j}: {r:?}"
+            );
         }
         let topology = Topology::analyse(&s.mesh.triangles, s.mesh.positions.len());
         assert_eq!(topology.boundary_edges, 0, "shape {j} is not closed");
@@ -58,7 +67,10 @@ fn sphere_offsets_are_spheres() {
     for (shape, &t) in shapes.iter().zip(&allowances) {
         for v in shape.mesh.positions.iter().step_by(7) {
             let r = v.coords.norm();
-            assert!(r >= radius + t - chord - 1e-6 * radius, "radius {r} for t = {t}");
+            assert!(
+                r >= radius + t - chord - 1e-6 * radius,
+                "radius {r} for t = {t}"
+            );
             assert!(r <= radius + t + t / 20.0, "radius {r} for t = {t}");
             assert!(brute_distance(&part, v) >= t - 1e-6 * radius);
         }
@@ -99,7 +111,9 @@ fn capped_cylinder_offsets_are_rounded_cylinders() {
     assert_guarantees(&shapes);
     let rounded = |p: &Point3| {
         let rho = p.x.hypot(p.y);
-        (rho - radius).max(0.0).hypot((p.z.abs() - height / 2.0).max(0.0))
+        (rho - radius)
+            .max(0.0)
+            .hypot((p.z.abs() - height / 2.0).max(0.0))
     };
     // The innermost is pushed along vertex directions (capped stretch at the rims), so only
     // the grid shape is held to the closed form.

@@ -131,7 +131,11 @@ fn check(
         shape
             .closest(p, f64::INFINITY)
             .map_or((f64::NEG_INFINITY, 0, Vector3::zeros()), |c| {
-                let side = if shape.contains_by_parity(p) { 1.0 } else { -1.0 };
+                let side = if shape.contains_by_parity(p) {
+                    1.0
+                } else {
+                    -1.0
+                };
                 let way = if c.distance > 1e-12 {
                     (c.point - p) * (side / c.distance)
                 } else {
@@ -140,8 +144,7 @@ fn check(
                 (side * c.distance, c.triangle, way)
             })
     };
-    let part_depths: Vec<(f64, u32, Vector3)> =
-        part_samples.points.par_iter().map(depth).collect();
+    let part_depths: Vec<(f64, u32, Vector3)> = part_samples.points.par_iter().map(depth).collect();
     let inner_depths: Option<Vec<(f64, u32, Vector3)>> =
         inner.map(|s| s.points.par_iter().map(depth).collect());
     let mut failures = Vec::new();
