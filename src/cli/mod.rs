@@ -85,6 +85,10 @@ pub struct OffsetsArgs {
     /// Edges whose faces meet at more than this angle (degrees) are feature lines.
     #[arg(long, default_value_t = 40.0)]
     pub crease_angle: f64,
+    /// Finest grid the shapes are extracted on: at most this many cells across the part's
+    /// bounding box (more: tighter shapes near the part, more triangles and time).
+    #[arg(long, default_value_t = 300.0)]
+    pub grid_cells: f64,
     /// Leave the timings out of offsets.json (byte-identical reports).
     #[arg(long)]
     pub no_timings: bool,
@@ -479,7 +483,17 @@ fn offsets(args: &OffsetsArgs) -> Result<()> {
         crease_angle_deg: args.crease_angle,
         ..Default::default()
     };
-    let options = crate::offset::OffsetOptions::default().with_tool_radius(tool_radius);
+    if !(args.grid_cells.is_finite() && args.grid_cells >= 4.0) {
+        return Err(Error::Job(format!(
+            "--grid-cells {}: must be a number >= 4",
+            args.grid_cells
+        )));
+    }
+    let options = crate::offset::OffsetOptions {
+        max_cells_across: args.grid_cells,
+        ..Default::default()
+    }
+    .with_tool_radius(tool_radius);
     let job::OffsetsOutput { files, report, .. } =
         job::offsets(&mesh, &remesh, &args.allowances, &options, !args.no_timings)?;
     create_dir(&args.out)?;
