@@ -16,7 +16,7 @@ pub use config::{
     FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
 };
 pub use levels::{LevelSummary, LevelsReport, levels};
-pub use offsets::{OffsetsOutput, OffsetsReport, ShapeSummary, offsets, shape_glb};
+pub use offsets::{OffsetsOutput, OffsetsReport, ShapeSummary, offset_specs, offsets, shape_glb};
 pub use output::{write_atomically, write_outputs};
 pub use pipeline::{Observer, PlanOutput, Quiet, load_part, plan};
 pub use report::{PlanReport, PoseCounts, StageTimings};

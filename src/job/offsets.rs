@@ -96,6 +96,21 @@ pub(crate) fn level_specs(
         .collect()
 }
 
+/// The shapes' specifications for `allowances` on the hierarchy of `part` (remeshed and
+/// analysed as `offsets` does), for callers that build the shapes themselves (benches,
+/// other planners): one per allowance, coarsest first.
+pub fn offset_specs(
+    part: &Mesh,
+    remesh: &RemeshOptions,
+    allowances: &[f64],
+) -> Result<Vec<ShapeSpec>> {
+    let analysed = analyse_hierarchy(part, remesh)?;
+    Ok(level_specs(&analysed, allowances)?
+        .into_iter()
+        .map(|(_, spec)| spec)
+        .collect())
+}
+
 /// Blue (no excess) through green to red (excess = `scale` or more), linear RGBA.
 fn excess_colour(excess: f64, scale: f64) -> [f32; 4] {
     let s = if scale > 0.0 {
