@@ -3,29 +3,36 @@
 //! must be covered with that of a lower resolution model in order to prevent overcut"; the 3D
 //! analogue of seed 004 eq. 3.1, d₁ = r + e, and of seed 001 ch. 3's global offset error bound).
 //!
-//! For shape j with allowance aⱼ, tool radius r (0 for the stock shapes) and deviation bound eⱼ
-//! (every part point within eⱼ of the level surface Lⱼ), the shape is the boundary of
+//! For shape j with allowance aⱼ, tool radius r (0 for the stock shapes; cⱼ = aⱼ + r) and
+//! deviation bound eⱼ (every part point within eⱼ of the level surface Lⱼ: the exact L∞
+//! deviation of Lⱼ from the finest level plus the finest level's Hausdorff distance to the
+//! part), the shape is the boundary of
 //!
 //! ```text
-//! Rⱼ = { x : sd(x, Lⱼ) ≤ tⱼ } ∪ { x : sd(x, Sⱼ₊₁) ≤ aⱼ − aⱼ₊₁ },   tⱼ = aⱼ + r + eⱼ
+//! Rⱼ = inside(part) ∪ tube(Lⱼ, tⱼ) ∪ ⋃_{k>j} tube(Lₖ, tₖ + cⱼ − cₖ),   tⱼ = cⱼ + eⱼ
 //! ```
 //!
-//! (signed distance for closed surfaces, unsigned for open ones). A point x of Sⱼ then has
-//! dist(x, part) ≥ dist(x, Lⱼ) − eⱼ = aⱼ + r on the first part, and ≥ (aⱼ − aⱼ₊₁) + aⱼ₊₁ + r on
-//! the second (the segment to the part crosses Sⱼ₊₁); and Sⱼ ⊇ Sⱼ₊₁ by construction, whatever the
-//! schedule. Excess over aⱼ + r is at most 2eⱼ on the first part.
+//! with tube(L, t) = {x : dist(x, L) ≤ t} (unsigned: it does not trust the sign of a level
+//! surface that may fold or touch itself; the part's inside, from its exact sign, fills the
+//! rest). A point x of Sⱼ on the tube of Lₖ has dist(x, part) ≥ tₖ + cⱼ − cₖ − eₖ = cⱼ, and
+//! Sⱼ ⊇ Sⱼ₊₁ whatever the allowance schedule, since Rⱼ holds every finer region grown by the
+//! difference of clearances (a schedule with tⱼ ≥ tⱼ₊₁ + eⱼ + eⱼ₊₁ would nest anyway; the
+//! union costs nothing where it does). Excess over cⱼ is at most 2eⱼ where Lⱼ's tube is the
+//! outer one.
 //!
-//! How the shapes are made ([`extract`], [`normal_offset`]): coarse shapes are iso-surfaces of
-//! that distance field on a sparse narrow-band grid (surface nets), so the folds an offset
+//! How the shapes are made (`extract`, `normal_offset`): shapes are iso-surfaces of that
+//! region's distance field on a sparse narrow-band grid (surface nets), so the folds an offset
 //! makes in concave regions never appear: the result is the boundary of the offset region. Each
-//! vertex is then moved exactly onto the level set (plus a chord margin). The innermost shape,
-//! whose offset is the small fitting error of the finest level, would need a grid far too fine
-//! for that; it is the finest level pushed out along conservative vertex directions instead,
-//! refused (and made by the grid) where a triangle would flip or the surface is open.
+//! vertex is then moved exactly onto the level set (plus a chord margin). The grid spacing is
+//! tⱼ/4, but no finer than the part's diagonal / 300; a shell thinner than two cells is raised
+//! to two cells (reported as a larger `offset_mm` and excess). The innermost shape is first
+//! tried as the closed level surface pushed out along conservative vertex directions, which
+//! keeps its small offset exact; it is refused (and made on the grid) where a triangle would
+//! flip, which happens on the fitted finest levels of the CAD impellers.
 //!
-//! Nothing above is trusted: [`verify`] checks every shape with exact f64 distance queries on
-//! dense samples of the shape (clearance), of the part (inside, at depth), and of the next shape
-//! (nesting), pushes out the triangles that fail and checks again.
+//! Nothing above is trusted: `verify` checks every shape with exact f64 distance queries on
+//! dense samples of the shape (clearance), of the part (inside by ray parity, at depth), and of
+//! the next shape (nesting), pushes out the triangles that fail and checks again.
 
 mod extract;
 mod field;
