@@ -44,6 +44,7 @@ mod tests;
 
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::collide::SurfaceDistance;
@@ -426,7 +427,7 @@ pub fn nested_offsets_opt(
         };
         let vertex_excess = mesh
             .positions
-            .iter()
+            .par_iter()
             .map(|p| query.signed_distance(p) - clearance)
             .collect();
         built.push((
