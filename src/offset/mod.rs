@@ -152,7 +152,8 @@ pub struct ShapeReport {
     pub tool_radius_mm: f64,
     /// eⱼ.
     pub bound_mm: f64,
-    /// tⱼ = aⱼ + r + eⱼ, the offset of the level surface.
+    /// The offset of the level surface: tⱼ = aⱼ + r + eⱼ, or two grid cells when that is more
+    /// (a thinner shell is not resolved by the grid).
     pub offset_mm: f64,
     pub method: Method,
     pub vertices: usize,
