@@ -24,6 +24,7 @@ pub mod geom;
 pub mod job;
 pub mod mesh;
 pub mod multires;
+pub mod offset;
 pub mod orient;
 pub mod path;
 pub mod post;

@@ -29,6 +29,7 @@ fn every_subcommand_has_help() {
         &["sample", "--help"],
         &["subdivide", "--help"],
         &["levels", "--help"],
+        &["offsets", "--help"],
         &["plan", "--help"],
     ] {
         let out = wavemill(sub);
@@ -262,4 +263,68 @@ fn levels_describes_every_level() {
         0.0
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn run_offsets(dir: &std::path::Path, threads: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "offsets",
+        "data/blade.glb",
+        "--allowances",
+        "1.5,0.5",
+        "--base-triangles",
+        "300",
+        "--grid-cells",
+        "60",
+        "--no-timings",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    Command::new(env!("CARGO_BIN_EXE_wavemill"))
+        .args(&args)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .expect("run wavemill")
+}
+
+/// `offsets` on the sample blade, with a ball: one closed, coloured GLB per allowance, a
+/// verified report, the same bytes for one thread and two; bad allowances and tools are
+/// refused by name with exit code 1.
+#[test]
+fn offsets_writes_verified_shapes_identically_for_any_thread_count() {
+    let (one, two) = (temp_dir("offsets-1"), temp_dir("offsets-2"));
+    for (dir, threads) in [(&one, "1"), (&two, "2")] {
+        let run = run_offsets(dir, threads, &["--tool", "ball:4"]);
+        assert_eq!(
+            run.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(one.join("offsets.json")).unwrap()).unwrap();
+    assert_eq!(report["verified"], true);
+    assert_eq!(report["tool_radius_mm"], 2.0);
+    for (j, shape) in report["shapes"].as_array().unwrap().iter().enumerate() {
+        assert!(shape["min_clearance_minus_allowance_mm"].as_f64().unwrap() >= -1e-6);
+        let glb = std::fs::read(one.join(format!("offset-{j}.glb"))).unwrap();
+        assert!(String::from_utf8_lossy(&glb).contains("COLOR_0"));
+    }
+    for file in ["offsets.json", "offset-0.glb", "offset-1.glb"] {
+        assert_eq!(
+            std::fs::read(one.join(file)).unwrap(),
+            std::fs::read(two.join(file)).unwrap(),
+            "{file} differs between 1 and 2 threads"
+        );
+    }
+    let bad = run_offsets(&one, "1", &["--allowances", "0.5,1.0"]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--allowances"));
+    let bad = run_offsets(&one, "1", &["--tool", "flat:4"]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--tool"));
+    for d in [one, two] {
+        std::fs::remove_dir_all(&d).unwrap();
+    }
 }

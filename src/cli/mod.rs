@@ -51,6 +51,9 @@ pub enum Command {
     /// 2.5D profile: multiresolution wavelet + loose convex hull paths (seed 004 ch. 3–4),
     /// verified, as G-code; with --compare also the contour-parallel baseline side by side.
     Contour(ContourArgs),
+    /// Build the nested rough-to-fine intermediate shapes (offsets of the levels that never
+    /// overcut the part), verify them against the part and write them.
+    Offsets(OffsetsArgs),
 }
 
 #[derive(Args, Debug)]
@@ -79,6 +82,55 @@ pub struct ContourArgs {
     #[arg(long)]
     pub no_timings: bool,
     /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct OffsetsArgs {
+    /// Mesh file (.stl, .obj, .gltf, .glb): a manifold surface.
+    pub part: PathBuf,
+    /// Stock to leave per shape, mm, strictly decreasing, e.g. `1.0,0.5,0.2,0`. Shape j
+    /// offsets hierarchy level j (the finest level for the shapes beyond it).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        required = true,
+        allow_negative_numbers = true
+    )]
+    pub allowances: Vec<f64>,
+    /// Ball cutter, e.g. `ball:6` (diameter in mm): the shapes become tool-centre surfaces,
+    /// offset by the ball radius as well.
+    #[arg(long)]
+    pub tool: Option<String>,
+    /// Units of the input file: mm, m or in.
+    #[arg(long, default_value = "mm")]
+    pub units: String,
+    /// Fitting tolerance of the finest level, mm (0: always build one level per allowance).
+    #[arg(long, default_value_t = 0.0)]
+    pub tolerance: f64,
+    /// Triangles of the base (coarsest) mesh.
+    #[arg(long, default_value_t = 2000)]
+    pub base_triangles: usize,
+    /// Stop simplifying the base when a collapse would move the surface more than this, mm.
+    /// Absent: `--base-triangles` alone sizes the base (coarse levels, simple rough shapes);
+    /// a bound keeps fillets and thin blades, for tighter shapes with more triangles.
+    #[arg(long)]
+    pub base_max_error: Option<f64>,
+    /// At most this many levels above the base (default: one per allowance after the first).
+    #[arg(long)]
+    pub max_levels: Option<u32>,
+    /// Edges whose faces meet at more than this angle (degrees) are feature lines.
+    #[arg(long, default_value_t = 40.0)]
+    pub crease_angle: f64,
+    /// Finest grid the shapes are extracted on: at most this many cells across the part's
+    /// bounding box (more: tighter shapes near the part, more triangles and time).
+    #[arg(long, default_value_t = 300.0)]
+    pub grid_cells: f64,
+    /// Leave the timings out of offsets.json (byte-identical reports).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder: offset-<j>.glb and offsets.json.
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -228,6 +280,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Subdivide(a) => subdivide(&a),
         Command::Levels(a) => levels(&a),
         Command::Contour(a) => contour(&a),
+        Command::Offsets(a) => offsets(&a),
     };
     match result {
         Ok(()) => 0,
@@ -459,6 +512,128 @@ fn subdivide(args: &SubdivideArgs) -> Result<()> {
     Ok(())
 }
 
+/// Reads, welds and orients a part and refuses it, saying why, unless it is a manifold surface.
+fn load_manifold_part(path: &Path, units: &str) -> Result<crate::mesh::Mesh> {
+    let name = path.display().to_string();
+    let raw = job::load_part(path, units)?;
+    let (mesh, report) =
+        prepare(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
+            file: name.clone(),
+            reason,
+        })?;
+    if report.non_manifold_edges > 0 || report.non_manifold_vertices > 0 {
+        return Err(Error::Mesh {
+            file: name,
+            reason: format!("not a manifold surface: {}", report.problems().join("; ")),
+        });
+    }
+    Ok(mesh)
+}
+
+fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        path: dir.display().to_string(),
+        source,
+    })
+}
+
+fn offsets(args: &OffsetsArgs) -> Result<()> {
+    if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
+        return Err(Error::Job(format!(
+            "--tolerance {}: must be a number of mm >= 0",
+            args.tolerance
+        )));
+    }
+    if let Some((i, a)) = args
+        .allowances
+        .iter()
+        .enumerate()
+        .find(|&(i, &a)| !(a.is_finite() && a >= 0.0) || (i > 0 && a >= args.allowances[i - 1]))
+    {
+        return Err(Error::Job(format!(
+            "--allowances: value {} ({a}) must be a number of mm >= 0, smaller than the one before",
+            i + 1
+        )));
+    }
+    let levels_above_base = args
+        .max_levels
+        .unwrap_or(args.allowances.len().saturating_sub(1) as u32);
+    if levels_above_base > 6 {
+        return Err(Error::Job(format!(
+            "--max-levels {levels_above_base}: at most 6 (each level multiplies the triangles by 4)"
+        )));
+    }
+    let tool_radius = match &args.tool {
+        Some(spec) => {
+            let Cutter::Ball { diameter, .. } =
+                parse_cutter(spec).map_err(|e| Error::Job(format!("--tool: {e}")))?;
+            diameter / 2.0
+        }
+        None => 0.0,
+    };
+    let name = args.part.display().to_string();
+    let mesh = load_manifold_part(&args.part, &args.units)?;
+    let remesh = multires::RemeshOptions {
+        tolerance: args.tolerance,
+        base_triangles: args.base_triangles.max(4),
+        base_max_error: args.base_max_error,
+        max_levels: levels_above_base,
+        crease_angle_deg: args.crease_angle,
+        ..Default::default()
+    };
+    if !(args.grid_cells.is_finite() && args.grid_cells >= 4.0) {
+        return Err(Error::Job(format!(
+            "--grid-cells {}: must be a number >= 4",
+            args.grid_cells
+        )));
+    }
+    let options = crate::offset::OffsetOptions {
+        max_cells_across: args.grid_cells,
+        ..Default::default()
+    }
+    .with_tool_radius(tool_radius);
+    let job::OffsetsOutput { files, report, .. } =
+        job::offsets(&mesh, &remesh, &args.allowances, &options, !args.no_timings)?;
+    create_dir(&args.out)?;
+    for (file, bytes) in &files {
+        job::write_atomically(&args.out.join(file), bytes)?;
+    }
+    let json = serde_json::to_string_pretty(&report).unwrap_or_default() + "\n";
+    let json_path = args.out.join("offsets.json");
+    job::write_atomically(&json_path, json.as_bytes())?;
+    for s in &report.shapes {
+        let f = &s.figures;
+        say!(
+            "offset {} (level {}): allowance {} mm, bound {:.4} mm, {} triangles, clearance - allowance {:.2e} mm, excess mean {:.4} max {:.4} mm, {}",
+            s.shape,
+            s.level,
+            f.allowance_mm,
+            f.bound_mm,
+            f.triangles,
+            f.min_clearance_minus_allowance_mm,
+            f.mean_excess_mm,
+            f.max_excess_mm,
+            if f.verified {
+                "verified"
+            } else {
+                "NOT VERIFIED"
+            }
+        );
+    }
+    if !report.verified {
+        return Err(Error::Verification(format!(
+            "{name}: a shape still fails its checks after the repairs (see {})",
+            json_path.display()
+        )));
+    }
+    say!(
+        "{name}: {} shapes -> {}",
+        report.shapes.len(),
+        args.out.display()
+    );
+    Ok(())
+}
+
 fn levels(args: &LevelsArgs) -> Result<()> {
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
         return Err(Error::Job(format!(
@@ -473,18 +648,7 @@ fn levels(args: &LevelsArgs) -> Result<()> {
         )));
     }
     let name = args.part.display().to_string();
-    let raw = job::load_part(&args.part, &args.units)?;
-    let (mesh, report) =
-        prepare(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
-            file: name.clone(),
-            reason,
-        })?;
-    if report.non_manifold_edges > 0 || report.non_manifold_vertices > 0 {
-        return Err(Error::Mesh {
-            file: name,
-            reason: format!("not a manifold surface: {}", report.problems().join("; ")),
-        });
-    }
+    let mesh = load_manifold_part(&args.part, &args.units)?;
     let options = multires::RemeshOptions {
         tolerance: args.tolerance,
         base_triangles: args.base_triangles.max(4),
@@ -497,10 +661,7 @@ fn levels(args: &LevelsArgs) -> Result<()> {
     let wavelet_options =
         multires::WaveletOptions::default().with_kdisk_update(!args.plain_lifting);
     let (files, report) = job::levels(&mesh, &options, &wavelet_options, !args.no_timings)?;
-    std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
-        path: args.out.display().to_string(),
-        source,
-    })?;
+    create_dir(&args.out)?;
     for (file, bytes) in &files {
         job::write_atomically(&args.out.join(file), bytes)?;
     }

@@ -328,6 +328,68 @@ impl SurfaceDistance {
         Some((sign * c.distance, c))
     }
 
+    /// How many triangles the ray `origin + s·direction`, s > 0, crosses (Möller–Trumbore in
+    /// f64). Its parity tells inside from outside for any closed surface, manifold or not.
+    pub fn ray_crossings(&self, origin: &Point3, direction: &Vector3) -> usize {
+        if self.nodes.is_empty() {
+            return 0;
+        }
+        let inverse = direction.map(|d| 1.0 / d);
+        let hits_box = |b: &Aabb| {
+            let (mut near, mut far) = (0.0f64, f64::INFINITY);
+            for i in 0..3 {
+                let t1 = (b.min[i] - origin[i]) * inverse[i];
+                let t2 = (b.max[i] - origin[i]) * inverse[i];
+                near = near.max(t1.min(t2));
+                far = far.min(t1.max(t2));
+            }
+            near <= far
+        };
+        let mut count = 0;
+        let mut stack = vec![0u32];
+        while let Some(ni) = stack.pop() {
+            let node = &self.nodes[ni as usize];
+            if !hits_box(&node.aabb) {
+                continue;
+            }
+            if node.count == 0 {
+                stack.push(node.left);
+                stack.push(node.right);
+                continue;
+            }
+            for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+                let (e1, e2) = (b - a, c - a);
+                let p = direction.cross(&e2);
+                let det = e1.dot(&p);
+                if det == 0.0 {
+                    continue;
+                }
+                let s = origin - a;
+                let u = s.dot(&p) / det;
+                let q = s.cross(&e1);
+                let v = direction.dot(&q) / det;
+                if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(&q) / det > 0.0 {
+                    count += 1;
+                }
+            }
+        }
+        count
+    }
+
+    /// Inside the closed surface by ray parity: the majority of three fixed, generic
+    /// directions, so that a ray grazing an edge or vertex is outvoted.
+    pub fn contains_by_parity(&self, p: &Point3) -> bool {
+        // Unnormalised (parity does not care), no zero component, no symmetry of the grids
+        // the shapes come from.
+        const DIRECTIONS: [[f64; 3]; 3] = [[1.0, 1.1, 1.3], [-1.3, 0.7, 1.1], [0.3, -1.2, 0.9]];
+        DIRECTIONS
+            .iter()
+            .filter(|d| self.ray_crossings(p, &Vector3::new(d[0], d[1], d[2])) % 2 == 1)
+            .count()
+            >= 2
+    }
+
     /// Unit normal of triangle `t`.
     pub fn face_normal(&self, t: u32) -> Vector3 {
         self.face_normals[t as usize]

@@ -10,7 +10,9 @@ use super::samples::NamedFile;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::mesh::io::GlbBuilder;
-use crate::multires::{Hierarchy, RemeshOptions, WaveletHierarchy, WaveletOptions};
+use crate::multires::{
+    Hierarchy, MultiresWavelets, RemeshOptions, WaveletHierarchy, WaveletOptions,
+};
 
 /// `levels.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -72,20 +74,37 @@ pub struct LevelsTimings {
     pub synthesis: f64,
 }
 
-/// Builds the hierarchy of `part` (already prepared: welded, manifold, oriented) and returns
-/// `level-<j>.glb` files and the report.
-pub fn levels(
+/// A part's remeshed hierarchy and its wavelet analysis: what `levels` describes and what
+/// `offsets` builds its shapes from.
+pub(crate) struct AnalysedHierarchy {
+    pub hierarchy: Hierarchy,
+    pub wavelets: WaveletHierarchy,
+    pub analysed: MultiresWavelets,
+    /// Milliseconds spent remeshing and analysing.
+    pub remesh_ms: f64,
+    pub analysis_ms: f64,
+}
+
+pub(crate) fn wavelet_error(e: crate::multires::WaveletError) -> Error {
+    Error::Job(format!("wavelets: {e}"))
+}
+
+/// Milliseconds since `t`, to 0.1 ms.
+pub(crate) fn elapsed_ms(t: Instant) -> f64 {
+    (t.elapsed().as_secs_f64() * 1e4).round() / 10.0
+}
+
+/// Remeshes `part` (already prepared: welded, manifold, oriented) to a hierarchy and analyses
+/// its finest level with lifting wavelets.
+pub(crate) fn analyse_hierarchy(
     part: &Mesh,
     options: &RemeshOptions,
     wavelet_options: &WaveletOptions,
-    timings: bool,
-) -> Result<(Vec<NamedFile>, LevelsReport)> {
-    let ms = |t: Instant| (t.elapsed().as_secs_f64() * 1e4).round() / 10.0;
-    let wavelet_error = |e: crate::multires::WaveletError| Error::Job(format!("wavelets: {e}"));
+) -> Result<AnalysedHierarchy> {
     let t = Instant::now();
     let hierarchy =
         Hierarchy::build(part, options).map_err(|e| Error::Job(format!("remeshing: {e}")))?;
-    let remesh_ms = ms(t);
+    let remesh_ms = elapsed_ms(t);
     let base = &hierarchy.levels[0];
     let n = hierarchy.levels.len() - 1;
     let wavelets = WaveletHierarchy::new_opt(
@@ -96,15 +115,38 @@ pub fn levels(
         wavelet_options,
     )
     .map_err(wavelet_error)?;
-    let finest = &hierarchy.finest().mesh;
     let t = Instant::now();
     let analysed = wavelets
-        .analyse_all(&finest.positions)
+        .analyse_all(&hierarchy.finest().mesh.positions)
         .map_err(wavelet_error)?;
-    let analysis_ms = ms(t);
+    Ok(AnalysedHierarchy {
+        hierarchy,
+        wavelets,
+        analysed,
+        remesh_ms,
+        analysis_ms: elapsed_ms(t),
+    })
+}
+
+/// Builds the hierarchy of `part` (already prepared: welded, manifold, oriented) and returns
+/// `level-<j>.glb` files and the report.
+pub fn levels(
+    part: &Mesh,
+    options: &RemeshOptions,
+    wavelet_options: &WaveletOptions,
+    timings: bool,
+) -> Result<(Vec<NamedFile>, LevelsReport)> {
+    let AnalysedHierarchy {
+        hierarchy,
+        wavelets,
+        analysed,
+        remesh_ms,
+        analysis_ms,
+    } = analyse_hierarchy(part, options, wavelet_options)?;
+    let finest = &hierarchy.finest().mesh;
     let t = Instant::now();
     let rebuilt = wavelets.synthesise_all(&analysed).map_err(wavelet_error)?;
-    let synthesis_ms = ms(t);
+    let synthesis_ms = elapsed_ms(t);
     let reconstruction_error = rebuilt
         .iter()
         .zip(&finest.positions)

@@ -7,6 +7,7 @@ mod config;
 mod contour;
 mod contour_picture;
 mod levels;
+mod offsets;
 mod output;
 mod pipeline;
 mod preview;
@@ -21,6 +22,7 @@ pub use contour::{
     contour_wavelet, parse_flat_tool, parse_stock_margin, write_contour_outputs,
 };
 pub use levels::{LevelSummary, LevelsReport, levels};
+pub use offsets::{OffsetsOutput, OffsetsReport, ShapeSummary, offset_specs, offsets, shape_glb};
 pub use output::{write_atomically, write_outputs};
 pub use pipeline::{Observer, PlanOutput, Quiet, load_part, plan};
 pub use report::{PlanReport, PoseCounts, StageTimings};
