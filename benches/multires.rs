@@ -2,6 +2,8 @@
 //! `scripts/time_trimesh_loop.py` on the same mesh) and lifting-wavelet analysis + synthesis at
 //! three sizes (linear scaling expected).
 
+mod common;
+
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use wavemill::job;
 use wavemill::mesh::{PrepareOptions, prepare};
@@ -58,18 +60,11 @@ fn wavelets(c: &mut Criterion) {
 /// is within 0.01 mm (base ~17k triangles + 3 levels, 1.1 M triangles, Hausdorff measured per
 /// level); skipped when the shared test data is absent.
 fn remeshing(c: &mut Criterion) {
-    let path = std::env::var_os("WAVEMILL_TESTDATA")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/testdata")
-        })
-        .join("meshes/impeller_blower_9blade__necro-nemesis_aero2205.stl");
-    if !path.is_file() {
-        eprintln!("skipped: {} not found", path.display());
+    let Some(mesh) =
+        common::shared_mesh("impeller_blower_9blade__necro-nemesis_aero2205.stl", "mm")
+    else {
         return;
-    }
-    let raw = job::load_part(&path, "mm").unwrap();
-    let (mesh, _) = prepare(&raw.mesh, &PrepareOptions::default()).unwrap();
+    };
     let options = RemeshOptions::default();
     let mut g = c.benchmark_group("remesh");
     g.sample_size(10);

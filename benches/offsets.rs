@@ -3,27 +3,21 @@
 //! made once, outside the measurement; the build/verify split of one run is printed. Skipped
 //! when the shared test data is absent.
 
+mod common;
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use wavemill::job;
-use wavemill::mesh::{PrepareOptions, prepare};
 use wavemill::multires::RemeshOptions;
 use wavemill::offset::nested_offsets;
 
 const ALLOWANCES: [f64; 4] = [1.0, 0.5, 0.2, 0.0];
 
 fn blower_offsets(c: &mut Criterion) {
-    let path = std::env::var_os("WAVEMILL_TESTDATA")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/testdata")
-        })
-        .join("meshes/impeller_blower_9blade__necro-nemesis_aero2205.stl");
-    if !path.is_file() {
-        eprintln!("skipped: {} not found", path.display());
+    let Some(part) =
+        common::shared_mesh("impeller_blower_9blade__necro-nemesis_aero2205.stl", "mm")
+    else {
         return;
-    }
-    let raw = job::load_part(&path, "mm").unwrap();
-    let part = prepare(&raw.mesh, &PrepareOptions::default()).unwrap().0;
+    };
     let remesh = RemeshOptions {
         tolerance: 0.0,
         base_max_error: None,

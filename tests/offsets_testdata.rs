@@ -132,24 +132,7 @@ fn offsets_of_the_shared_manifold_meshes() {
     let Some(dir) = common::testdata() else {
         return;
     };
-    for (file, units) in [
-        (
-            "impeller_compressor_splitter__omorellAUS_Impellor-V3.stl",
-            "mm",
-        ),
-        ("impeller_blower_9blade__necro-nemesis_aero2205.stl", "mm"),
-        (
-            "impeller_blower_9blade_tall__necro-nemesis_aero2205_aggressive.stl",
-            "mm",
-        ),
-        ("turbine_blade_with_root__dengwirda_jigsaw-models.stl", "m"),
-        ("blade_airfoil__LostSunset_pyturbo-aero.stl", "m"),
-        ("blade_coarse196tri__pittance_compressorFan.stl", "mm"),
-        ("ocl/sphere_on_plate.stl", "mm"),
-        ("ocl/wheel_in_box.stl", "mm"),
-        ("ocl/ktoolcav.stl", "mm"),
-        ("ocl/demo.stl", "mm"),
-    ] {
+    for (file, units) in common::MANIFOLD_MESHES {
         let part = load(&dir.join("meshes").join(file), units);
         let out = build(file, &part);
         check(file, &part, &out);

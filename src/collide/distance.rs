@@ -222,19 +222,7 @@ impl SurfaceDistance {
                     }
                 }
             } else {
-                let (l, r) = (node.left, node.right);
-                let (dl, dr) = (
-                    self.nodes[l as usize].aabb.distance_squared(p),
-                    self.nodes[r as usize].aabb.distance_squared(p),
-                );
-                // Nearer child last, so it is popped first.
-                if dl <= dr {
-                    stack.push((dr, r));
-                    stack.push((dl, l));
-                } else {
-                    stack.push((dl, l));
-                    stack.push((dr, r));
-                }
+                self.push_children(node, p, &mut stack);
             }
         }
         best
@@ -287,21 +275,27 @@ impl SurfaceDistance {
                     return true;
                 }
             } else {
-                let (l, r) = (node.left, node.right);
-                let (dl, dr) = (
-                    self.nodes[l as usize].aabb.distance_squared(p),
-                    self.nodes[r as usize].aabb.distance_squared(p),
-                );
-                if dl <= dr {
-                    stack.push((dr, r));
-                    stack.push((dl, l));
-                } else {
-                    stack.push((dl, l));
-                    stack.push((dr, r));
-                }
+                self.push_children(node, p, &mut stack);
             }
         }
         false
+    }
+
+    /// Queues an inner node's children with their box distances, the nearer last so that it
+    /// is popped first.
+    fn push_children(&self, node: &Node, p: &Point3, stack: &mut NodeStack) {
+        let (l, r) = (node.left, node.right);
+        let (dl, dr) = (
+            self.nodes[l as usize].aabb.distance_squared(p),
+            self.nodes[r as usize].aabb.distance_squared(p),
+        );
+        if dl <= dr {
+            stack.push((dr, r));
+            stack.push((dl, l));
+        } else {
+            stack.push((dl, l));
+            stack.push((dr, r));
+        }
     }
 
     /// The pseudo-normal at a closest point: its sign against `p - point` tells outside (>0)

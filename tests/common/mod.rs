@@ -24,6 +24,27 @@ pub fn testdata() -> Option<PathBuf> {
     }
 }
 
+/// The manifold meshes of the shared test data (paths under `meshes/`) and their units: the
+/// set every multiresolution and offset test runs over.
+pub const MANIFOLD_MESHES: [(&str, &str); 10] = [
+    (
+        "impeller_compressor_splitter__omorellAUS_Impellor-V3.stl",
+        "mm",
+    ),
+    ("impeller_blower_9blade__necro-nemesis_aero2205.stl", "mm"),
+    (
+        "impeller_blower_9blade_tall__necro-nemesis_aero2205_aggressive.stl",
+        "mm",
+    ),
+    ("turbine_blade_with_root__dengwirda_jigsaw-models.stl", "m"),
+    ("blade_airfoil__LostSunset_pyturbo-aero.stl", "m"),
+    ("blade_coarse196tri__pittance_compressorFan.stl", "mm"),
+    ("ocl/sphere_on_plate.stl", "mm"),
+    ("ocl/wheel_in_box.stl", "mm"),
+    ("ocl/ktoolcav.stl", "mm"),
+    ("ocl/demo.stl", "mm"),
+];
+
 pub fn repo_file(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
