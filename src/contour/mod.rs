@@ -45,7 +45,7 @@ pub mod wavelet;
 
 pub use error::ContourError;
 pub use gcode::{MachineParams, Program, ProgramStats};
-pub use input::{OutlineError, OutlineOptions, read_outline};
+pub use input::{OutlineError, OutlineOptions, mesh_section, read_outline};
 pub use multires::{MultiresOptions, MultiresPlan, MultiresReport, multires_paths};
 pub use parallel::{ParallelOptions, contour_parallel};
 pub use toolpath::{CenterPath, Link, Pass};

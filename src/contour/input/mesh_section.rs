@@ -273,23 +273,32 @@ mod tests {
     #[test]
     fn torus_section_through_its_middle_has_a_hole() {
         let (big, small) = (20.0, 5.0);
-        let s = mesh_section(&torus(big, small, 128, 64), 0.5, 1e-3, "torus.obj")
-            .expect("section");
+        let s = mesh_section(&torus(big, small, 128, 64), 0.5, 1e-3, "torus.obj").expect("section");
         assert_eq!(s.contours.len(), 2);
         let mut areas: Vec<f64> = s.contours.iter().map(|c| c.signed_area()).collect();
         areas.sort_by(f64::total_cmp);
-        assert!(areas[0] < 0.0 && areas[1] > 0.0, "outer CCW, hole CW: {areas:?}");
+        assert!(
+            areas[0] < 0.0 && areas[1] > 0.0,
+            "outer CCW, hole CW: {areas:?}"
+        );
         // An annulus between radii big ± sqrt(small² − z²), within the facets' chord error.
         let w = (small * small - 0.25f64).sqrt();
         let exact = PI * ((big + w).powi(2) - (big - w).powi(2));
-        assert!((area(&s) - exact).abs() < 0.01 * exact, "{} vs {exact}", area(&s));
+        assert!(
+            (area(&s) - exact).abs() < 0.01 * exact,
+            "{} vs {exact}",
+            area(&s)
+        );
     }
 
     #[test]
     fn plane_above_the_torus_misses() {
         let e = mesh_section(&torus(20.0, 5.0, 64, 32), 5.5, 1e-3, "torus.obj").unwrap_err();
         let msg = e.to_string();
-        assert!(msg.starts_with("torus.obj: the plane z = 5.5 mm misses"), "{msg}");
+        assert!(
+            msg.starts_with("torus.obj: the plane z = 5.5 mm misses"),
+            "{msg}"
+        );
     }
 
     #[test]
@@ -303,10 +312,8 @@ mod tests {
     fn open_mesh_is_refused() {
         let mut m = cuboid(10.0, 10.0, 10.0);
         // Drop one side face: the section at mid height is open there.
-        m.triangles.retain(|t| {
-            !t.iter()
-                .all(|&v| m.positions[v as usize].x.abs() < 1e-12)
-        });
+        m.triangles
+            .retain(|t| !t.iter().all(|&v| m.positions[v as usize].x.abs() < 1e-12));
         let e = mesh_section(&m, 5.0, 1e-3, "open.stl").unwrap_err();
         assert!(matches!(e, OutlineError::OpenSection { .. }), "{e}");
         let msg = e.to_string();

@@ -106,9 +106,7 @@ pub enum OutlineError {
         what: String,
         detail: String,
     },
-    #[error(
-        "{file}: the plane z = {z} mm misses the part (it spans z = {zmin} … {zmax} mm)"
-    )]
+    #[error("{file}: the plane z = {z} mm misses the part (it spans z = {zmin} … {zmax} mm)")]
     PlaneMisses {
         file: String,
         z: f64,
