@@ -76,6 +76,11 @@ pub struct ContourArgs {
     /// band of 0.05 × D each side of their level to be simplified in.
     #[arg(long)]
     pub stepover: Option<f64>,
+    /// Band half-width of the wavelet passes around their offset level, mm [default:
+    /// (D/2 − S)/2, ≥ 0]. A wider band gives coarser passes; where they end up more than
+    /// max(D/2, S) apart, adaptive curves (seed 004 eq. 3.3) are inserted.
+    #[arg(long)]
+    pub band: Option<f64>,
     /// One outline unit is this many mm (outline files and a stock outline).
     #[arg(long, default_value_t = 1.0)]
     pub scale: f64,
@@ -248,6 +253,7 @@ fn contour(args: &ContourArgs) -> Result<()> {
     options.z = args.z;
     options.units = args.units.clone();
     options.stepover = args.stepover;
+    options.band = args.band;
     options.scale = args.scale;
     options.timings = !args.no_timings;
     let figures_line = |name: &str, f: &job::MethodFigures| {

@@ -68,6 +68,9 @@ pub struct ContourJobOptions {
     pub units: String,
     /// Stepover, mm; `None` = 0.4 × D (see the module docs).
     pub stepover: Option<f64>,
+    /// Band half-width τ of the wavelet passes around their level, mm; `None` =
+    /// max(0, (r − s)/2). Wider bands give coarser passes and need adaptive curves (§3.5).
+    pub band: Option<f64>,
     /// Outline scale (one outline unit = `scale` mm); outline files only (meshes: `units`).
     pub scale: f64,
     /// Machine parameters and the time model.
@@ -86,6 +89,7 @@ impl ContourJobOptions {
             z: None,
             units: "mm".into(),
             stepover: None,
+            band: None,
             scale: 1.0,
             machine: MachineParams::default(),
             timings: true,
@@ -206,6 +210,12 @@ pub struct CompareReport {
 #[derive(Clone, Debug, Serialize)]
 pub struct PlannerFigures {
     pub band_tolerance_mm: f64,
+    /// Largest measured deviation of a part level's passes from its exact offset, mm.
+    pub max_pass_deviation_mm: f64,
+    /// Adaptive curves (seed 004 §3.5, eq. 3.3) inserted where consecutive part levels ended
+    /// up more than max(r, s) apart, and the offset loops they made.
+    pub adaptive_curves: usize,
+    pub adaptive_loops: usize,
     pub part_levels: usize,
     pub hull_levels: usize,
     pub hull_legs: usize,
@@ -222,6 +232,9 @@ impl From<&MultiresReport> for PlannerFigures {
     fn from(r: &MultiresReport) -> Self {
         Self {
             band_tolerance_mm: r.tolerance,
+            max_pass_deviation_mm: r.max_deviation,
+            adaptive_curves: r.adaptive_curves,
+            adaptive_loops: r.adaptive_loops,
             part_levels: r.part_levels,
             hull_levels: r.hull_levels,
             hull_legs: r.hull_legs,
@@ -423,6 +436,12 @@ fn method_figures(
     ))
 }
 
+fn multires_options(p: &Prepared, opts: &ContourJobOptions) -> MultiresOptions {
+    let mut m = MultiresOptions::new(p.r, p.s);
+    m.tolerance = opts.band;
+    m
+}
+
 /// Reads `outline` and plans, verifies and posts the multiresolution path only (no baseline):
 /// its G-code and figures.
 pub fn contour_wavelet(
@@ -430,7 +449,7 @@ pub fn contour_wavelet(
     opts: &ContourJobOptions,
 ) -> Result<(String, MethodFigures)> {
     let p = prepare(outline, opts)?;
-    let plan = multires_paths(&p.part, &p.stock, &MultiresOptions::new(p.r, p.s))
+    let plan = multires_paths(&p.part, &p.stock, &multires_options(&p, opts))
         .map_err(contour_error(&p.file))?;
     let (figures, nc, _) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;
     Ok((nc, figures))
@@ -442,7 +461,7 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
     let (file, part, stock, r, s) = (&p.file, &p.part, &p.stock, p.r, p.s);
     let t = Instant::now();
     let plan =
-        multires_paths(part, stock, &MultiresOptions::new(r, s)).map_err(contour_error(file))?;
+        multires_paths(part, stock, &multires_options(&p, opts)).map_err(contour_error(file))?;
     let t_wavelet = ms(t);
     let t = Instant::now();
     let base =
