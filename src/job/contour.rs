@@ -3,6 +3,10 @@
 //! contour-parallel baseline ([`crate::contour::parallel`]) — with the same tool, stock and
 //! stepover, verified and compared side by side (issue #6).
 //!
+//! The part is an SVG/DXF outline or the Z-section of a closed mesh (`.stl`, `.obj`, `.gltf`,
+//! `.glb`, with `z`); the stock is the part's bounding box grown by a margin or a given outline
+//! that must contain the part.
+//!
 //! Outputs (all in memory; [`write_contour_outputs`] writes them atomically): `wavelet.nc`,
 //! `contour_parallel.nc`, `compare.json`, `paths.svg`, `paths.png`.
 //!

@@ -40,11 +40,28 @@
 //! convex, a point t from H is within r of the hull pass at any δ ∈ [t − r, t + r], and
 //! s ≤ 2r. When s ≥ r the default τ is
 //! 0 and the part levels are the exact offsets; the hull passes still simplify the roughing.
-//! The adaptive curves of §3.5 (eq. 3.2–3.3) fill the gaps that offsetting a coarse control
-//! polygon by r + e leaves; with the band construction the spacing of consecutive part levels
-//! is at most s + 2τ ≤ r by construction, so no adaptive curve is needed and none is added
-//! (the fractional levels of eq. 3.2 are in [`crate::contour::wavelet::fractional`]). The
-//! uncut area is measured by the `contour` command against the baseline's.
+//!
+//! # Adaptive curves (§3.5, eq. 3.3)
+//!
+//! The argument needs consecutive part levels no more than L = max(r, s) apart where their
+//! crossings are worst: G = s + e₁ + e₂ ≤ L, with e₁, e₂ the deviations of the two levels'
+//! passes from their exact offsets, MEASURED on the loops used (two-sided, sampled every τ/4;
+//! the largest over the loops of a level). With the default τ, e ≤ τ = (r − s)/2 gives G ≤ r
+//! and eq. 3.3's count is below one: no curve is added. With a wider band (the `tolerance`
+//! option, `--band`) the passes get coarser and G can exceed L; then
+//! `adaptive_levels` inserts n = ⌈(G − L)/(L − 2e_a)⌉ curves at fractional levels between
+//! the two (eq. 3.3, rounded up, generalised to s ≠ r and to curves with their own band
+//! e_a = min(τ, (r − s)/2)). Each is the exact offset at its fractional level, approximated by
+//! the same wavelet machinery within e_a, checked exactly like every pass, clipped and linked
+//! like the part levels. Where we depart from the seed: its adaptive curve c^{m+t} (eq. 3.2,
+//! [`crate::contour::wavelet::fractional`]) interpolates the control points of two scales of
+//! one region; our two neighbouring passes are fits of different exact offsets, with their own
+//! corners and region splits, so there are no matching control points to interpolate — the
+//! fractional LEVEL is interpolated (the offset distance), not the control points. The count
+//! is per level (the worst loop of each level decides), not per non-smooth region, so a curve
+//! is a whole offset loop, which is safe but not minimal. Measured (README): a wider band makes
+//! the coarse passes no shorter than the extra curves cost, so the default band stays.
+//! The uncut area is measured by the `contour` command against the baseline's.
 //!
 //! # Pass spacing
 //!
