@@ -8,7 +8,7 @@ mod common;
 
 use std::process::Command;
 
-use wavemill::job::{ContourJobOptions, StockSpec, contour_compare};
+use wavemill::job::{CompareReport, ContourJobOptions, StockSpec, contour_compare};
 
 fn wavemill(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_wavemill"))
@@ -21,6 +21,36 @@ fn wavemill(args: &[&str]) -> std::process::Output {
 /// about a row times the stock width where a boundary falls between rows.
 fn uncut_slack(report: &serde_json::Value) -> f64 {
     report["uncut_row_step_mm"].as_f64().unwrap_or(0.0) * 2.0
+}
+
+/// No overcut for either method in `compare.json`, and no more uncut area for the new one.
+fn assert_verified_json(report: &serde_json::Value) {
+    let (w, p) = (&report["wavelet"], &report["contour_parallel"]);
+    for m in [w, p] {
+        assert!(m["min_clearance_minus_r_mm"].as_f64().expect("clearance") >= -1e-6);
+    }
+    let (wu, pu) = (
+        w["uncut_area_mm2"].as_f64().expect("uncut"),
+        p["uncut_area_mm2"].as_f64().expect("uncut"),
+    );
+    assert!(wu <= pu + uncut_slack(report), "uncut {wu} vs {pu}");
+}
+
+/// The same for a report in memory.
+fn assert_verified(r: &CompareReport, what: &str) {
+    for m in [&r.wavelet, &r.contour_parallel] {
+        assert!(
+            m.min_clearance_minus_r_mm >= -1e-6,
+            "{what}: overcut {}",
+            m.min_clearance_minus_r_mm
+        );
+    }
+    assert!(
+        r.wavelet.uncut_area_mm2 <= r.contour_parallel.uncut_area_mm2 + 2.0 * r.uncut_row_step_mm,
+        "{what}: uncut {} vs {}",
+        r.wavelet.uncut_area_mm2,
+        r.contour_parallel.uncut_area_mm2
+    );
 }
 
 #[test]
@@ -86,15 +116,8 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
         serde_json::from_str(&std::fs::read_to_string(a.join("compare.json")).expect("json"))
             .expect("compare.json parses");
     assert!(report.get("timings_ms").is_none());
+    assert_verified_json(&report);
     let (w, p) = (&report["wavelet"], &report["contour_parallel"]);
-    for m in [w, p] {
-        assert!(m["min_clearance_minus_r_mm"].as_f64().expect("clearance") >= -1e-6);
-    }
-    let (wu, pu) = (
-        w["uncut_area_mm2"].as_f64().expect("uncut"),
-        p["uncut_area_mm2"].as_f64().expect("uncut"),
-    );
-    assert!(wu <= pu + uncut_slack(&report), "uncut {wu} vs {pu}");
     // The hull passes are a few lines and arcs each: fewer NC blocks than the offsets.
     assert!(w["nc_blocks"].as_u64() < p["nc_blocks"].as_u64());
     // The lower bound of any path with passes one stepover apart.
@@ -155,20 +178,7 @@ fn shared_outlines_no_overcut_no_more_uncut() {
         opts.timings = false;
         let c = contour_compare(&data.join("outlines").join(file), &opts).expect(file);
         let r = &c.report;
-        for m in [&r.wavelet, &r.contour_parallel] {
-            assert!(
-                m.min_clearance_minus_r_mm >= -1e-6,
-                "{file}: overcut {}",
-                m.min_clearance_minus_r_mm
-            );
-        }
-        assert!(
-            r.wavelet.uncut_area_mm2
-                <= r.contour_parallel.uncut_area_mm2 + 2.0 * r.uncut_row_step_mm,
-            "{file}: uncut {} vs {}",
-            r.wavelet.uncut_area_mm2,
-            r.contour_parallel.uncut_area_mm2
-        );
+        assert_verified(r, file);
         assert!(
             r.wavelet.nc_blocks < r.contour_parallel.nc_blocks,
             "{file}: blocks"
@@ -208,15 +218,7 @@ fn impeller_section_end_to_end() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report = compare_json(&dir);
     assert_eq!(report["section_z_mm"].as_f64(), Some(10.0));
-    let (w, p) = (&report["wavelet"], &report["contour_parallel"]);
-    for m in [w, p] {
-        assert!(m["min_clearance_minus_r_mm"].as_f64().expect("clearance") >= -1e-6);
-    }
-    let (wu, pu) = (
-        w["uncut_area_mm2"].as_f64().expect("uncut"),
-        p["uncut_area_mm2"].as_f64().expect("uncut"),
-    );
-    assert!(wu <= pu + uncut_slack(&report), "uncut {wu} vs {pu}");
+    assert_verified_json(&report);
     // Stock 110 × 110 mm minus the section: the hub (r ≈ 15 mm with its bore) and the
     // blades take a few thousand mm², far from nothing and far from all of it.
     let region = report["region_area_mm2"].as_f64().expect("area");
@@ -236,18 +238,9 @@ fn impeller_section_end_to_end() {
         "{err}"
     );
     let sample = common::repo_file("data/mountain.svg");
-    let o = wavemill(&[
-        "contour",
-        sample.to_str().expect("utf-8 path"),
-        "--z",
-        "3",
-        "--tool",
-        "flat:6",
-        "--stock",
-        "margin:5",
-        "--out",
-        out,
-    ]);
+    let mut args = vec!["contour", sample.to_str().expect("utf-8 path"), "--z", "3"];
+    args.extend(["--tool", "flat:6", "--stock", "margin:5", "--out", out]);
+    let o = wavemill(&args);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("mountain.svg: --z 3 applies to mesh"));
     let _ = std::fs::remove_dir_all(&dir);
@@ -289,12 +282,7 @@ fn stock_given_as_an_outline() {
         "{} vs {exact}",
         r.region_area_mm2
     );
-    for m in [&r.wavelet, &r.contour_parallel] {
-        assert!(m.min_clearance_minus_r_mm >= -1e-6);
-    }
-    assert!(
-        r.wavelet.uncut_area_mm2 <= r.contour_parallel.uncut_area_mm2 + 2.0 * r.uncut_row_step_mm
-    );
+    assert_verified(r, "disc stock");
     // Nothing may be cut outside the stock grown by the tool radius (SVG y is flipped: the
     // disc's centre is (105, −100) mm).
     assert!(

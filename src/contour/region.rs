@@ -269,14 +269,7 @@ mod tests {
     use crate::contour::geometry::{Contour, Vertex};
 
     fn square(x0: f64, y0: f64, side: f64) -> Contour {
-        Contour {
-            vertices: vec![
-                Vertex::line(x0, y0),
-                Vertex::line(x0 + side, y0),
-                Vertex::line(x0 + side, y0 + side),
-                Vertex::line(x0, y0 + side),
-            ],
-        }
+        crate::contour::parallel::tests::rect(x0, y0, x0 + side, y0 + side, true)
     }
 
     #[test]
@@ -300,8 +293,7 @@ mod tests {
         let e = check_inside(&outside, &stock, 1e-9).unwrap_err();
         assert_eq!(e.reason, "lies outside the stock outline");
         // A stock with a hole where the part is: the part surrounds the hole.
-        let mut hole = square(3.0, 3.0, 1.0);
-        hole.vertices.reverse();
+        let hole = crate::contour::parallel::tests::rect(3.0, 3.0, 4.0, 4.0, false);
         let holed = Shape {
             contours: vec![square(0.0, 0.0, 10.0), hole],
         };

@@ -16,7 +16,8 @@
 
 use super::fill::{FillRule, build_region};
 use super::{OutlineError, RawContour};
-use crate::contour::geometry::{Point2, Shape, Vertex};
+use crate::contour::geometry::{Point2, Segment, Shape, Vertex};
+use crate::contour::segops::point_distance;
 use crate::mesh::Mesh;
 use crate::path::plane_section;
 
@@ -170,15 +171,8 @@ fn simplify_closed(points: &[Point2], tol: f64) -> Vec<Point2> {
         .collect()
 }
 
-fn point_segment_distance(p: Point2, a: Point2, b: Point2) -> f64 {
-    let ab = b - a;
-    let len2 = ab.norm_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + ab * t)).norm()
+fn point_segment_distance(p: Point2, start: Point2, end: Point2) -> f64 {
+    point_distance(p, &Segment::Line { start, end }).0
 }
 
 #[cfg(test)]

@@ -106,6 +106,18 @@ fn measure(path: &CenterPath, part: &Shape, stock: &Shape) -> Measured {
     }
 }
 
+/// No overcut, and no more uncut area than the baseline `b` up to one 0.05 mm scanline row
+/// across a stock `width` mm wide.
+fn assert_covered_as_well(m: &Measured, b: &Measured, width: f64) {
+    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
+    assert!(
+        m.uncut <= b.uncut + 0.05 * width,
+        "uncut {} vs {}",
+        m.uncut,
+        b.uncut
+    );
+}
+
 #[test]
 fn mountain_no_overcut_no_more_uncut() {
     let part = mountain();
@@ -236,16 +248,7 @@ fn options_are_validated() {
 /// within the band, and the path still never cuts the part nor leaves more material.
 #[test]
 fn many_segment_part_gets_wavelet_passes() {
-    let vertices: Vec<Vertex> = (0..360)
-        .map(|k| {
-            let a = k as f64 * std::f64::consts::TAU / 360.0;
-            let rho = 30.0 + 10.0 * (5.0 * a).sin();
-            Vertex::line(rho * a.cos(), rho * a.sin())
-        })
-        .collect();
-    let part = Shape {
-        contours: vec![Contour { vertices }],
-    };
+    let part = lobed_part();
     let stock = stock_around(&part, 8.0);
     let (r, s) = (3.0, 2.0);
     let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).expect("plan");
@@ -259,13 +262,7 @@ fn many_segment_part_gets_wavelet_passes() {
         measure(&plan.path, &part, &stock),
         measure(&base, &part, &stock),
     );
-    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
-    assert!(
-        m.uncut <= b.uncut + 0.05 * 100.0,
-        "uncut {} vs {}",
-        m.uncut,
-        b.uncut
-    );
+    assert_covered_as_well(&m, &b, 100.0);
     assert!(m.segments < b.segments, "{} vs {}", m.segments, b.segments);
 }
 
@@ -363,11 +360,5 @@ fn wide_band_inserts_adaptive_curves_without_losing_coverage() {
         "wide band: length {:.1} vs {:.1}, segments {} vs {}, uncut {:.3} vs {:.3}, {rep:?}",
         m.length, b.length, m.segments, b.segments, m.uncut, b.uncut
     );
-    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
-    assert!(
-        m.uncut <= b.uncut + 0.05 * 100.0,
-        "uncut {} vs {}",
-        m.uncut,
-        b.uncut
-    );
+    assert_covered_as_well(&m, &b, 100.0);
 }
