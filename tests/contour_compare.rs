@@ -218,6 +218,11 @@ fn impeller_section_end_to_end() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report = compare_json(&dir);
     assert_eq!(report["section_z_mm"].as_f64(), Some(10.0));
+    // The default band keeps consecutive passes within r: eq. 3.3 asks for no curve.
+    assert_eq!(
+        report["wavelet_planner"]["adaptive_curves"].as_u64(),
+        Some(0)
+    );
     assert_verified_json(&report);
     // Stock 110 × 110 mm minus the section: the hub (r ≈ 15 mm with its bore) and the
     // blades take a few thousand mm², far from nothing and far from all of it.
@@ -227,6 +232,9 @@ fn impeller_section_end_to_end() {
         "{region}"
     );
 
+    let o = run(&["--z", "10", "--band=-1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--band -1: must be"));
     let o = run(&[]);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("impeller.glb: a mesh part needs --z"));

@@ -303,6 +303,13 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
             "--stepover {s}: must satisfy 0 < stepover ≤ tool diameter {d}"
         )));
     }
+    if let Some(b) = opts.band
+        && !(b.is_finite() && b >= 0.0)
+    {
+        return Err(Error::Job(format!(
+            "--band {b}: must be a finite number of mm ≥ 0"
+        )));
+    }
     let t = Instant::now();
     let outline_opts = OutlineOptions {
         scale: opts.scale,

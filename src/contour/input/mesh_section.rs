@@ -285,6 +285,23 @@ mod tests {
         );
     }
 
+    /// Metamorphic: turning the part about the Z axis turns the section, and its area and
+    /// perimeter stay.
+    #[test]
+    fn rotated_torus_gives_the_same_section_figures() {
+        let m = torus(20.0, 5.0, 96, 48);
+        let a = mesh_section(&m, 1.5, 1e-3, "torus.obj").expect("section");
+        let (s, c) = 0.7f64.sin_cos();
+        let mut turned = m.clone();
+        for p in &mut turned.positions {
+            *p = Point3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
+        }
+        let b = mesh_section(&turned, 1.5, 1e-3, "torus.obj").expect("section");
+        assert_eq!(a.contours.len(), b.contours.len());
+        assert!((area(&a) - area(&b)).abs() < 1e-9 * area(&a));
+        assert!((perimeter(&a) - perimeter(&b)).abs() < 1e-9 * perimeter(&a));
+    }
+
     #[test]
     fn plane_above_the_torus_misses() {
         let e = mesh_section(&torus(20.0, 5.0, 64, 32), 5.5, 1e-3, "torus.obj").unwrap_err();
