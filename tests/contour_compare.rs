@@ -8,7 +8,7 @@ mod common;
 
 use std::process::Command;
 
-use wavemill::job::{ContourJobOptions, contour_compare};
+use wavemill::job::{CompareReport, ContourJobOptions, StockSpec, contour_compare};
 
 fn wavemill(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_wavemill"))
@@ -21,6 +21,36 @@ fn wavemill(args: &[&str]) -> std::process::Output {
 /// about a row times the stock width where a boundary falls between rows.
 fn uncut_slack(report: &serde_json::Value) -> f64 {
     report["uncut_row_step_mm"].as_f64().unwrap_or(0.0) * 2.0
+}
+
+/// No overcut for either method in `compare.json`, and no more uncut area for the new one.
+fn assert_verified_json(report: &serde_json::Value) {
+    let (w, p) = (&report["wavelet"], &report["contour_parallel"]);
+    for m in [w, p] {
+        assert!(m["min_clearance_minus_r_mm"].as_f64().expect("clearance") >= -1e-6);
+    }
+    let (wu, pu) = (
+        w["uncut_area_mm2"].as_f64().expect("uncut"),
+        p["uncut_area_mm2"].as_f64().expect("uncut"),
+    );
+    assert!(wu <= pu + uncut_slack(report), "uncut {wu} vs {pu}");
+}
+
+/// The same for a report in memory.
+fn assert_verified(r: &CompareReport, what: &str) {
+    for m in [&r.wavelet, &r.contour_parallel] {
+        assert!(
+            m.min_clearance_minus_r_mm >= -1e-6,
+            "{what}: overcut {}",
+            m.min_clearance_minus_r_mm
+        );
+    }
+    assert!(
+        r.wavelet.uncut_area_mm2 <= r.contour_parallel.uncut_area_mm2 + 2.0 * r.uncut_row_step_mm,
+        "{what}: uncut {} vs {}",
+        r.wavelet.uncut_area_mm2,
+        r.contour_parallel.uncut_area_mm2
+    );
 }
 
 #[test]
@@ -86,15 +116,8 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
         serde_json::from_str(&std::fs::read_to_string(a.join("compare.json")).expect("json"))
             .expect("compare.json parses");
     assert!(report.get("timings_ms").is_none());
+    assert_verified_json(&report);
     let (w, p) = (&report["wavelet"], &report["contour_parallel"]);
-    for m in [w, p] {
-        assert!(m["min_clearance_minus_r_mm"].as_f64().expect("clearance") >= -1e-6);
-    }
-    let (wu, pu) = (
-        w["uncut_area_mm2"].as_f64().expect("uncut"),
-        p["uncut_area_mm2"].as_f64().expect("uncut"),
-    );
-    assert!(wu <= pu + uncut_slack(&report), "uncut {wu} vs {pu}");
     // The hull passes are a few lines and arcs each: fewer NC blocks than the offsets.
     assert!(w["nc_blocks"].as_u64() < p["nc_blocks"].as_u64());
     // The lower bound of any path with passes one stepover apart.
@@ -155,23 +178,137 @@ fn shared_outlines_no_overcut_no_more_uncut() {
         opts.timings = false;
         let c = contour_compare(&data.join("outlines").join(file), &opts).expect(file);
         let r = &c.report;
-        for m in [&r.wavelet, &r.contour_parallel] {
-            assert!(
-                m.min_clearance_minus_r_mm >= -1e-6,
-                "{file}: overcut {}",
-                m.min_clearance_minus_r_mm
-            );
-        }
-        assert!(
-            r.wavelet.uncut_area_mm2
-                <= r.contour_parallel.uncut_area_mm2 + 2.0 * r.uncut_row_step_mm,
-            "{file}: uncut {} vs {}",
-            r.wavelet.uncut_area_mm2,
-            r.contour_parallel.uncut_area_mm2
-        );
+        assert_verified(r, file);
         assert!(
             r.wavelet.nc_blocks < r.contour_parallel.nc_blocks,
             "{file}: blocks"
         );
     }
+}
+
+fn compare_json(dir: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("compare.json")).expect("json"))
+        .expect("compare.json parses")
+}
+
+/// The bundled impeller (90 mm wide, 30 mm tall) cut at z = 10: hub with its bore and six
+/// blades. Both methods clear the section without cutting into it; an outline-only option
+/// and a plane above the part are refused naming the file and the Z.
+#[test]
+fn impeller_section_end_to_end() {
+    let part = common::repo_file("data/impeller.glb");
+    let part = part.to_str().expect("utf-8 path");
+    let dir = std::env::temp_dir().join(format!("wavemill-contour-z-{}", std::process::id()));
+    let out = dir.to_str().expect("utf-8 path");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "contour",
+            part,
+            "--tool",
+            "flat:6",
+            "--stock",
+            "margin:10",
+            "--out",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        wavemill(&args)
+    };
+    let o = run(&["--z", "10", "--compare", "--no-timings"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report = compare_json(&dir);
+    assert_eq!(report["section_z_mm"].as_f64(), Some(10.0));
+    // The default band keeps consecutive passes within r: eq. 3.3 asks for no curve.
+    assert_eq!(
+        report["wavelet_planner"]["adaptive_curves"].as_u64(),
+        Some(0)
+    );
+    assert_verified_json(&report);
+    // Stock 110 × 110 mm minus the section: the hub (r ≈ 15 mm with its bore) and the
+    // blades take a few thousand mm², far from nothing and far from all of it.
+    let region = report["region_area_mm2"].as_f64().expect("area");
+    assert!(
+        region > 0.6 * 110.0 * 110.0 && region < 0.99 * 110.0 * 110.0,
+        "{region}"
+    );
+
+    let o = run(&["--z", "10", "--band=-1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--band -1: must be"));
+    let o = run(&[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("impeller.glb: a mesh part needs --z"));
+    let o = run(&["--z", "40"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("impeller.glb: the plane z = 40 mm misses the part"),
+        "{err}"
+    );
+    let sample = common::repo_file("data/mountain.svg");
+    let mut args = vec!["contour", sample.to_str().expect("utf-8 path"), "--z", "3"];
+    args.extend(["--tool", "flat:6", "--stock", "margin:5", "--out", out]);
+    let o = wavemill(&args);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("mountain.svg: --z 3 applies to mesh"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A square part in a circular stock outline: the region is the disc minus the square (closed
+/// form), both methods stay off the part, the new one leaves no more material; a stock
+/// outline that does not contain the part is refused.
+#[test]
+fn stock_given_as_an_outline() {
+    let dir = std::env::temp_dir().join(format!("wavemill-contour-stock-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let svg = |name: &str, body: &str| {
+        let path = dir.join(name);
+        std::fs::write(
+            &path,
+            format!(
+                r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 200 200">{body}</svg>"#
+            ),
+        )
+        .expect("write svg");
+        path
+    };
+    let part = svg(
+        "part.svg",
+        r#"<rect x="85" y="90" width="30" height="20"/>"#,
+    );
+    let disc = svg("disc.svg", r#"<circle cx="105" cy="100" r="40"/>"#);
+    let small = svg("small.svg", r#"<circle cx="100" cy="100" r="12"/>"#);
+    let mut opts = ContourJobOptions::new(6.0, 0.0);
+    opts.stock = StockSpec::Outline(disc);
+    opts.timings = false;
+    let c = contour_compare(&part, &opts).expect("disc stock");
+    let r = &c.report;
+    assert_eq!(r.stock, "outline:disc.svg");
+    let exact = std::f64::consts::PI * 1600.0 - 600.0;
+    assert!(
+        (r.region_area_mm2 - exact).abs() < 80.0 * 2.0 * r.uncut_row_step_mm,
+        "{} vs {exact}",
+        r.region_area_mm2
+    );
+    assert_verified(r, "disc stock");
+    // Nothing may be cut outside the stock grown by the tool radius (SVG y is flipped: the
+    // disc's centre is (105, −100) mm).
+    assert!(
+        c.wavelet_nc
+            .lines()
+            .filter_map(|l| {
+                let x = l.split_whitespace().find_map(|w| w.strip_prefix('X'))?;
+                let y = l.split_whitespace().find_map(|w| w.strip_prefix('Y'))?;
+                Some((x.parse::<f64>().ok()?, y.parse::<f64>().ok()?))
+            })
+            .all(|(x, y)| ((x - 105.0).hypot(y + 100.0)) <= 43.0 + 1e-3)
+    );
+
+    opts.stock = StockSpec::Outline(small);
+    let e = contour_compare(&part, &opts).unwrap_err().to_string();
+    assert!(
+        e.starts_with("small.svg: the part part.svg touches or crosses the stock outline"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

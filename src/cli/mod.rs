@@ -58,12 +58,20 @@ pub enum Command {
 
 #[derive(Args, Debug)]
 pub struct ContourArgs {
-    /// Outline file (.svg or .dxf): one or more closed paths, the part to machine around.
+    /// The part: an outline file (.svg or .dxf, one or more closed paths), or a closed mesh
+    /// (.stl, .obj, .gltf, .glb) cut at the height given by --z.
     pub outline: PathBuf,
+    /// Height of the plane that cuts a mesh part, mm (mesh parts only).
+    #[arg(long, allow_negative_numbers = true)]
+    pub z: Option<f64>,
+    /// Units of a mesh part: mm, m or in.
+    #[arg(long, default_value = "mm")]
+    pub units: String,
     /// Flat end mill, `flat:D` with the diameter D in mm.
     #[arg(long)]
     pub tool: String,
-    /// Stock: `margin:M`, the outline's bounding box grown by M mm.
+    /// Stock: `margin:M`, the part's bounding box grown by M mm, or `outline:FILE`, a closed
+    /// SVG/DXF outline (same --scale) that contains the part.
     #[arg(long)]
     pub stock: String,
     /// Stepover between passes, mm (0 < S ≤ D). Default 0.4 × D: below the tool radius, so
@@ -71,7 +79,12 @@ pub struct ContourArgs {
     /// band of 0.05 × D each side of their level to be simplified in.
     #[arg(long)]
     pub stepover: Option<f64>,
-    /// One outline unit is this many mm.
+    /// Band half-width of the wavelet passes around their offset level, mm [default:
+    /// (D/2 − S)/2, ≥ 0]. A wider band gives coarser passes; where they end up more than
+    /// max(D/2, S) apart, adaptive curves (seed 004 eq. 3.3) are inserted.
+    #[arg(long)]
+    pub band: Option<f64>,
+    /// One outline unit is this many mm (outline files and a stock outline).
     #[arg(long, default_value_t = 1.0)]
     pub scale: f64,
     /// Also write the contour-parallel baseline (contour_parallel.nc), compare.json and
@@ -292,11 +305,12 @@ pub fn run(cli: Cli) -> i32 {
 }
 
 fn contour(args: &ContourArgs) -> Result<()> {
-    let mut options = job::ContourJobOptions::new(
-        job::parse_flat_tool(&args.tool)?,
-        job::parse_stock_margin(&args.stock)?,
-    );
+    let mut options = job::ContourJobOptions::new(job::parse_flat_tool(&args.tool)?, 0.0);
+    options.stock = job::parse_stock(&args.stock)?;
+    options.z = args.z;
+    options.units = args.units.clone();
     options.stepover = args.stepover;
+    options.band = args.band;
     options.scale = args.scale;
     options.timings = !args.no_timings;
     let figures_line = |name: &str, f: &job::MethodFigures| {

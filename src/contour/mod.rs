@@ -6,14 +6,17 @@
 //! * [`input`] — SVG (paths incl. arcs, basic shapes, nested transforms, fill rules) and DXF
 //!   (LINE, ARC, CIRCLE, ELLIPSE, LWPOLYLINE, POLYLINE, SPLINE) outlines read into a
 //!   [`geometry::Shape`]; curves that are not circles become biarcs within a tolerance;
-//!   crossing paths are refused, naming both and where they cross;
+//!   crossing paths are refused, naming both and where they cross; Z-sections of closed
+//!   meshes ([`input::mesh_section`]: region by nesting, straight runs merged within the
+//!   tolerance, a missed plane / open mesh / horizontal face in the plane refused);
 //! * [`wavelet`] — the endpoint-interpolating cubic B-spline wavelet filters P^j and Q^j
 //!   (seed 004 §2.2, figs. 2.5–2.6), decomposition (eq. 2.16), reconstruction (eq. 2.17),
 //!   fractional levels (eq. 3.2), least-squares fitting and the eq. 3.1 deviation bound;
 //! * [`multires`] — the multiresolution method of seed 004 ch. 3–4: corners by multi-scale
 //!   curvature (§3.1), ν = l/m segmentation (§3.2), wavelet-approximated offsets checked
-//!   exactly against the part (§3.3–3.4), the loose convex hull and its offsets (§4.1), the
-//!   part levels clipped to it (§4.2);
+//!   exactly against the part (§3.3–3.4), adaptive curves where measured pass deviations open
+//!   gaps (§3.5, eq. 3.3), the loose convex hull and its offsets (§4.1), the part levels
+//!   clipped to it (§4.2);
 //! * [`parallel`] — the contour-parallel baseline the seed compares against (tables 3.1,
 //!   4.1): exact line/arc offsets of the part at r, r + s, …, clipped to the stock
 //!   (cavalier_contours), ordered from the far side toward the part and linked;
@@ -23,11 +26,12 @@
 //! * [`gcode`] — G-code with G2/G3 arcs and the seed's machining-time model (length / feed +
 //!   NC blocks × dwell);
 //! * helpers: [`segops`] (exact segment geometry), [`bvh`] (segment BVH), [`region`]
-//!   (point-in-shape, scanline crossings), [`cavc`] (the cavalier_contours bridge).
+//!   (point-in-shape, scanline crossings, part-inside-stock check), [`cavc`] (the
+//!   cavalier_contours bridge).
 //!
-//! Still to come (issue #6): Z-sections of meshes as outlines; the adaptive curves of §3.5
-//! (eq. 3.2 is in [`wavelet`], eq. 3.3 is not; the band construction of [`multires`] needs
-//! neither).
+//! Not done (issue #6): biarc fitting of mesh sections (they are polygons simplified within
+//! the tolerance); eq. 3.2's control-point interpolation for the adaptive curves (see
+//! [`multires`] for why the fractional level is interpolated instead).
 
 pub mod bvh;
 pub mod cavc;
@@ -45,7 +49,7 @@ pub mod wavelet;
 
 pub use error::ContourError;
 pub use gcode::{MachineParams, Program, ProgramStats};
-pub use input::{OutlineError, OutlineOptions, read_outline};
+pub use input::{OutlineError, OutlineOptions, mesh_section, read_outline};
 pub use multires::{MultiresOptions, MultiresPlan, MultiresReport, multires_paths};
 pub use parallel::{ParallelOptions, contour_parallel};
 pub use toolpath::{CenterPath, Link, Pass};

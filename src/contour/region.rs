@@ -216,10 +216,90 @@ impl RegionIndex {
     }
 }
 
+/// Where and why `inner` does not lie inside `outer`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NotInside {
+    pub at: Point2,
+    pub reason: &'static str,
+}
+
+/// Checks that the region `inner` lies strictly inside the region `outer` (a part inside its
+/// stock): the boundaries stay more than `gap` apart, every contour of `inner` starts inside
+/// `outer`, and no contour of `outer` (a hole of the stock) starts inside `inner`. With the
+/// boundaries apart every contour lies in one face of the other region, so one point per
+/// contour decides.
+pub fn check_inside(inner: &Shape, outer: &Shape, gap: f64) -> Result<(), NotInside> {
+    let (inner_index, outer_index) = (RegionIndex::new(inner), RegionIndex::new(outer));
+    for seg in inner.contours.iter().flat_map(|c| c.segments()) {
+        if let Some(n) = outer_index.boundary().nearest(&seg)
+            && n.distance <= gap
+        {
+            return Err(NotInside {
+                at: n.on_query,
+                reason: "touches or crosses the stock outline",
+            });
+        }
+    }
+    for c in &inner.contours {
+        if let Some(v) = c.vertices.first()
+            && !outer_index.contains(v.point)
+        {
+            return Err(NotInside {
+                at: v.point,
+                reason: "lies outside the stock outline",
+            });
+        }
+    }
+    for c in &outer.contours {
+        if let Some(v) = c.vertices.first()
+            && inner_index.contains(v.point)
+        {
+            return Err(NotInside {
+                at: v.point,
+                reason: "surrounds a hole of the stock outline",
+            });
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::contour::geometry::{Contour, Vertex};
+
+    fn square(x0: f64, y0: f64, side: f64) -> Contour {
+        crate::contour::parallel::tests::rect(x0, y0, x0 + side, y0 + side, true)
+    }
+
+    #[test]
+    fn part_inside_stock_check() {
+        let stock = Shape {
+            contours: vec![square(0.0, 0.0, 10.0)],
+        };
+        let inside = Shape {
+            contours: vec![square(2.0, 2.0, 3.0)],
+        };
+        assert_eq!(check_inside(&inside, &stock, 1e-9), Ok(()));
+        let crossing = Shape {
+            contours: vec![square(8.0, 2.0, 3.0)],
+        };
+        let e = check_inside(&crossing, &stock, 1e-9).unwrap_err();
+        assert_eq!(e.reason, "touches or crosses the stock outline");
+        assert!((e.at.x - 10.0).abs() < 1e-12, "{e:?}");
+        let outside = Shape {
+            contours: vec![square(20.0, 2.0, 3.0)],
+        };
+        let e = check_inside(&outside, &stock, 1e-9).unwrap_err();
+        assert_eq!(e.reason, "lies outside the stock outline");
+        // A stock with a hole where the part is: the part surrounds the hole.
+        let hole = crate::contour::parallel::tests::rect(3.0, 3.0, 4.0, 4.0, false);
+        let holed = Shape {
+            contours: vec![square(0.0, 0.0, 10.0), hole],
+        };
+        let e = check_inside(&inside, &holed, 1e-9).unwrap_err();
+        assert_eq!(e.reason, "surrounds a hole of the stock outline");
+    }
 
     fn disc(cx: f64, cy: f64, r: f64, ccw: bool) -> Contour {
         let b = if ccw { 1.0 } else { -1.0 };

@@ -3,6 +3,10 @@
 //! contour-parallel baseline ([`crate::contour::parallel`]) — with the same tool, stock and
 //! stepover, verified and compared side by side (issue #6).
 //!
+//! The part is an SVG/DXF outline or the Z-section of a closed mesh (`.stl`, `.obj`, `.gltf`,
+//! `.glb`, with `z`); the stock is the part's bounding box grown by a margin or a given outline
+//! that must contain the part.
+//!
 //! Outputs (all in memory; [`write_contour_outputs`] writes them atomically): `wavelet.nc`,
 //! `contour_parallel.nc`, `compare.json`, `paths.svg`, `paths.png`.
 //!
@@ -10,7 +14,7 @@
 //! (see [`crate::contour::parallel`]) and the wavelet passes get a band of (r − s)/2 = 0.05 × D
 //! on each side of their nominal level to be simplified in.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::Serialize;
@@ -18,24 +22,60 @@ use serde::Serialize;
 use super::output::write_atomically;
 use crate::contour::geometry::{Contour, Vertex};
 use crate::contour::geometry::{Point2, Shape};
-use crate::contour::region::RegionIndex;
+use crate::contour::region::{RegionIndex, check_inside};
 use crate::contour::{
     CenterPath, ContourError, MachineParams, MultiresOptions, MultiresReport, OutlineOptions,
-    ParallelOptions, Program, clearance, contour_parallel, multires_paths, pass_spacing,
-    path_stats, read_outline, uncut_area,
+    ParallelOptions, Program, clearance, contour_parallel, mesh_section, multires_paths,
+    pass_spacing, path_stats, read_outline, uncut_area,
 };
 use crate::error::{Error, Result};
+use crate::mesh::{PrepareOptions, prepare as prepare_mesh};
+
+/// Extensions (lower case) of the part files read as meshes and cut at `--z`; every other
+/// file is read as an SVG/DXF outline.
+const MESH_EXTENSIONS: [&str; 4] = ["stl", "obj", "gltf", "glb"];
+
+/// The part and a stock outline must stay this far apart, mm (they must not touch).
+const STOCK_GAP: f64 = 1e-9;
+
+/// The stock the region to machine is cut from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StockSpec {
+    /// The part's bounding box grown by this margin, mm (≥ 0).
+    Margin(f64),
+    /// A closed outline (SVG or DXF, read like an outline part, with the same scale) that
+    /// contains the part.
+    Outline(PathBuf),
+}
+
+impl StockSpec {
+    /// The `--stock` text of this stock, for reports.
+    fn describe(&self) -> String {
+        match self {
+            StockSpec::Margin(m) => format!("margin:{m}"),
+            StockSpec::Outline(p) => format!("outline:{}", file_name(p)),
+        }
+    }
+}
 
 /// Options of [`contour_compare`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourJobOptions {
     /// Flat end mill diameter D, mm.
     pub tool_diameter: f64,
-    /// Rectangular stock: the part's bounding box grown by this margin, mm.
-    pub stock_margin: f64,
+    /// The stock: a rectangle around the part, or a given outline.
+    pub stock: StockSpec,
+    /// Height of the section plane, mm, when the part is a mesh (required then, refused for
+    /// outline files).
+    pub z: Option<f64>,
+    /// Units of a mesh part: mm, m or in.
+    pub units: String,
     /// Stepover, mm; `None` = 0.4 × D (see the module docs).
     pub stepover: Option<f64>,
-    /// Outline scale (one outline unit = `scale` mm).
+    /// Band half-width τ of the wavelet passes around their level, mm; `None` =
+    /// max(0, (r − s)/2). Wider bands give coarser passes and need adaptive curves (§3.5).
+    pub band: Option<f64>,
+    /// Outline scale (one outline unit = `scale` mm); outline files only (meshes: `units`).
     pub scale: f64,
     /// Machine parameters and the time model.
     pub machine: MachineParams,
@@ -44,12 +84,16 @@ pub struct ContourJobOptions {
 }
 
 impl ContourJobOptions {
-    /// Tool diameter and stock margin; default stepover, scale 1, default machine, timings on.
+    /// Tool diameter and stock margin; default stepover, scale 1, mm, no section plane,
+    /// default machine, timings on.
     pub fn new(tool_diameter: f64, stock_margin: f64) -> Self {
         Self {
             tool_diameter,
-            stock_margin,
+            stock: StockSpec::Margin(stock_margin),
+            z: None,
+            units: "mm".into(),
             stepover: None,
+            band: None,
             scale: 1.0,
             machine: MachineParams::default(),
             timings: true,
@@ -72,19 +116,26 @@ pub fn parse_flat_tool(spec: &str) -> Result<f64> {
     Ok(d)
 }
 
-/// Parses `margin:M` (M in mm ≥ 0) into the stock margin.
-pub fn parse_stock_margin(spec: &str) -> Result<f64> {
+/// Parses `margin:M` (M in mm ≥ 0) or `outline:FILE` (an SVG or DXF file) into the stock.
+pub fn parse_stock(spec: &str) -> Result<StockSpec> {
     let bad = || {
         Error::Job(format!(
-            "--stock {spec}: expected margin:M with M ≥ 0 mm (e.g. margin:10)"
+            "--stock {spec}: expected margin:M with M ≥ 0 mm (e.g. margin:10) or \
+             outline:FILE with an .svg or .dxf file"
         ))
     };
-    let (kind, m) = spec.split_once(':').ok_or_else(bad)?;
-    let m: f64 = m.trim().parse().map_err(|_| bad())?;
-    if kind.trim() != "margin" || !(m.is_finite() && m >= 0.0) {
-        return Err(bad());
+    let (kind, value) = spec.split_once(':').ok_or_else(bad)?;
+    match kind.trim() {
+        "margin" => {
+            let m: f64 = value.trim().parse().map_err(|_| bad())?;
+            if !(m.is_finite() && m >= 0.0) {
+                return Err(bad());
+            }
+            Ok(StockSpec::Margin(m))
+        }
+        "outline" if !value.trim().is_empty() => Ok(StockSpec::Outline(PathBuf::from(value))),
+        _ => Err(bad()),
     }
-    Ok(m)
 }
 
 /// The figures of one method in `compare.json`.
@@ -136,7 +187,11 @@ pub struct CompareReport {
     pub outline: String,
     pub tool_diameter_mm: f64,
     pub stepover_mm: f64,
-    pub stock_margin_mm: f64,
+    /// `margin:M` or `outline:FILE`, as given.
+    pub stock: String,
+    /// Height of the section plane when the part is a mesh, mm.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub section_z_mm: Option<f64>,
     pub scale: f64,
     /// (stock − part) area, mm², and that area divided by the stepover: the length a path
     /// with passes exactly one stepover apart would need, mm.
@@ -159,6 +214,12 @@ pub struct CompareReport {
 #[derive(Clone, Debug, Serialize)]
 pub struct PlannerFigures {
     pub band_tolerance_mm: f64,
+    /// Largest measured deviation of a part level's passes from its exact offset, mm.
+    pub max_pass_deviation_mm: f64,
+    /// Adaptive curves (seed 004 §3.5, eq. 3.3) inserted where consecutive part levels ended
+    /// up more than max(r, s) apart, and the offset loops they made.
+    pub adaptive_curves: usize,
+    pub adaptive_loops: usize,
     pub part_levels: usize,
     pub hull_levels: usize,
     pub hull_legs: usize,
@@ -175,6 +236,9 @@ impl From<&MultiresReport> for PlannerFigures {
     fn from(r: &MultiresReport) -> Self {
         Self {
             band_tolerance_mm: r.tolerance,
+            max_pass_deviation_mm: r.max_deviation,
+            adaptive_curves: r.adaptive_curves,
+            adaptive_loops: r.adaptive_loops,
             part_levels: r.part_levels,
             hull_levels: r.hull_levels,
             hull_legs: r.hull_legs,
@@ -223,6 +287,8 @@ struct Prepared {
     s: f64,
     row_step: f64,
     read_ms: f64,
+    /// The section height, when the part is a mesh.
+    z: Option<f64>,
 }
 
 fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
@@ -237,10 +303,11 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
             "--stepover {s}: must satisfy 0 < stepover ≤ tool diameter {d}"
         )));
     }
-    if !(opts.stock_margin.is_finite() && opts.stock_margin >= 0.0) {
+    if let Some(b) = opts.band
+        && !(b.is_finite() && b >= 0.0)
+    {
         return Err(Error::Job(format!(
-            "stock margin {}: must be ≥ 0 mm",
-            opts.stock_margin
+            "--band {b}: must be a finite number of mm ≥ 0"
         )));
     }
     let t = Instant::now();
@@ -248,9 +315,30 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
         scale: opts.scale,
         ..Default::default()
     };
-    let part = read_outline(outline, &outline_opts).map_err(|e| Error::Job(e.to_string()))?;
-    let stock = stock_around(&part, opts.stock_margin)
-        .ok_or_else(|| Error::Job(format!("{file}: the outline has no points")))?;
+    let (part, z) = read_part(outline, opts, &outline_opts)?;
+    let stock = match &opts.stock {
+        StockSpec::Margin(margin) => {
+            if !(margin.is_finite() && *margin >= 0.0) {
+                return Err(Error::Job(format!("stock margin {margin}: must be ≥ 0 mm")));
+            }
+            stock_around(&part, *margin)
+                .ok_or_else(|| Error::Job(format!("{file}: the outline has no points")))?
+        }
+        StockSpec::Outline(path) => {
+            let stock = read_outline(path, &outline_opts).map_err(|e| Error::Job(e.to_string()))?;
+            check_inside(&part, &stock, STOCK_GAP).map_err(|e| {
+                Error::Job(format!(
+                    "{}: the part {} {} at ({:.4}, {:.4}) mm; the part must lie inside the stock",
+                    file_name(path),
+                    file_name(outline),
+                    e.reason,
+                    e.at.x,
+                    e.at.y
+                ))
+            })?;
+            stock
+        }
+    };
     let bounds = stock_bounds(&stock);
     Ok(Prepared {
         file,
@@ -260,7 +348,60 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
         s,
         row_step: (bounds.1.x - bounds.0.x).max(bounds.1.y - bounds.0.y) / 4000.0,
         read_ms: ms(t),
+        z,
     })
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// The part: an SVG/DXF outline, or the section of a mesh (chosen by the extension) at
+/// `opts.z`, which a mesh needs and an outline refuses. Returns the shape and the Z used.
+fn read_part(
+    path: &Path,
+    opts: &ContourJobOptions,
+    outline_opts: &OutlineOptions,
+) -> Result<(Shape, Option<f64>)> {
+    let name = file_name(path);
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let is_mesh = ext.as_deref().is_some_and(|e| MESH_EXTENSIONS.contains(&e));
+    if !is_mesh {
+        if let Some(z) = opts.z {
+            return Err(Error::Job(format!(
+                "{name}: --z {z} applies to mesh parts (.stl, .obj, .gltf, .glb) only; an \
+                 outline file is already planar"
+            )));
+        }
+        let part = read_outline(path, outline_opts).map_err(|e| Error::Job(e.to_string()))?;
+        return Ok((part, None));
+    }
+    let Some(z) = opts.z else {
+        return Err(Error::Job(format!(
+            "{name}: a mesh part needs --z Z, the height (mm) of the plane that cuts the \
+             outline from it"
+        )));
+    };
+    if opts.scale != 1.0 {
+        return Err(Error::Job(format!(
+            "{name}: --scale applies to outline files; give a mesh's units with --units"
+        )));
+    }
+    let raw = super::load_part(path, &opts.units)?;
+    // Welding joins the triangles of STL-like files, so the section can chain them.
+    let (mesh, _) =
+        prepare_mesh(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
+            file: name.clone(),
+            reason,
+        })?;
+    let part = mesh_section(&mesh, z, outline_opts.tolerance, &name)
+        .map_err(|e| Error::Job(e.to_string()))?;
+    Ok((part, Some(z)))
 }
 
 /// Verifies and measures one path; refuses a path that cuts into the part. Returns the
@@ -306,6 +447,12 @@ fn method_figures(
     ))
 }
 
+fn multires_options(p: &Prepared, opts: &ContourJobOptions) -> MultiresOptions {
+    let mut m = MultiresOptions::new(p.r, p.s);
+    m.tolerance = opts.band;
+    m
+}
+
 /// Reads `outline` and plans, verifies and posts the multiresolution path only (no baseline):
 /// its G-code and figures.
 pub fn contour_wavelet(
@@ -313,7 +460,7 @@ pub fn contour_wavelet(
     opts: &ContourJobOptions,
 ) -> Result<(String, MethodFigures)> {
     let p = prepare(outline, opts)?;
-    let plan = multires_paths(&p.part, &p.stock, &MultiresOptions::new(p.r, p.s))
+    let plan = multires_paths(&p.part, &p.stock, &multires_options(&p, opts))
         .map_err(contour_error(&p.file))?;
     let (figures, nc, _) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;
     Ok((nc, figures))
@@ -325,7 +472,7 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
     let (file, part, stock, r, s) = (&p.file, &p.part, &p.stock, p.r, p.s);
     let t = Instant::now();
     let plan =
-        multires_paths(part, stock, &MultiresOptions::new(r, s)).map_err(contour_error(file))?;
+        multires_paths(part, stock, &multires_options(&p, opts)).map_err(contour_error(file))?;
     let t_wavelet = ms(t);
     let t = Instant::now();
     let base =
@@ -350,7 +497,8 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
             .unwrap_or_default(),
         tool_diameter_mm: 2.0 * r,
         stepover_mm: s,
-        stock_margin_mm: opts.stock_margin,
+        stock: opts.stock.describe(),
+        section_z_mm: p.z,
         scale: opts.scale,
         region_area_mm2: region,
         area_over_stepover_mm: region / s,

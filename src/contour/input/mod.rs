@@ -13,6 +13,8 @@
 //!   loops by their endpoints.
 //! * `curves` turns everything that is not a line or a circular arc (Béziers, elliptical arcs,
 //!   NURBS) into biarcs within [`OutlineOptions::tolerance`].
+//! * `mesh_section` cuts a closed triangle mesh by a plane z = Z into an outline (the region
+//!   by nesting, straight runs merged within the tolerance).
 //! * `fill` checks that contours neither cross nor overlap (exact line/arc intersections),
 //!   builds the containment tree, applies the fill rule and orients the contours.
 //!
@@ -22,6 +24,7 @@
 pub(crate) mod curves;
 mod dxf;
 mod fill;
+mod mesh_section;
 mod segmath;
 mod svg;
 
@@ -32,6 +35,7 @@ use std::path::Path;
 use crate::contour::geometry::{Point2, Shape, Vertex};
 
 pub use fill::FillRule;
+pub use mesh_section::mesh_section;
 
 /// Largest input file accepted, bytes.
 pub const MAX_FILE_BYTES: u64 = 50 * 1024 * 1024;
@@ -101,6 +105,35 @@ pub enum OutlineError {
         file: String,
         what: String,
         detail: String,
+    },
+    #[error("{file}: the plane z = {z} mm misses the part (it spans z = {zmin} … {zmax} mm)")]
+    PlaneMisses {
+        file: String,
+        z: f64,
+        zmin: f64,
+        zmax: f64,
+    },
+    #[error(
+        "{file}: the section at z = {z} mm is open: it ends at ({x:.6}, {y:.6}) mm, {gap:.6} mm \
+         from its start; the mesh is not closed there"
+    )]
+    OpenSection {
+        file: String,
+        z: f64,
+        x: f64,
+        y: f64,
+        gap: f64,
+    },
+    #[error(
+        "{file}: the plane z = {z} mm runs along a horizontal face of the part (triangle \
+         {triangle}), where the section is not defined; try a slightly different Z, e.g. \
+         --z {suggestion}"
+    )]
+    DegenerateSection {
+        file: String,
+        z: f64,
+        triangle: usize,
+        suggestion: f64,
     },
     #[error("{file}: no closed shape found{detail}")]
     NoClosedShape { file: String, detail: String },

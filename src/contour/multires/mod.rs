@@ -40,11 +40,28 @@
 //! convex, a point t from H is within r of the hull pass at any δ ∈ [t − r, t + r], and
 //! s ≤ 2r. When s ≥ r the default τ is
 //! 0 and the part levels are the exact offsets; the hull passes still simplify the roughing.
-//! The adaptive curves of §3.5 (eq. 3.2–3.3) fill the gaps that offsetting a coarse control
-//! polygon by r + e leaves; with the band construction the spacing of consecutive part levels
-//! is at most s + 2τ ≤ r by construction, so no adaptive curve is needed and none is added
-//! (the fractional levels of eq. 3.2 are in [`crate::contour::wavelet::fractional`]). The
-//! uncut area is measured by the `contour` command against the baseline's.
+//!
+//! # Adaptive curves (§3.5, eq. 3.3)
+//!
+//! The argument needs consecutive part levels no more than L = max(r, s) apart where their
+//! crossings are worst: G = s + e₁ + e₂ ≤ L, with e₁, e₂ the deviations of the two levels'
+//! passes from their exact offsets, MEASURED on the loops used (two-sided, sampled every τ/4;
+//! the largest over the loops of a level). With the default τ, e ≤ τ = (r − s)/2 gives G ≤ r
+//! and eq. 3.3's count is below one: no curve is added. With a wider band (the `tolerance`
+//! option, `--band`) the passes get coarser and G can exceed L; then
+//! `adaptive_levels` inserts n = ⌈(G − L)/(L − 2e_a)⌉ curves at fractional levels between
+//! the two (eq. 3.3, rounded up, generalised to s ≠ r and to curves with their own band
+//! e_a = min(τ, (r − s)/2)). Each is the exact offset at its fractional level, approximated by
+//! the same wavelet machinery within e_a, checked exactly like every pass, clipped and linked
+//! like the part levels. Where we depart from the seed: its adaptive curve c^{m+t} (eq. 3.2,
+//! [`crate::contour::wavelet::fractional`]) interpolates the control points of two scales of
+//! one region; our two neighbouring passes are fits of different exact offsets, with their own
+//! corners and region splits, so there are no matching control points to interpolate — the
+//! fractional LEVEL is interpolated (the offset distance), not the control points. The count
+//! is per level (the worst loop of each level decides), not per non-smooth region, so a curve
+//! is a whole offset loop, which is safe but not minimal. Measured (README): a wider band makes
+//! the coarse passes no shorter than the extra curves cost, so the default band stays.
+//! The uncut area is measured by the `contour` command against the baseline's.
 //!
 //! # Pass spacing
 //!
@@ -66,7 +83,7 @@ use crate::contour::error::{ContourError, Result};
 use crate::contour::geometry::{Contour, Point2, Shape};
 use crate::contour::parallel::{CLIP_EPS, Piece, Setup, clip_loop, link, order_pieces, setup};
 use crate::contour::region::RegionIndex;
-use crate::contour::toolpath::CenterPath;
+use crate::contour::toolpath::{CenterPath, Pass};
 use corners::CornerOptions;
 use sample::sample_closed;
 
@@ -140,6 +157,12 @@ pub struct MultiresReport {
     /// Segments of the exact offset loops and of the loops used instead (before clipping).
     pub exact_segments: usize,
     pub used_segments: usize,
+    /// Adaptive curves (§3.5): fractional levels inserted between consecutive part levels
+    /// whose gap s + e₁ + e₂ exceeds r, and the offset loops they produced (before clipping).
+    pub adaptive_curves: usize,
+    pub adaptive_loops: usize,
+    /// Largest measured deviation e of a part level's passes from its exact offset, mm.
+    pub max_deviation: f64,
 }
 
 /// The planned path, its report and the loose hull (counter-clockwise polygon).
@@ -210,7 +233,21 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     });
 
     let mut pieces: Vec<Piece> = Vec::new();
-    // Part levels, clipped to the stock and to the loose hull.
+    // Band of the adaptive curves: the default band, which keeps their own spacing within r.
+    let adaptive_band = tol.min((0.5 * (r - s)).max(0.0));
+    let ctx = LevelContext {
+        part,
+        r,
+        s,
+        opts,
+        part_index: &part_index,
+        clip_index: &clip_index,
+        hull_clip: &hull_clip,
+    };
+    // Part levels, clipped to the stock and to the loose hull; `ring` numbers the passes
+    // outward (part levels and adaptive curves) for the far-side-first ordering.
+    let mut ring = 0;
+    let mut previous = (r, 0.0);
     let mut k = 0;
     loop {
         if k > opts.max_levels {
@@ -220,32 +257,43 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
             });
         }
         let level = r + k as f64 * s;
-        let mut found = false;
-        for exact in offset_region(part, level, "part")? {
-            let used = if k == 0 || tol <= 0.0 {
-                exact.clone()
-            } else {
-                approximate_checked(&exact, level, tol, r, s, opts, &part_index, &mut report)
-            };
-            report.exact_segments += exact.vertices.len();
-            report.used_segments += used.vertices.len();
-            // Level 0 is the whole finishing pass: material within r of the part is swept by
-            // the level-r point beyond it, which may lie outside H.
-            let clips: &[(&RegionIndex, bool)] = if k == 0 {
-                &[(&clip_index, true)]
-            } else {
-                &[(&clip_index, true), (&hull_clip, true)]
-            };
-            for pass in clip_loop(&used, clips, level)? {
-                found = true;
-                pieces.push(Piece { level: k, pass });
+        // Level 0 is the whole finishing pass, exact and clipped to the stock only: material
+        // within r of the part is swept by the level-r point beyond it, which may lie
+        // outside H.
+        let (level_pieces, e) = if k == 0 {
+            ctx.level_passes(level, 0.0, false, &mut report)?
+        } else {
+            ctx.level_passes(level, tol, true, &mut report)?
+        };
+        // A missing level counts as exact: the adaptive curves still close the gap from the
+        // last level to where it would have been.
+        if k > 0 {
+            let (from, e_from) = previous;
+            let e_to = if level_pieces.is_empty() { 0.0 } else { e };
+            for u in adaptive_levels(from - e_from, level + e_to, r.max(s), adaptive_band) {
+                let (extra, _) = ctx.level_passes(u, adaptive_band, true, &mut report)?;
+                report.adaptive_curves += 1;
+                report.adaptive_loops += extra.len();
+                ring += 1;
+                pieces.extend(extra.into_iter().map(|pass| Piece { level: ring, pass }));
             }
         }
-        // The clip region (stock ∩ grown hull) is convex for a rectangular stock, so once a
-        // level misses it every farther level does too.
-        if !found {
+        // The clip region (stock ∩ grown hull) is convex for a rectangular stock, and
+        // connected for any stock around the part, so once a level misses it every farther
+        // level does too.
+        if level_pieces.is_empty() {
             break;
         }
+        if k > 0 {
+            ring += 1;
+        }
+        pieces.extend(
+            level_pieces
+                .into_iter()
+                .map(|pass| Piece { level: ring, pass }),
+        );
+        report.max_deviation = report.max_deviation.max(e);
+        previous = (level, e);
         report.part_levels += 1;
         k += 1;
     }
@@ -259,7 +307,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     let finish_zone = RegionIndex::new(&Shape {
         contours: offset_region(part, r + DUPLICATE_TOL, "part")?,
     });
-    let base = k;
+    let base = ring + 1;
     let mut m = 0;
     loop {
         if m > opts.max_levels {
@@ -305,65 +353,148 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     })
 }
 
-/// The wavelet approximation of the exact offset loop `exact` at `level`, when it passes the
-/// exact band check; else `exact`.
-#[allow(clippy::too_many_arguments)]
-fn approximate_checked(
-    exact: &Contour,
-    level: f64,
-    tol: f64,
+/// Fractional levels (distances to the part, mm) of the adaptive curves between two passes
+/// whose crossings of a part normal lie at distances ≥ `from` (the inner pass's level minus
+/// its deviation e₁) and ≤ `to` (the outer pass's level plus its deviation e₂) — seed 004
+/// §3.5, eq. 3.3.
+///
+/// A point is swept when the pass crossing its normal on the part side lies within r, so the
+/// gap G = to − from = s + e₁ + e₂ must not exceed L = max(r, s) (for s > r the baseline's own
+/// passes are s apart; only the deviations are to be made up). Eq. 3.3 counts n = (e₁ + e₂)/r
+/// curves for the seed's stepover s = r; in general n = ⌈(G − L)/(L − 2e_a)⌉ curves with a
+/// band e_a of their own close the gap (n = ⌈(e₁ + e₂)/r⌉ for exact curves and s = r: eq. 3.3
+/// rounded up): curve i at from + i·h − (2i − 1)·e_a with h = (G + 2n·e_a)/(n + 1) ≤ L, so
+/// every step from the farthest-in crossing of one curve to the farthest-out crossing of the
+/// next is h.
+fn adaptive_levels(from: f64, to: f64, limit: f64, band: f64) -> Vec<f64> {
+    let gap = to - from;
+    let reach = limit - 2.0 * band;
+    if !(gap > limit * (1.0 + 1e-9) && reach > 0.0) {
+        return Vec::new();
+    }
+    let n = ((gap - limit) / reach).ceil().max(1.0);
+    let h = (gap + 2.0 * n * band) / (n + 1.0);
+    (1..=n as usize)
+        .map(|i| from + i as f64 * h - (2 * i - 1) as f64 * band)
+        .collect()
+}
+
+/// What computing the passes of one level needs.
+struct LevelContext<'a> {
+    part: &'a Shape,
     r: f64,
     s: f64,
-    opts: &MultiresOptions,
-    part: &RegionIndex,
-    report: &mut MultiresReport,
-) -> Contour {
-    // A loop of a few lines and arcs is as simple as any approximation of it.
-    if exact.vertices.len() <= MIN_SEGMENTS_TO_SIMPLIFY {
-        report.exact_fallbacks += 1;
-        return exact.clone();
+    opts: &'a MultiresOptions,
+    part_index: &'a RegionIndex,
+    clip_index: &'a RegionIndex,
+    hull_clip: &'a RegionIndex,
+}
+
+impl LevelContext<'_> {
+    /// The passes at distance `level` from the part: its exact offset loops, approximated
+    /// within `band` (0 = exact), clipped to the stock and, with `to_hull`, to the loose hull;
+    /// and the largest measured deviation e of the loops used from the exact offset.
+    fn level_passes(
+        &self,
+        level: f64,
+        band: f64,
+        to_hull: bool,
+        report: &mut MultiresReport,
+    ) -> Result<(Vec<Pass>, f64)> {
+        let mut passes = Vec::new();
+        let mut e_max: f64 = 0.0;
+        for exact in offset_region(self.part, level, "part")? {
+            let (used, e) = if band <= 0.0 {
+                (exact.clone(), 0.0)
+            } else {
+                self.approximate_checked(&exact, level, band, report)
+            };
+            report.exact_segments += exact.vertices.len();
+            report.used_segments += used.vertices.len();
+            e_max = e_max.max(e);
+            let clips: &[(&RegionIndex, bool)] = if to_hull {
+                &[(self.clip_index, true), (self.hull_clip, true)]
+            } else {
+                &[(self.clip_index, true)]
+            };
+            passes.extend(clip_loop(&used, clips, level)?);
+        }
+        Ok((passes, e_max))
     }
-    // Sampling step: fine enough for the tolerance and for corners at the stepover's scale.
-    let step = (0.25 * s)
-        .min(exact.length() / 64.0)
-        .max(exact.length() / 20_000.0);
-    let (approx, stats) = smooth::approximate_loop(exact, tol, step, &opts.corners);
-    // Already simpler than any approximation (a few lines and arcs): keep it exact.
-    if approx.vertices.len() >= exact.vertices.len() {
-        report.exact_fallbacks += 1;
-        return exact.clone();
-    }
-    report.corners += stats.corners;
-    report.smooth_regions += stats.smooth_regions;
-    report.non_smooth_regions += stats.non_smooth_regions;
-    report.levels_dropped += stats.levels_dropped;
-    let floor = r.max(level - tol) - 1e-9;
-    let near_ok = approx.segments().all(|seg| {
-        part.boundary()
-            .nearest(&seg)
-            .is_none_or(|n| n.distance >= floor)
-    }) && approx
-        .vertices
-        .first()
-        .is_some_and(|v| !part.contains(v.point));
-    let same_turn = approx.signed_area().signum() == exact.signed_area().signum();
-    let ok = near_ok && same_turn && within(&approx, exact, tol) && within(exact, &approx, tol);
-    if ok {
-        report.wavelet_loops += 1;
-        approx
-    } else {
-        report.exact_fallbacks += 1;
-        exact.clone()
+
+    /// The wavelet approximation of the exact offset loop `exact` at `level` and its measured
+    /// deviation from it, when it passes the exact band check; else `exact` and 0.
+    fn approximate_checked(
+        &self,
+        exact: &Contour,
+        level: f64,
+        tol: f64,
+        report: &mut MultiresReport,
+    ) -> (Contour, f64) {
+        let keep_exact = |report: &mut MultiresReport| {
+            report.exact_fallbacks += 1;
+            (exact.clone(), 0.0)
+        };
+        // A loop of a few lines and arcs is as simple as any approximation of it.
+        if exact.vertices.len() <= MIN_SEGMENTS_TO_SIMPLIFY {
+            return keep_exact(report);
+        }
+        // Sampling step: fine enough for the tolerance and for corners at the stepover's
+        // scale.
+        let step = (0.25 * self.s)
+            .min(exact.length() / 64.0)
+            .max(exact.length() / 20_000.0);
+        let (approx, stats) = smooth::approximate_loop(exact, tol, step, &self.opts.corners);
+        // Already simpler than any approximation (a few lines and arcs): keep it exact.
+        if approx.vertices.len() >= exact.vertices.len() {
+            return keep_exact(report);
+        }
+        report.corners += stats.corners;
+        report.smooth_regions += stats.smooth_regions;
+        report.non_smooth_regions += stats.non_smooth_regions;
+        report.levels_dropped += stats.levels_dropped;
+        let floor = self.r.max(level - tol) - 1e-9;
+        let near_ok = approx.segments().all(|seg| {
+            self.part_index
+                .boundary()
+                .nearest(&seg)
+                .is_none_or(|n| n.distance >= floor)
+        }) && approx
+            .vertices
+            .first()
+            .is_some_and(|v| !self.part_index.contains(v.point));
+        let same_turn = approx.signed_area().signum() == exact.signed_area().signum();
+        let deviation = if near_ok && same_turn {
+            deviation(&approx, exact, tol)
+                .zip(deviation(exact, &approx, tol))
+                .map(|(a, b)| a.max(b))
+        } else {
+            None
+        };
+        match deviation {
+            Some(e) => {
+                report.wavelet_loops += 1;
+                (approx, e)
+            }
+            None => keep_exact(report),
+        }
     }
 }
 
-/// Whether every sample of `a` (every tol/4 of length) lies within `tol` of `b`.
-fn within(a: &Contour, b: &Contour, tol: f64) -> bool {
+/// The largest distance from a sample of `a` (every tol/4 of length) to `b`, when it is at
+/// most `tol`.
+fn deviation(a: &Contour, b: &Contour, tol: f64) -> Option<f64> {
     let bvh = SegmentBvh::new(b.segments().collect());
     let step = (0.25 * tol).max(a.length() / 200_000.0);
-    sample_closed(a, step)
-        .iter()
-        .all(|(p, _)| bvh.nearest_point(*p).is_some_and(|n| n.distance <= tol))
+    let mut worst: f64 = 0.0;
+    for (p, _) in sample_closed(a, step) {
+        let d = bvh.nearest_point(p)?.distance;
+        if d > tol {
+            return None;
+        }
+        worst = worst.max(d);
+    }
+    Some(worst)
 }
 
 #[cfg(test)]

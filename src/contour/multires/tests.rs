@@ -106,6 +106,18 @@ fn measure(path: &CenterPath, part: &Shape, stock: &Shape) -> Measured {
     }
 }
 
+/// No overcut, and no more uncut area than the baseline `b` up to one 0.05 mm scanline row
+/// across a stock `width` mm wide.
+fn assert_covered_as_well(m: &Measured, b: &Measured, width: f64) {
+    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
+    assert!(
+        m.uncut <= b.uncut + 0.05 * width,
+        "uncut {} vs {}",
+        m.uncut,
+        b.uncut
+    );
+}
+
 #[test]
 fn mountain_no_overcut_no_more_uncut() {
     let part = mountain();
@@ -236,16 +248,7 @@ fn options_are_validated() {
 /// within the band, and the path still never cuts the part nor leaves more material.
 #[test]
 fn many_segment_part_gets_wavelet_passes() {
-    let vertices: Vec<Vertex> = (0..360)
-        .map(|k| {
-            let a = k as f64 * std::f64::consts::TAU / 360.0;
-            let rho = 30.0 + 10.0 * (5.0 * a).sin();
-            Vertex::line(rho * a.cos(), rho * a.sin())
-        })
-        .collect();
-    let part = Shape {
-        contours: vec![Contour { vertices }],
-    };
+    let part = lobed_part();
     let stock = stock_around(&part, 8.0);
     let (r, s) = (3.0, 2.0);
     let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).expect("plan");
@@ -259,12 +262,103 @@ fn many_segment_part_gets_wavelet_passes() {
         measure(&plan.path, &part, &stock),
         measure(&base, &part, &stock),
     );
-    assert!(m.clearance >= -1e-6, "overcut {}", m.clearance);
-    assert!(
-        m.uncut <= b.uncut + 0.05 * 100.0,
-        "uncut {} vs {}",
-        m.uncut,
-        b.uncut
-    );
+    assert_covered_as_well(&m, &b, 100.0);
     assert!(m.segments < b.segments, "{} vs {}", m.segments, b.segments);
+}
+
+/// The wavy many-segment part of [`many_segment_part_gets_wavelet_passes`].
+fn lobed_part() -> Shape {
+    let vertices: Vec<Vertex> = (0..360)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 360.0;
+            let rho = 30.0 + 10.0 * (5.0 * a).sin();
+            Vertex::line(rho * a.cos(), rho * a.sin())
+        })
+        .collect();
+    Shape {
+        contours: vec![Contour { vertices }],
+    }
+}
+
+#[test]
+fn adaptive_levels_close_every_gap_to_the_limit() {
+    // No gap beyond the limit: no curve (the default band gives s + 2τ = r exactly).
+    assert!(adaptive_levels(3.0, 3.0 + 3.0, 3.0, 0.3).is_empty());
+    assert!(adaptive_levels(3.0, 5.9, 3.0, 0.0).is_empty());
+    for (from, to, limit, band) in [
+        (3.0, 7.5, 3.0, 0.0),
+        (3.0, 7.5, 3.0, 0.3),
+        (5.0, 19.0, 3.0, 0.9),
+        (2.0, 2.0 + 6.01, 3.0, 0.1),
+    ] {
+        let u = adaptive_levels(from, to, limit, band);
+        assert!(!u.is_empty());
+        // Each step from the farthest-in crossing of one curve to the farthest-out crossing
+        // of the next stays within the limit, and the levels increase.
+        let mut lows = vec![from];
+        let mut highs = Vec::new();
+        for &x in &u {
+            lows.push(x - band);
+            highs.push(x + band);
+        }
+        highs.push(to);
+        for (lo, hi) in lows.iter().zip(&highs) {
+            assert!(
+                hi - lo <= limit * (1.0 + 1e-12),
+                "{from} {to} {band}: {u:?}"
+            );
+            assert!(hi > lo);
+        }
+        // No more curves than needed: one fewer would leave a step beyond the limit.
+        let n = u.len() as f64;
+        assert!(
+            (n - 1.0) * (limit - 2.0 * band) < to - from - limit,
+            "{u:?}"
+        );
+        // Eq. 3.3 for exact curves and s = r: n = ⌈(e₁ + e₂)/r⌉.
+        if band == 0.0 {
+            let (r, e_sum) = (limit, (to - from) - limit);
+            assert_eq!(u.len(), (e_sum / r).ceil() as usize);
+        }
+    }
+}
+
+#[test]
+fn default_band_needs_no_adaptive_curve() {
+    let part = lobed_part();
+    let stock = stock_around(&part, 8.0);
+    let plan = multires_paths(&part, &stock, &MultiresOptions::new(3.0, 2.0)).expect("plan");
+    let rep = &plan.report;
+    assert_eq!(rep.adaptive_curves, 0, "{rep:?}");
+    assert!(
+        rep.max_deviation > 0.0 && rep.max_deviation <= rep.tolerance,
+        "{rep:?}"
+    );
+}
+
+/// With a band wider than (r − s)/2 the passes drift apart by more than r: the adaptive curves
+/// of eq. 3.3 fill the gaps, exactly checked like every pass — no overcut, no more uncut area
+/// than the baseline.
+#[test]
+fn wide_band_inserts_adaptive_curves_without_losing_coverage() {
+    let part = lobed_part();
+    let stock = stock_around(&part, 8.0);
+    let (r, s) = (3.0, 2.6);
+    let mut opts = MultiresOptions::new(r, s);
+    opts.tolerance = Some(1.5);
+    let plan = multires_paths(&part, &stock, &opts).expect("plan");
+    let rep = &plan.report;
+    assert!(rep.adaptive_curves > 0 && rep.adaptive_loops > 0, "{rep:?}");
+    // Beyond the default band (r − s)/2 = 0.2 mm.
+    assert!(rep.max_deviation > 0.2, "{rep:?}");
+    let base = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).expect("baseline");
+    let (m, b) = (
+        measure(&plan.path, &part, &stock),
+        measure(&base, &part, &stock),
+    );
+    eprintln!(
+        "wide band: length {:.1} vs {:.1}, segments {} vs {}, uncut {:.3} vs {:.3}, {rep:?}",
+        m.length, b.length, m.segments, b.segments, m.uncut, b.uncut
+    );
+    assert_covered_as_well(&m, &b, 100.0);
 }
