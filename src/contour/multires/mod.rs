@@ -250,13 +250,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     let mut previous = (r, 0.0);
     let mut k = 0;
     loop {
-        if k > opts.max_levels {
-            return Err(ContourError::TooManyLevels {
-                levels: opts.max_levels,
-                reached: r + k as f64 * s,
-            });
-        }
-        let level = r + k as f64 * s;
+        let level = level_distance(k, r, s, opts.max_levels)?;
         // Level 0 is the whole finishing pass, exact and clipped to the stock only: material
         // within r of the part is swept by the level-r point beyond it, which may lie
         // outside H.
@@ -310,13 +304,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     let base = ring + 1;
     let mut m = 0;
     loop {
-        if m > opts.max_levels {
-            return Err(ContourError::TooManyLevels {
-                levels: opts.max_levels,
-                reached: r + m as f64 * s,
-            });
-        }
-        let delta = r + m as f64 * s;
+        let delta = level_distance(m, r, s, opts.max_levels)?;
         let ring = hull::hull_offset(&loose, delta);
         let mut found = false;
         // Where the part lies on the hull, the first hull pass runs along the finishing pass:
@@ -495,6 +483,18 @@ fn deviation(a: &Contour, b: &Contour, tol: f64) -> Option<f64> {
         worst = worst.max(d);
     }
     Some(worst)
+}
+
+/// Distance r + k·s of level `k` from the part, refused past `max_levels` (absurd
+/// stock/stepover ratios).
+fn level_distance(k: usize, r: f64, s: f64, max_levels: usize) -> Result<f64> {
+    if k > max_levels {
+        return Err(ContourError::TooManyLevels {
+            levels: max_levels,
+            reached: r + k as f64 * s,
+        });
+    }
+    Ok(r + k as f64 * s)
 }
 
 #[cfg(test)]
