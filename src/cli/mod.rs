@@ -143,7 +143,7 @@ pub struct OffsetsArgs {
     /// Leave the timings out of offsets.json (byte-identical reports).
     #[arg(long)]
     pub no_timings: bool,
-    /// Output folder: offset-<j>.glb and offsets.json.
+    /// Output folder: `offset-<j>.glb` and `offsets.json`.
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -183,7 +183,7 @@ pub struct LevelsArgs {
     /// Leave the timings out of levels.json (byte-identical reports).
     #[arg(long)]
     pub no_timings: bool,
-    /// Output folder: level-<j>.glb and levels.json.
+    /// Output folder: `level-<j>.glb` and `levels.json`.
     #[arg(long)]
     pub out: PathBuf,
 }

@@ -1,7 +1,7 @@
 //! Collision and clearance between the tool and the part.
 //!
 //! * [`distance`]: exact f64 closest points and signed distance (the gouge guarantee);
-//! * [`tool_bodies`]: the tool assembly as parry3d shapes, tested against the part with
+//! * `tool_bodies`: the tool assembly as parry3d shapes, tested against the part with
 //!   BVH-accelerated `intersection_test` and `closest_points` (f32, with margins that cover
 //!   f32 error).
 //!

@@ -4,7 +4,7 @@
 //! non-smooth regions are then wavelet-decomposed to coarser levels (eq. 2.16) as long as the
 //! eq. 3.1 bound says the curve stays within the tolerance, smooth regions keep their fitted
 //! level (§3.3: "the smooth regions are left unchanged"); finally every Bézier span is replaced
-//! by lines and arcs (biarcs, [`crate::contour::input::curves::fit_curve`]).
+//! by lines and arcs (biarcs, `contour::input::curves::fit_curve`).
 //!
 //! The error budget of a region: sampled fit error + Σ eq. 3.1 bounds of the dropped levels
 //! ≤ ¾ tol, biarcs the rest (≥ ¼ tol). A region whose exact piece has fewer segments than its
@@ -29,7 +29,7 @@ pub struct LoopStats {
     pub corners: usize,
     pub smooth_regions: usize,
     pub non_smooth_regions: usize,
-    /// Regions kept exact: no level up to [`MAX_LEVEL`] fitted them, or the exact piece had
+    /// Regions kept exact: no level up to `MAX_LEVEL` fitted them, or the exact piece had
     /// fewer segments.
     pub exact_regions: usize,
     /// Levels removed by decomposition, over all non-smooth regions.

@@ -7,8 +7,8 @@
 //! 1. the base mesh M0 is the input simplified by topology-preserving quadric edge collapse
 //!    ([`simplify`](super::simplify())), which keeps boundaries, feature lines and genus; its
 //!    feature vertices are input vertices, so each of its sharp edges follows a *run* of input
-//!    feature edges ([`feature_lines`]), and its sharp edges cut it into the same *charts*
-//!    (smooth patches) as the input's cut the input ([`charts`]);
+//!    feature edges (`feature_lines`), and its sharp edges cut it into the same *charts*
+//!    (smooth patches) as the input's cut the input (`charts`);
 //! 2. level j+1 is the 1-to-4 split of level j ([`super::split()`], creases carried over) and
 //!    *interpolates* it: even vertices keep their places on the input; an odd
 //!    vertex on a sharp edge goes to the arc-length middle of the edge's run, one on a smooth
