@@ -34,15 +34,27 @@ fn points(path: &Path) -> (RayScene, Vec<SurfacePoint>) {
 
 fn parts() -> Vec<(String, PathBuf)> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let mut parts = vec![("sample_impeller".to_string(), root.join("data/impeller.glb"))];
+    let mut parts = vec![(
+        "sample_impeller".to_string(),
+        root.join("data/impeller.glb"),
+    )];
     let shared = std::env::var_os("WAVEMILL_TESTDATA")
         .map(PathBuf::from)
         .unwrap_or_else(|| root.join("../shared/testdata"))
         .join("meshes");
     for (short, file) in [
-        ("compressor", "impeller_compressor_splitter__omorellAUS_Impellor-V3.stl"),
-        ("blower", "impeller_blower_9blade__necro-nemesis_aero2205.stl"),
-        ("blower_tall", "impeller_blower_9blade_tall__necro-nemesis_aero2205_aggressive.stl"),
+        (
+            "compressor",
+            "impeller_compressor_splitter__omorellAUS_Impellor-V3.stl",
+        ),
+        (
+            "blower",
+            "impeller_blower_9blade__necro-nemesis_aero2205.stl",
+        ),
+        (
+            "blower_tall",
+            "impeller_blower_9blade_tall__necro-nemesis_aero2205_aggressive.stl",
+        ),
     ] {
         if shared.join(file).is_file() {
             parts.push((short.to_string(), shared.join(file)));

@@ -59,7 +59,10 @@ fn check(path: &Path) {
         .zip(&brute.front_facing)
         .filter(|(m, f)| m.count() > 0 && m.count() < **f)
         .count();
-    assert!(partly * 10 > points.len(), "{name}: only {partly} partly visible points");
+    assert!(
+        partly * 10 > points.len(),
+        "{name}: only {partly} partly visible points"
+    );
     // Same input, same maps: rayon does not change the answer.
     let again = visibility_hierarchical(&scene, &set, &points, &options).unwrap();
     assert_eq!(again, hier);

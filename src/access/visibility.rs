@@ -273,10 +273,10 @@ fn hierarchical_map(
         border.clear();
         border.extend((0..coarse).map(|j| {
             front[j]
-                && set
-                    .neighbours(k - 1, j)
-                    .iter()
-                    .any(|&m| map.contains(m as usize) != map.contains(j))
+                && set.neighbours(k - 1, j).iter().any(|&m| {
+                    let m = m as usize;
+                    front[m] && map.contains(m) != map.contains(j)
+                })
         }));
         for i in coarse..set.count(k) {
             if !front[i] {

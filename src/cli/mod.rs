@@ -551,7 +551,8 @@ fn levels(args: &LevelsArgs) -> Result<()> {
 
 /// `--tool ball:D`: the job's ball diameter, with flutes and shank at least as long and wide.
 fn set_tool(job: &mut Job, spec: &str) -> Result<()> {
-    let Cutter::Ball { diameter, .. } = parse_cutter(spec).map_err(|e| Error::Job(e.to_string()))?;
+    let Cutter::Ball { diameter, .. } =
+        parse_cutter(spec).map_err(|e| Error::Job(e.to_string()))?;
     job.tool.diameter = diameter;
     job.tool.flute_length = job.tool.flute_length.max(diameter);
     job.tool.shank_diameter = job.tool.shank_diameter.max(diameter);

@@ -171,8 +171,8 @@ pub fn access(
         })
         .collect();
     let t = Instant::now();
-    let maps = visibility_hierarchical(&scene, &set, &points, &visibility)
-        .map_err(visibility_error)?;
+    let maps =
+        visibility_hierarchical(&scene, &set, &points, &visibility).map_err(visibility_error)?;
     let hierarchical_ms = ms(t);
 
     let t = Instant::now();
@@ -192,7 +192,13 @@ pub fn access(
         .maps
         .iter()
         .zip(&maps.front_facing)
-        .map(|(m, &f)| if f == 0 { 0.0 } else { m.count() as f64 / f as f64 })
+        .map(|(m, &f)| {
+            if f == 0 {
+                0.0
+            } else {
+                m.count() as f64 / f as f64
+            }
+        })
         .collect();
     let mut colours = vec![heat(0.0); part.positions.len()];
     for (&v, &f) in vertices.iter().zip(&fractions) {
@@ -205,8 +211,8 @@ pub fn access(
     let t = Instant::now();
     let (query_csv, query_summary) = match query {
         Some(q) => {
-            let (csv, summary) = query_points(&part, &scene, &set, &visibility, job, q)
-                .map_err(|e| match e {
+            let (csv, summary) =
+                query_points(&part, &scene, &set, &visibility, job, q).map_err(|e| match e {
                     Error::Job(m) => Error::Job(format!("query: {m}")),
                     other => other,
                 })?;
@@ -241,7 +247,11 @@ pub fn access(
             },
         },
         visible_fraction: Spread {
-            min: fractions.iter().copied().fold(f64::INFINITY, f64::min).min(1.0),
+            min: fractions
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min)
+                .min(1.0),
             mean: fractions.iter().sum::<f64>() / fractions.len().max(1) as f64,
             max: fractions.iter().copied().fold(0.0, f64::max),
         },
