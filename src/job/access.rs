@@ -157,7 +157,12 @@ pub fn access(
     let set = DirectionSet::new(level);
     let visibility = VisibilityOptions::default()
         .with_level(level)
-        .with_start_level(level.min(VisibilityOptions::default().start_level));
+        // The default coarse set (162), or one level below K when K is that small.
+        .with_start_level(
+            level
+                .saturating_sub(1)
+                .min(VisibilityOptions::default().start_level),
+        );
     let visibility_error = |e: crate::access::VisibilityError| Error::Job(format!("{e}"));
     let normals = part.vertex_normals();
     let vertices: Vec<usize> = (0..part.positions.len())
