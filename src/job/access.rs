@@ -469,9 +469,14 @@ mod tests {
 
     #[test]
     fn heat_map_runs_red_to_green() {
-        assert_eq!(heat(0.0)[..3], [0.8, 0.08, 0.06]);
-        assert_eq!(heat(1.0)[..3], [0.1, 0.7, 0.2]);
-        assert_eq!(heat(0.5), heat(0.5));
+        let close = |a: [f32; 4], b: [f32; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
+        assert!(close(heat(0.0), [0.8, 0.08, 0.06]));
+        assert!(close(heat(0.5), [0.95, 0.85, 0.1]));
+        assert!(close(heat(1.0), [0.1, 0.7, 0.2]));
+        // Green rises and red falls monotonically along the ramp.
+        let ramp: Vec<[f32; 4]> = (0..=10).map(|k| heat(k as f64 / 10.0)).collect();
+        assert!(ramp.windows(2).skip(5).all(|w| w[1][0] <= w[0][0]));
+        assert!(ramp.windows(2).take(5).all(|w| w[1][1] >= w[0][1]));
         assert!(heat(2.0) == heat(1.0) && heat(-1.0) == heat(0.0));
     }
 }
