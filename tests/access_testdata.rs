@@ -10,7 +10,7 @@ use std::path::Path;
 
 use common::{repo_file, testdata};
 use wavemill::access::{
-    DirectionSet, RayScene, SurfacePoint, VisibilityOptions, visibility_brute_force,
+    DirectionSet, RayScene, SurfacePoint, VisibilityOptions, vertex_points, visibility_brute_force,
     visibility_hierarchical,
 };
 use wavemill::job;
@@ -21,16 +21,9 @@ use wavemill::mesh::{PrepareOptions, prepare};
 fn sample_points(path: &Path, wanted: usize) -> (RayScene, Vec<SurfacePoint>) {
     let raw = job::load_part(path, "mm").unwrap();
     let (mesh, _) = prepare(&raw.mesh, &PrepareOptions::default()).unwrap();
-    let normals = mesh.vertex_normals();
-    let stride = (mesh.positions.len() / wanted).max(1);
-    let points = (0..mesh.positions.len())
-        .step_by(stride)
-        .filter(|&v| normals[v].norm() > 0.5)
-        .map(|v| SurfacePoint {
-            point: mesh.positions[v],
-            normal: normals[v],
-        })
-        .collect();
+    let (_, all) = vertex_points(&mesh);
+    let stride = (all.len() / wanted).max(1);
+    let points = all.into_iter().step_by(stride).collect();
     (RayScene::new(&mesh), points)
 }
 

@@ -279,17 +279,20 @@ fn access_writes_maps_statistics_and_query_answers() {
     // A point far above the part looking up and one far below it looking down: each sees its
     // whole open hemisphere.
     std::fs::write(&query, "x,y,z,nx,ny,nz\n0,0,500,0,0,1\n0,0,-500,0,0,-1\n").unwrap();
-    let run = wavemill(&[
-        "access",
-        part,
-        "--directions",
-        "162",
-        "--query",
-        query.to_str().unwrap(),
-        "--no-timings",
-        "--out",
-        out,
-    ]);
+    let query_run = |to: &str| {
+        wavemill(&[
+            "access",
+            part,
+            "--directions",
+            "162",
+            "--query",
+            query.to_str().unwrap(),
+            "--no-timings",
+            "--out",
+            to,
+        ])
+    };
+    let run = query_run(out);
     assert_eq!(
         run.status.code(),
         Some(0),
@@ -329,17 +332,7 @@ fn access_writes_maps_statistics_and_query_answers() {
     );
     // Identical bytes on a second run.
     let again = temp_dir("access-again");
-    let run = wavemill(&[
-        "access",
-        part,
-        "--directions",
-        "162",
-        "--query",
-        query.to_str().unwrap(),
-        "--no-timings",
-        "--out",
-        again.to_str().unwrap(),
-    ]);
+    let run = query_run(again.to_str().unwrap());
     assert_eq!(run.status.code(), Some(0));
     for f in ["access.glb", "access.json", "query.csv"] {
         assert_eq!(

@@ -20,8 +20,8 @@ pub use directions::{
     BadDirectionCount, DirectionSet, LEVEL_COUNTS, MAX_LEVEL, VisibilityMap, level_for_count,
 };
 pub use visibility::{
-    PointMaps, SurfacePoint, VisibilityError, VisibilityOptions, visibility_brute_force,
-    visibility_hierarchical,
+    PointMaps, SurfacePoint, VisibilityError, VisibilityOptions, vertex_points,
+    visibility_brute_force, visibility_hierarchical,
 };
 
 use glam::Vec3A;

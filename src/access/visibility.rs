@@ -87,6 +87,22 @@ pub enum VisibilityError {
     Lift(f64),
 }
 
+/// The vertices of `mesh` whose area-weighted normal is defined, as surface points, with
+/// their vertex indices.
+pub fn vertex_points(mesh: &crate::mesh::Mesh) -> (Vec<usize>, Vec<SurfacePoint>) {
+    let normals = mesh.vertex_normals();
+    (0..mesh.positions.len())
+        .filter(|&v| normals[v].norm() > 0.5)
+        .map(|v| {
+            let p = SurfacePoint {
+                point: mesh.positions[v],
+                normal: normals[v],
+            };
+            (v, p)
+        })
+        .unzip()
+}
+
 /// One map per point, over the `count(level)` directions of the set.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointMaps {

@@ -22,7 +22,7 @@ use serde::Serialize;
 use super::config::Job;
 use super::output::write_atomically;
 use crate::access::{
-    DirectionSet, RayScene, SurfacePoint, VisibilityOptions, level_for_count,
+    DirectionSet, RayScene, SurfacePoint, VisibilityOptions, level_for_count, vertex_points,
     visibility_brute_force, visibility_hierarchical,
 };
 use crate::collide::{Margins, PartCollider, PreparedTool};
@@ -164,17 +164,7 @@ pub fn access(
                 .min(VisibilityOptions::default().start_level),
         );
     let visibility_error = |e: crate::access::VisibilityError| Error::Job(format!("{e}"));
-    let normals = part.vertex_normals();
-    let vertices: Vec<usize> = (0..part.positions.len())
-        .filter(|&v| normals[v].norm() > 0.5)
-        .collect();
-    let points: Vec<SurfacePoint> = vertices
-        .iter()
-        .map(|&v| SurfacePoint {
-            point: part.positions[v],
-            normal: normals[v],
-        })
-        .collect();
+    let (vertices, points) = vertex_points(&part);
     let t = Instant::now();
     let maps =
         visibility_hierarchical(&scene, &set, &points, &visibility).map_err(visibility_error)?;
