@@ -84,6 +84,18 @@ fn visibility(c: &mut Criterion) {
             hier.rays_cast as f64 / hier_s / 1e6,
             brute.rays_cast as f64 / brute_s / 1e6,
         );
+        // A coarser start (42 directions) for comparison: fewer rays, more risk of missing
+        // narrow windows.
+        let coarser = options.clone().with_start_level(1);
+        let t = Instant::now();
+        let start1 = visibility_hierarchical(&scene, &set, &points, &coarser).unwrap();
+        let start1_s = t.elapsed().as_secs_f64();
+        println!(
+            "{name}: start at 42 directions: agreement {:.4} %, rays {}, {:.2}x faster than brute force",
+            100.0 * start1.agreement(&brute),
+            start1.rays_cast,
+            brute_s / start1_s
+        );
         g.throughput(Throughput::Elements(points.len() as u64));
         g.bench_function(format!("{name}_hierarchical"), |b| {
             b.iter(|| visibility_hierarchical(&scene, &set, &points, &options).unwrap())
