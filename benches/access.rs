@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use wavemill::access::{
-    DirectionSet, RayScene, SurfacePoint, VisibilityOptions, vertex_points, visibility_brute_force,
-    visibility_hierarchical,
+    DirectionSet, RayScene, Refine, SurfacePoint, VisibilityOptions, vertex_points,
+    visibility_brute_force, visibility_hierarchical,
 };
 use wavemill::job;
 use wavemill::mesh::{PrepareOptions, prepare};
@@ -84,18 +84,25 @@ fn visibility(c: &mut Criterion) {
             hier.rays_cast as f64 / hier_s / 1e6,
             brute.rays_cast as f64 / brute_s / 1e6,
         );
-        // A coarser start (42 directions) for comparison: fewer rays, more risk of missing
-        // narrow windows.
-        let coarser = options.clone().with_start_level(1);
-        let t = Instant::now();
-        let start1 = visibility_hierarchical(&scene, &set, &points, &coarser).unwrap();
-        let start1_s = t.elapsed().as_secs_f64();
-        println!(
-            "{name}: start at 42 directions: agreement {:.4} %, rays {}, {:.2}x faster than brute force",
-            100.0 * start1.agreement(&brute),
-            start1.rays_cast,
-            brute_s / start1_s
-        );
+        // Other refinement choices, for comparison: a coarser start (42 directions) and the
+        // more cautious parent-ring rule.
+        for (label, other) in [
+            ("start at 42", options.clone().with_start_level(1)),
+            (
+                "parent rings",
+                options.clone().with_refine(Refine::ParentRings),
+            ),
+        ] {
+            let t = Instant::now();
+            let maps = visibility_hierarchical(&scene, &set, &points, &other).unwrap();
+            let seconds = t.elapsed().as_secs_f64();
+            println!(
+                "{name}: {label}: agreement {:.4} %, rays {}, {:.2}x faster than brute force",
+                100.0 * maps.agreement(&brute),
+                maps.rays_cast,
+                brute_s / seconds
+            );
+        }
         g.throughput(Throughput::Elements(points.len() as u64));
         g.bench_function(format!("{name}_hierarchical"), |b| {
             b.iter(|| visibility_hierarchical(&scene, &set, &points, &options).unwrap())

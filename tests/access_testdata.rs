@@ -10,8 +10,8 @@ use std::path::Path;
 
 use common::{repo_file, testdata};
 use wavemill::access::{
-    DirectionSet, RayScene, SurfacePoint, VisibilityOptions, vertex_points, visibility_brute_force,
-    visibility_hierarchical,
+    DirectionSet, RayScene, Refine, SurfacePoint, VisibilityOptions, vertex_points,
+    visibility_brute_force, visibility_hierarchical,
 };
 use wavemill::job;
 use wavemill::mesh::{PrepareOptions, prepare};
@@ -56,6 +56,10 @@ fn check(path: &Path) {
         partly * 10 > points.len(),
         "{name}: only {partly} partly visible points"
     );
+    // The more cautious rule agrees at least as well here.
+    let rings = options.clone().with_refine(Refine::ParentRings);
+    let cautious = visibility_hierarchical(&scene, &set, &points, &rings).unwrap();
+    assert!(cautious.agreement(&brute) >= 0.999, "{name}: parent rings");
     // Same input, same maps: rayon does not change the answer.
     let again = visibility_hierarchical(&scene, &set, &points, &options).unwrap();
     assert_eq!(again, hier);

@@ -39,6 +39,9 @@ pub struct DirectionSet {
     directions: Vec<Vector3>,
     /// For direction `i ≥ 12`: the two directions of the level below whose edge it splits.
     parents: Vec<[u32; 2]>,
+    /// For direction `i ≥ 12`: the two directions of the level below opposite that edge (the
+    /// third corners of the two triangles the edge bounds).
+    opposite: Vec<[u32; 2]>,
     /// Per level, per direction of that level: its neighbours on that level's sphere mesh,
     /// sorted by index.
     neighbours: Vec<Vec<Vec<u32>>>,
@@ -89,6 +92,7 @@ impl DirectionSet {
             [9, 8, 1],
         ];
         let mut parents = Vec::new();
+        let mut opposite: Vec<[u32; 2]> = Vec::new();
         let mut neighbours = vec![neighbours_of(&faces, directions.len())];
         for _ in 0..level {
             let mut midpoint: HashMap<(u32, u32), u32> = HashMap::new();
@@ -102,18 +106,37 @@ impl DirectionSet {
                 })
             };
             let mut finer = Vec::with_capacity(faces.len() * 4);
+            let mut across = Vec::with_capacity(faces.len() * 3);
             for &[a, b, c] in &faces {
                 let ab = split(a, b, &mut directions);
                 let bc = split(b, c, &mut directions);
                 let ca = split(c, a, &mut directions);
                 finer.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+                across.extend([(ab, c), (bc, a), (ca, b)]);
             }
+            // Each edge bounds two triangles: its midpoint has one opposite corner in each.
+            let first = LEVEL_COUNTS[0] + opposite.len();
+            opposite.resize(directions.len() - LEVEL_COUNTS[0], [u32::MAX; 2]);
+            for (mid, corner) in across {
+                let slot = &mut opposite[mid as usize - LEVEL_COUNTS[0]];
+                if slot[0] == u32::MAX {
+                    slot[0] = corner;
+                } else {
+                    slot[1] = corner;
+                }
+            }
+            debug_assert!(
+                opposite[first - LEVEL_COUNTS[0]..]
+                    .iter()
+                    .all(|o| o[1] != u32::MAX)
+            );
             faces = finer;
             neighbours.push(neighbours_of(&faces, directions.len()));
         }
         Self {
             directions,
             parents,
+            opposite,
             neighbours,
         }
     }
@@ -143,6 +166,14 @@ impl DirectionSet {
     pub fn parents(&self, i: usize) -> Option<[u32; 2]> {
         i.checked_sub(LEVEL_COUNTS[0])
             .and_then(|k| self.parents.get(k).copied())
+    }
+
+    /// The two directions of level k − 1 opposite the edge direction `i` (added at level
+    /// k ≥ 1) splits: with its parents, the corners of the two coarse triangles it lies in.
+    /// `None` for the 12 icosahedron vertices.
+    pub fn opposite(&self, i: usize) -> Option<[u32; 2]> {
+        i.checked_sub(LEVEL_COUNTS[0])
+            .and_then(|k| self.opposite.get(k).copied())
     }
 
     /// Neighbours of direction `i` on the sphere mesh of `level` (`i < count(level)`).
@@ -361,6 +392,13 @@ mod tests {
                 assert!(set.neighbours(level - 1, a as usize).contains(&b));
                 let mid = (set.directions()[a as usize] + set.directions()[b as usize]).normalize();
                 assert!((mid - set.directions()[i]).norm() < 1e-12);
+                // The opposite corners are the parents' two common neighbours.
+                let [c, d] = set.opposite(i).unwrap();
+                for o in [c, d] {
+                    assert!(set.neighbours(level - 1, a as usize).contains(&o));
+                    assert!(set.neighbours(level - 1, b as usize).contains(&o));
+                }
+                assert_ne!(c, d);
                 // On its own level, the child neighbours both parents.
                 assert!(set.neighbours(level, i).contains(&a));
                 assert!(set.neighbours(level, i).contains(&b));
@@ -375,6 +413,7 @@ mod tests {
             }
         }
         assert_eq!(set.parents(5), None);
+        assert_eq!(set.opposite(11), None);
     }
 
     #[test]

@@ -20,7 +20,7 @@ pub use directions::{
     BadDirectionCount, DirectionSet, LEVEL_COUNTS, MAX_LEVEL, VisibilityMap, level_for_count,
 };
 pub use visibility::{
-    PointMaps, SurfacePoint, VisibilityError, VisibilityOptions, vertex_points,
+    PointMaps, Refine, SurfacePoint, VisibilityError, VisibilityOptions, vertex_points,
     visibility_brute_force, visibility_hierarchical,
 };
 

@@ -226,7 +226,7 @@ pub fn access(
         skipped_vertices: part.positions.len() - points.len(),
         directions: options.directions,
         start_directions: set.count(visibility.start_level),
-        lift_mm: 1e-4 * scene.diagonal(),
+        lift_mm: visibility.lift_for(&scene),
         rays: RayCounts {
             hierarchical: maps.rays_cast,
             brute_force: brute_force_rays,
