@@ -31,6 +31,7 @@ fn every_subcommand_has_help() {
         &["levels", "--help"],
         &["offsets", "--help"],
         &["plan", "--help"],
+        &["access", "--help"],
     ] {
         let out = wavemill(sub);
         assert_eq!(out.status.code(), Some(0), "{sub:?}");
@@ -327,4 +328,123 @@ fn offsets_writes_verified_shapes_identically_for_any_thread_count() {
     for d in [one, two] {
         std::fs::remove_dir_all(&d).unwrap();
     }
+}
+
+/// `access` on the sample impeller: heat-map GLB with a colour per vertex, statistics, and a
+/// query CSV whose counts match the closed-form expectation (a point far above the part sees
+/// its whole open hemisphere); bad query files and K are named.
+#[test]
+fn access_writes_maps_statistics_and_query_answers() {
+    let dir = temp_dir("access");
+    let out = dir.to_str().unwrap();
+    let part = repo_file("data/impeller.glb");
+    let part = part.to_str().unwrap();
+    std::fs::create_dir_all(&dir).unwrap();
+    let query = dir.join("points.csv");
+    // A point far above the part looking up and one far below it looking down: each sees its
+    // whole open hemisphere.
+    std::fs::write(&query, "x,y,z,nx,ny,nz\n0,0,500,0,0,1\n0,0,-500,0,0,-1\n").unwrap();
+    let query_run = |to: &str| {
+        wavemill(&[
+            "access",
+            part,
+            "--directions",
+            "162",
+            "--query",
+            query.to_str().unwrap(),
+            "--no-timings",
+            "--out",
+            to,
+        ])
+    };
+    let run = query_run(out);
+    assert_eq!(
+        run.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("access.json")).unwrap()).unwrap();
+    assert_eq!(report["directions"], 162);
+    assert!(report.get("timings_ms").is_none());
+    assert!(report["agreement"]["percent"].as_f64().unwrap() >= 99.9);
+    let rays = &report["rays"];
+    assert!(rays["hierarchical"].as_u64().unwrap() < rays["brute_force"].as_u64().unwrap());
+    let glb = std::fs::read(dir.join("access.glb")).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    assert!(String::from_utf8_lossy(&glb).contains("COLOR_0"));
+    let csv = std::fs::read_to_string(dir.join("query.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("x,y,z,visible,total,axis_i,axis_j,axis_k")
+    );
+    // Directions on the equator z = 0 face neither way; count the open hemispheres from the set.
+    let set = wavemill::access::DirectionSet::new(2);
+    let up = set.directions().iter().filter(|d| d.z > 0.0).count();
+    let down = set.directions().iter().filter(|d| d.z < 0.0).count();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[0][3], up.to_string());
+    assert_eq!(rows[1][3], down.to_string());
+    assert!(rows.iter().all(|r| r[4] == "162"));
+    // Far from the part nothing collides: the axis is the preferred one, leaning 10° toward +X.
+    let axis: Vec<f64> = rows[0][5..8].iter().map(|v| v.parse().unwrap()).collect();
+    assert!(
+        (axis[2] - 10f64.to_radians().cos()).abs() < 1e-5 && axis[0] > 0.17,
+        "{axis:?}"
+    );
+    // Identical bytes on a second run.
+    let again = temp_dir("access-again");
+    let run = query_run(again.to_str().unwrap());
+    assert_eq!(run.status.code(), Some(0));
+    for f in ["access.glb", "access.json", "query.csv"] {
+        assert_eq!(
+            std::fs::read(dir.join(f)).unwrap(),
+            std::fs::read(again.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+
+    let fails = |args: &[&str], needles: &[&str]| {
+        let r = wavemill(args);
+        assert_eq!(r.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {err}");
+        }
+    };
+    fails(
+        &["access", part, "--directions", "100", "--out", out],
+        &["100", "10242"],
+    );
+    for (text, needles) in [
+        ("x,y,z,nx,ny\n1,2,3,0,0\n", &["bad.csv", "nz"][..]),
+        (
+            "x,y,z,nx,ny,nz\n1,2,abc,0,0,1\n",
+            &["bad.csv", "line 2", "abc"],
+        ),
+        (
+            "x,y,z,nx,ny,nz\n1,2,3,0,0,0\n",
+            &["bad.csv", "line 2", "zero"],
+        ),
+    ] {
+        let bad = dir.join("bad.csv");
+        std::fs::write(&bad, text).unwrap();
+        fails(
+            &[
+                "access",
+                part,
+                "--query",
+                bad.to_str().unwrap(),
+                "--out",
+                out,
+            ],
+            needles,
+        );
+    }
+    fails(&["access", "no/such.stl", "--out", out], &["no/such.stl"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&again).unwrap();
 }

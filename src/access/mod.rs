@@ -1,9 +1,28 @@
 //! Accessibility: from which directions can a point of the part be seen.
 //!
-//! For now this is the ray test the tool-axis choice screens candidates with: a ray from a
-//! point along a direction escapes the part. The visibility maps on the sphere (DESIGN.md §3.5)
-//! build on it. Rays run on an obvhs compressed wide BVH in f32, relative to the part centre.
-//! This is one of the two modules where glam types exist; nothing glam leaves it.
+//! DESIGN.md §3.5 and seed 004 ch. 5 step 4 (Chen & Woo visibility maps):
+//!
+//! * [`RayScene`]: the ray test everything stands on — a ray from a point along a direction
+//!   escapes the part. Rays run on an obvhs compressed wide BVH in f32, relative to the part
+//!   centre. This is one of the two modules where glam types exist; nothing glam leaves it.
+//! * [`directions`]: near-uniform nested direction sets (subdivided icosahedron, 12 … 10242)
+//!   and visibility maps as bitsets, intersected into region maps.
+//! * [`visibility`]: per-point maps, by brute force or coarse-to-fine over the direction
+//!   hierarchy (the hierarchy's speed-up; measured in `benches/access.rs`).
+//!
+//! The tool-axis choice (`orient`) still screens its candidates with single rays; accessibility
+//! for a whole tool assembly is the exact body test in `collide`.
+
+pub mod directions;
+pub mod visibility;
+
+pub use directions::{
+    BadDirectionCount, DirectionSet, LEVEL_COUNTS, MAX_LEVEL, VisibilityMap, level_for_count,
+};
+pub use visibility::{
+    PointMaps, Refine, SurfacePoint, VisibilityError, VisibilityOptions, vertex_points,
+    visibility_brute_force, visibility_hierarchical,
+};
 
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
@@ -21,11 +40,14 @@ pub struct RayScene {
     /// Triangles in the BVH's leaf order.
     leaf_triangles: Vec<Triangle>,
     origin: Point3,
+    /// Bounding-box diagonal of the part, mm: the scale default tolerances follow.
+    diagonal: f64,
 }
 
 impl RayScene {
     pub fn new(mesh: &Mesh) -> Self {
-        let origin = mesh.aabb().center();
+        let aabb = mesh.aabb();
+        let origin = aabb.center();
         let tris: Vec<Triangle> = (0..mesh.triangles.len())
             .map(|t| {
                 let [a, b, c] = mesh.corners(t).map(|p| to_f32a(&(p - origin)));
@@ -50,7 +72,13 @@ impl RayScene {
             bvh,
             leaf_triangles,
             origin,
+            diagonal: aabb.diagonal(),
         }
+    }
+
+    /// The part's bounding-box diagonal, mm.
+    pub fn diagonal(&self) -> f64 {
+        self.diagonal
     }
 
     /// True when the ray from `from` along unit `direction` meets no triangle within

@@ -48,12 +48,40 @@ pub enum Command {
     Subdivide(SubdivideArgs),
     /// Remesh a part to a rough-to-fine hierarchy, analyse it with wavelets, write every level.
     Levels(LevelsArgs),
+    /// Visibility maps: from which directions each point of the part can be seen (heat-map GLB,
+    /// statistics), and for query points the visible count and the tool axis.
+    Access(AccessArgs),
     /// 2.5D profile: multiresolution wavelet + loose convex hull paths (seed 004 ch. 3–4),
     /// verified, as G-code; with --compare also the contour-parallel baseline side by side.
     Contour(ContourArgs),
     /// Build the nested rough-to-fine intermediate shapes (offsets of the levels that never
     /// overcut the part), verify them against the part and write them.
     Offsets(OffsetsArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct AccessArgs {
+    /// Part mesh (.stl, .obj, .gltf, .glb).
+    pub part: PathBuf,
+    /// Size K of the direction set (subdivided icosahedron): 12, 42, 162, 642, 2562 or 10242.
+    #[arg(long, default_value_t = 642)]
+    pub directions: usize,
+    /// Cutter for the query axes, e.g. `ball:6` (diameter in mm) [default: the job default].
+    #[arg(long)]
+    pub tool: Option<String>,
+    /// Query points: CSV with a header x,y,z,nx,ny,nz; writes query.csv with, per point, the
+    /// visible directions, K and the chosen tool axis (feed +X projected into the tangent plane).
+    #[arg(long)]
+    pub query: Option<PathBuf>,
+    /// Units of the part file: mm, m or in.
+    #[arg(long, default_value = "mm")]
+    pub units: String,
+    /// Leave the run-dependent timings out of access.json (byte-identical reports).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder: access.glb, access.json and, with --query, query.csv.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -294,6 +322,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Levels(a) => levels(&a),
         Command::Contour(a) => contour(&a),
         Command::Offsets(a) => offsets(&a),
+        Command::Access(a) => access(&a),
     };
     match result {
         Ok(()) => 0,
@@ -700,17 +729,74 @@ fn levels(args: &LevelsArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--tool ball:D`: the job's ball diameter, with flutes and shank at least as long and wide.
+fn set_tool(job: &mut Job, spec: &str) -> Result<()> {
+    let Cutter::Ball { diameter, .. } =
+        parse_cutter(spec).map_err(|e| Error::Job(e.to_string()))?;
+    job.tool.diameter = diameter;
+    job.tool.flute_length = job.tool.flute_length.max(diameter);
+    job.tool.shank_diameter = job.tool.shank_diameter.max(diameter);
+    Ok(())
+}
+
+fn access(args: &AccessArgs) -> Result<()> {
+    let mut job = Job::default();
+    if let Some(spec) = &args.tool {
+        set_tool(&mut job, spec)?;
+    }
+    crate::access::level_for_count(args.directions)
+        .map_err(|e| Error::Job(format!("--directions: {e}")))?;
+    let query = match &args.query {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+                path: path.display().to_string(),
+                source,
+            })?;
+            Some(job::parse_query_csv(&text, &path.display().to_string())?)
+        }
+        None => None,
+    };
+    let name = args.part.display().to_string();
+    let raw = job::load_part(&args.part, &args.units)?;
+    let options = job::AccessOptions {
+        directions: args.directions,
+        timings: !args.no_timings,
+        ..Default::default()
+    };
+    let output = job::access(&raw, &name, &job, &options, query.as_deref())?;
+    job::write_access_outputs(&args.out, &output)?;
+    let r = &output.report;
+    say!(
+        "{name}: {} points x {} directions, {} rays ({:.1}x fewer than brute force's {}), agreement {:.3} % on {} points, visible {:.0} % on average -> {}",
+        r.points,
+        r.directions,
+        r.rays.hierarchical,
+        r.rays.saving,
+        r.rays.brute_force,
+        r.agreement.percent,
+        r.agreement.points_checked,
+        100.0 * r.visible_fraction.mean,
+        args.out.display()
+    );
+    if let Some(q) = &r.query {
+        say!(
+            "  {} query points, {} without an axis ({}) -> {}",
+            q.points,
+            q.without_axis,
+            q.tool,
+            args.out.join("query.csv").display()
+        );
+    }
+    Ok(())
+}
+
 fn plan(args: &PlanArgs) -> Result<()> {
     let mut job = match &args.job {
         Some(path) => Job::load(path).map_err(Error::Job)?,
         None => Job::default(),
     };
     if let Some(spec) = &args.tool {
-        let Cutter::Ball { diameter, .. } =
-            parse_cutter(spec).map_err(|e| Error::Job(e.to_string()))?;
-        job.tool.diameter = diameter;
-        job.tool.flute_length = job.tool.flute_length.max(diameter);
-        job.tool.shank_diameter = job.tool.shank_diameter.max(diameter);
+        set_tool(&mut job, spec)?;
     }
     if let Some(u) = &args.units {
         job.part.units = Some(u.clone());

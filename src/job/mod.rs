@@ -1,8 +1,11 @@
 //! Jobs: the job file, and the pipeline that wires the stages together into a plan.
 //!
+//! [`access`] computes the visibility maps `wavemill access` writes.
+//!
 //! [`plan`] is what `wavemill plan` runs and what other planners call: it takes a raw part mesh
 //! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
 
+mod access;
 mod config;
 mod contour;
 mod contour_picture;
@@ -14,6 +17,9 @@ mod preview;
 mod report;
 mod samples;
 
+pub use access::{
+    AccessOptions, AccessOutput, AccessReport, access, parse_query_csv, write_access_outputs,
+};
 pub use config::{
     FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
 };

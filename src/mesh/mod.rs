@@ -45,6 +45,23 @@ impl Mesh {
         if len > 0.0 { n / len } else { Vector3::zeros() }
     }
 
+    /// Area-weighted unit vertex normals (zero for isolated vertices and where the faces
+    /// around a vertex cancel).
+    pub fn vertex_normals(&self) -> Vec<Vector3> {
+        let mut normal = vec![Vector3::zeros(); self.positions.len()];
+        for tri in &self.triangles {
+            let [a, b, c] = tri.map(|v| self.positions[v as usize]);
+            let face = triangle_normal(&a, &b, &c);
+            for &v in tri {
+                normal[v as usize] += face;
+            }
+        }
+        normal
+            .iter()
+            .map(|n| n.try_normalize(1e-300).unwrap_or_else(Vector3::zeros))
+            .collect()
+    }
+
     pub fn aabb(&self) -> Aabb {
         Aabb::from_points(&self.positions)
     }

@@ -31,7 +31,7 @@
 //! The finest level is what the planner would machine; its fit is reported.
 
 use crate::collide::SurfaceDistance;
-use crate::geom::{Point3, Vector3};
+use crate::geom::Point3;
 use crate::mesh::Mesh;
 use crate::mesh::topology::edges;
 
@@ -374,7 +374,7 @@ fn project(
     first: usize,
 ) {
     use rayon::prelude::*;
-    let normals = vertex_normals(mesh);
+    let normals = mesh.vertex_normals();
     let classes = classify_vertices(&mesh.triangles, mesh.positions.len(), creases);
     // A smooth vertex's faces all lie in one chart (no sharp edge separates them).
     let mut chart_of_vertex = vec![u32::MAX; mesh.positions.len()];
@@ -408,9 +408,9 @@ fn project(
 fn relax_tangentially(mesh: &mut Mesh, creases: &Creases, first: usize) {
     use rayon::prelude::*;
     let n = mesh.positions.len();
-    let normals = vertex_normals(mesh);
+    let normals = mesh.vertex_normals();
     let classes = classify_vertices(&mesh.triangles, n, creases);
-    let mut sum = vec![Vector3::zeros(); n];
+    let mut sum = vec![crate::geom::Vector3::zeros(); n];
     let mut count = vec![0u32; n];
     for e in edges(&mesh.triangles) {
         let [a, b] = e.vertices.map(|v| v as usize);
@@ -445,22 +445,6 @@ fn sharp_edges(triangles: &[[u32; 3]], creases: &Creases) -> Vec<[u32; 2]> {
     sharp.sort_unstable();
     sharp.dedup();
     sharp
-}
-
-/// Area-weighted unit vertex normals (zero for isolated vertices).
-fn vertex_normals(mesh: &Mesh) -> Vec<Vector3> {
-    let mut normal = vec![Vector3::zeros(); mesh.positions.len()];
-    for tri in &mesh.triangles {
-        let [a, b, c] = tri.map(|v| mesh.positions[v as usize]);
-        let face = crate::geom::triangle_normal(&a, &b, &c);
-        for &v in tri {
-            normal[v as usize] += face;
-        }
-    }
-    normal
-        .iter()
-        .map(|n| n.try_normalize(1e-300).unwrap_or_else(Vector3::zeros))
-        .collect()
 }
 
 #[cfg(test)]
@@ -676,7 +660,7 @@ mod tests {
     /// tangentially, no creases (the shape CAD exports are full of).
     fn rounded_cube(cells: usize) -> Mesh {
         let mut m = crate::multires::simplify::test_support::cube_grid(cells, 10.0);
-        let centre = Vector3::repeat(5.0);
+        let centre = crate::geom::Vector3::repeat(5.0);
         for p in &mut m.positions {
             let rel = p.coords - centre;
             let core = rel.map(|c| c.clamp(-3.0, 3.0));
