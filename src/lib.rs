@@ -30,4 +30,5 @@ pub mod path;
 pub mod post;
 pub mod sample;
 pub mod tool;
+pub mod tool_choice;
 pub mod verify;

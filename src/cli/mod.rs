@@ -607,11 +607,7 @@ fn offsets(args: &OffsetsArgs) -> Result<()> {
         )));
     }
     let tool_radius = match &args.tool {
-        Some(spec) => {
-            let Cutter::Ball { diameter, .. } =
-                parse_cutter(spec).map_err(|e| Error::Job(format!("--tool: {e}")))?;
-            diameter / 2.0
-        }
+        Some(spec) => ball_diameter(spec).map_err(|e| Error::Job(format!("--tool: {e}")))? / 2.0,
         None => 0.0,
     };
     let name = args.part.display().to_string();
@@ -729,10 +725,21 @@ fn levels(args: &LevelsArgs) -> Result<()> {
     Ok(())
 }
 
+/// The diameter of a `ball:D` spec; other cutters are refused by name (the 5-axis stages drive
+/// a ball centre).
+fn ball_diameter(spec: &str) -> Result<f64> {
+    match parse_cutter(spec).map_err(|e| Error::Job(e.to_string()))? {
+        Cutter::Ball { diameter, .. } => Ok(diameter),
+        other => Err(Error::Job(format!(
+            "tool `{spec}` is a {} cutter: this command drives a ball-end mill (ball:D)",
+            other.kind()
+        ))),
+    }
+}
+
 /// `--tool ball:D`: the job's ball diameter, with flutes and shank at least as long and wide.
 fn set_tool(job: &mut Job, spec: &str) -> Result<()> {
-    let Cutter::Ball { diameter, .. } =
-        parse_cutter(spec).map_err(|e| Error::Job(e.to_string()))?;
+    let diameter = ball_diameter(spec)?;
     job.tool.diameter = diameter;
     job.tool.flute_length = job.tool.flute_length.max(diameter);
     job.tool.shank_diameter = job.tool.shank_diameter.max(diameter);

@@ -8,13 +8,13 @@
 use glam::{Quat, Vec3};
 use parry3d::math::Pose;
 use parry3d::query::{self, ClosestPoints};
-use parry3d::shape::{Capsule, ConvexPolyhedron, Cylinder, Shape, TriMesh};
+use parry3d::shape::{Capsule, ConvexPolyhedron, Cylinder, RoundCylinder, Shape, TriMesh};
 
 use super::distance::SurfaceDistance;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 use crate::path::ToolPose;
-use crate::tool::{Body, BodyRole, ToolAssembly};
+use crate::tool::{Body, BodyRole, Cutter, ToolAssembly};
 
 /// mm. Larger than f32 rounding of coordinates within ±1000 mm of the part centre (~1e-4 mm).
 pub const F32_SLACK: f64 = 1e-3;
@@ -143,6 +143,46 @@ impl PartCollider {
         let r = tool.ball_radius;
         self.check_ball(&(pose.tip + pose.axis.into_inner() * r), r, 0.0)?;
         self.check_bodies(tool, pose)
+    }
+
+    /// The tool touching `point` (outward unit `normal`) along unit `axis`, with any cutter:
+    /// where its tip goes, or why it cannot stand there. The cutting end may dip into the part
+    /// by at most `tolerance` (a ball exactly in f64; flat and bull-nose ends as parry solids
+    /// lifted `tolerance` along the normal, so touching is allowed and f32 error is ~1e-4 mm);
+    /// the bodies above keep their margins as in [`PartCollider::check_bodies`].
+    pub fn check_touching(
+        &self,
+        tool: &PreparedTool,
+        point: &Point3,
+        normal: &Vector3,
+        axis: &Vector3,
+        tolerance: f64,
+    ) -> Result<ToolPose, Collision> {
+        let tip = tool
+            .cutter
+            .tip_touching(point, normal, axis)
+            .ok_or(Collision::Gouge {
+                depth: f64::INFINITY,
+            })?;
+        let pose = ToolPose {
+            tip,
+            axis: crate::geom::Direction::new_normalize(*axis),
+        };
+        if tool.ball_radius > 0.0 {
+            let r = tool.ball_radius;
+            self.check_ball(&(point + normal * r), r, tolerance)?;
+        }
+        let lifted = ToolPose {
+            tip: tip + normal * tolerance,
+            ..pose
+        };
+        for end in &tool.end {
+            if self.intersects(end.shape.as_ref(), &end.geometry.place(&lifted, self)) {
+                return Err(Collision::Gouge { depth: tolerance });
+            }
+        }
+        self.check_bodies(tool, &pose)?;
+        Ok(pose)
     }
 
     /// The bodies above the ball at `pose`: flutes must not touch, shank and holder must stay
@@ -319,12 +359,12 @@ impl Revolved {
     }
 
     /// The parry shape, centred on its own origin with its axis along +Y. `exact_cylinder`
-    /// asks for parry's true cylinder (used for the flutes, whose side may touch the part);
-    /// otherwise a circumscribed 32-gon prism or frustum, which contains the true body and makes
-    /// parry's queries several times faster (CRATES.md §2).
+    /// asks for parry's true cylinder where the body is one (used for the flutes, whose side
+    /// may touch the part); otherwise a circumscribed 32-gon prism or frustum, which contains
+    /// the true body and makes parry's queries several times faster (CRATES.md §2).
     fn shape(&self, exact_cylinder: bool) -> Box<dyn Shape> {
         let half = 0.5 * (self.to - self.from);
-        if exact_cylinder {
+        if exact_cylinder && self.radius_from == self.radius_to {
             return Box::new(Cylinder::new(
                 half as f32,
                 self.radius_from.max(self.radius_to) as f32,
@@ -379,12 +419,22 @@ impl PreparedBody {
     }
 }
 
+/// The fluted end of a flat or bull-nose cutter as one parry solid.
+struct EndSolid {
+    geometry: Revolved,
+    shape: Box<dyn Shape>,
+}
+
 /// A tool assembly turned into parry shapes once, for many poses.
 pub struct PreparedTool {
+    /// Radius of the ball of a ball-ended cutter, tested exactly in f64; 0 for flat and
+    /// bull-nose cutters, whose ends are `end` solids.
     pub ball_radius: f64,
     /// How far from the tip along the axis anything of the tool can be, plus its widest radius
     /// twice: rays that screen axis candidates run this far.
     pub reach: f64,
+    cutter: Cutter,
+    end: Vec<EndSolid>,
     bodies: Vec<PreparedBody>,
 }
 
@@ -419,22 +469,33 @@ impl PreparedTool {
             })
             .collect();
         Self {
-            ball_radius: tool.ball_radius(),
+            ball_radius: tool.ball_radius().unwrap_or(0.0),
             reach: tool.total_length() + 2.0 * tool.max_radius(),
+            cutter: tool.cutter,
+            end: end_solids(&tool.cutter),
             bodies,
         }
     }
 
+    pub fn cutter(&self) -> &Cutter {
+        &self.cutter
+    }
+
     /// The lowest z of any point of the tool at `pose`, or anywhere along its move of `sweep`
     /// mm up its own axis. Every body is a frustum along the axis, whose lowest point is on the
-    /// rim of one of its end discs: z = tip.z + h·a_z − R·√(1 − a_z²).
+    /// rim of one of its end discs: z = tip.z + h·a_z − R·√(1 − a_z²); the cutter's rounded end
+    /// is lowest on its corner circle, z = tip.z + rc·a_z − R'·√(1 − a_z²) − rc.
     pub fn lowest_z(&self, pose: &ToolPose, sweep: f64) -> f64 {
         let a = pose.axis.into_inner();
         let lateral = (1.0 - a.z * a.z).max(0.0).sqrt();
+        let (rc, flat) = (self.cutter.corner_radius(), self.cutter.flat_radius());
         let mut lowest = f64::INFINITY;
         for start in [0.0, sweep.max(0.0)] {
             let tip_z = pose.tip.z + a.z * start;
-            lowest = lowest.min(tip_z + a.z * self.ball_radius - self.ball_radius);
+            // The corner: a circle of radius `flat` at height rc, grown by rc.
+            lowest = lowest.min(tip_z + a.z * rc - flat * lateral - rc);
+            let top = self.cutter.flute_length();
+            lowest = lowest.min(tip_z + a.z * top - self.cutter.flute_top_radius() * lateral);
             for b in &self.bodies {
                 let g = &b.geometry;
                 for (h, r) in [(g.from, g.radius_from), (g.to, g.radius_to)] {
@@ -443,6 +504,51 @@ impl PreparedTool {
             }
         }
         lowest
+    }
+}
+
+/// The fluted end of a flat (a cylinder) or bull-nose cutter (a cylinder rounded by the corner
+/// radius, whose rounded top rim is filled by a plain cylinder from the corner up). Ball-ended
+/// cutters have none: their ball is exact in f64 and their flank is a flute body.
+fn end_solids(cutter: &Cutter) -> Vec<EndSolid> {
+    let (length, radius) = (cutter.flute_length(), cutter.diameter() / 2.0);
+    let cylinder = |from: f64| {
+        let geometry = Revolved {
+            from,
+            to: length,
+            radius_from: radius,
+            radius_to: radius,
+        };
+        EndSolid {
+            shape: geometry.shape(true),
+            geometry,
+        }
+    };
+    match *cutter {
+        Cutter::Flat { .. } => vec![cylinder(0.0)],
+        Cutter::BullNose { corner_radius, .. } => {
+            // Flutes shorter than two corner radii: the rounded solid reaches a little above them
+            // (still inside the tool's reach, never below the tip).
+            let inner_half = (0.5 * length - corner_radius).max(1e-3);
+            let geometry = Revolved {
+                from: 0.0,
+                to: 2.0 * (corner_radius + inner_half),
+                radius_from: radius,
+                radius_to: radius,
+            };
+            let rounded = RoundCylinder {
+                inner_shape: Cylinder::new(inner_half as f32, (radius - corner_radius) as f32),
+                border_radius: corner_radius as f32,
+            };
+            vec![
+                EndSolid {
+                    geometry,
+                    shape: Box::new(rounded),
+                },
+                cylinder(corner_radius),
+            ]
+        }
+        Cutter::Ball { .. } | Cutter::TaperedBall { .. } => Vec::new(),
     }
 }
 
@@ -460,10 +566,12 @@ mod tests {
     fn tool() -> ToolAssembly {
         ToolAssembly {
             id: 1,
+            name: String::new(),
             cutter: Cutter::Ball {
                 diameter: 6.0,
                 flute_length: 12.0,
             },
+            neck: None,
             shank_diameter: 6.0,
             stickout: 30.0,
             holder: vec![Section::cylinder(30.0, 20.0)],

@@ -295,7 +295,7 @@ fn query_points(
         max_deviation_deg: job.strategy.max_axis_deviation_deg,
         ..AxisOptions::default()
     });
-    let r = tool.ball_radius();
+    let r = job.tool.diameter / 2.0;
     let anywhere = |_: &Vector3| true;
     let total = set.count(visibility.level);
     let mut csv = String::from("x,y,z,visible,total,axis_i,axis_j,axis_k\n");

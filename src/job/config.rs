@@ -78,10 +78,12 @@ impl ToolSection {
     pub fn assembly(&self) -> ToolAssembly {
         ToolAssembly {
             id: self.id,
+            name: String::new(),
             cutter: Cutter::Ball {
                 diameter: self.diameter,
                 flute_length: self.flute_length,
             },
+            neck: None,
             shank_diameter: self.shank_diameter,
             stickout: self.stickout,
             holder: self.holder.clone(),

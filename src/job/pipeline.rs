@@ -221,7 +221,7 @@ pub fn plan(
         max_step: job.strategy.max_step,
         max_axis_turn_deg: job.strategy.max_axis_turn_deg,
     };
-    let stepover = path::stepover_for_scallop(tool.ball_radius(), options.scallop_height);
+    let stepover = path::stepover_for_scallop(job.tool.diameter / 2.0, options.scallop_height);
     let extent = part
         .aabb()
         .extent()
@@ -296,7 +296,7 @@ pub fn plan(
 
     let t = Instant::now();
     observer.stage("preview", 0);
-    let preview_glb = preview(&part, &toolpath, 5.0, 2.0 * tool.ball_radius() + 8.0)?;
+    let preview_glb = preview(&part, &toolpath, 5.0, 2.0 * job.tool.diameter / 2.0 + 8.0)?;
     timings.preview = ms(t);
     timings.total = ms(started);
     observer.finish();
@@ -332,7 +332,7 @@ pub fn plan(
         },
         tool: ToolSummary {
             description: tool.describe(),
-            ball_radius_mm: tool.ball_radius(),
+            ball_radius_mm: job.tool.diameter / 2.0,
             shank_margin_mm: margins.shank,
             holder_margin_mm: margins.holder,
             assembly: tool.clone(),
