@@ -32,6 +32,8 @@ fn every_subcommand_has_help() {
         &["offsets", "--help"],
         &["plan", "--help"],
         &["access", "--help"],
+        &["contour", "--help"],
+        &["tools", "--help"],
     ] {
         let out = wavemill(sub);
         assert_eq!(out.status.code(), Some(0), "{sub:?}");

@@ -57,6 +57,40 @@ pub enum Command {
     /// Build the nested rough-to-fine intermediate shapes (offsets of the levels that never
     /// overcut the part), verify them against the part and write them.
     Offsets(OffsetsArgs),
+    /// Propose tools from a library, largest first: which tool finishes which region of the
+    /// part (curvature, the largest ball that fits, accessibility of the whole assembly).
+    Tools(ToolsArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct ToolsArgs {
+    /// Part mesh (.stl, .obj, .gltf, .glb), closed.
+    pub part: PathBuf,
+    /// Tool library (TOML, one [[tool]] table per tool; see data/tools.toml).
+    #[arg(long)]
+    pub library: PathBuf,
+    /// Units of the part file: mm, m or in.
+    #[arg(long, default_value = "mm")]
+    pub units: String,
+    /// How far a cutting end may dip into the part, mm.
+    #[arg(long, default_value_t = 0.01)]
+    pub tolerance: f64,
+    /// At most this many points (vertices, thinned evenly) are evaluated.
+    #[arg(long, default_value_t = 20_000)]
+    pub points: usize,
+    /// Largest angle between the tool axis and the surface normal, degrees (0 to 90).
+    #[arg(long, default_value_t = 90.0)]
+    pub max_tilt: f64,
+    /// Leave out the machine table (by default the part stands on it at its lowest point and
+    /// every tool stays 2 mm above it).
+    #[arg(long)]
+    pub no_table: bool,
+    /// Leave the run-dependent timings out of tools.json (byte-identical reports).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder: tools.json and tools.glb.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -323,6 +357,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Contour(a) => contour(&a),
         Command::Offsets(a) => offsets(&a),
         Command::Access(a) => access(&a),
+        Command::Tools(a) => tools(&a),
     };
     match result {
         Ok(()) => 0,
@@ -743,6 +778,69 @@ fn set_tool(job: &mut Job, spec: &str) -> Result<()> {
     job.tool.diameter = diameter;
     job.tool.flute_length = job.tool.flute_length.max(diameter);
     job.tool.shank_diameter = job.tool.shank_diameter.max(diameter);
+    Ok(())
+}
+
+fn tools(args: &ToolsArgs) -> Result<()> {
+    if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
+        return Err(Error::Job(format!(
+            "--tolerance {}: must be a non-negative number of mm",
+            args.tolerance
+        )));
+    }
+    if !(0.0..=90.0).contains(&args.max_tilt) {
+        return Err(Error::Job(format!(
+            "--max-tilt {}: must be between 0 and 90 degrees",
+            args.max_tilt
+        )));
+    }
+    if args.points == 0 {
+        return Err(Error::Job("--points 0: evaluate at least one point".into()));
+    }
+    let library = crate::tool::ToolLibrary::read(&args.library).map_err(Error::Job)?;
+    let name = args.part.display().to_string();
+    let raw = job::load_part(&args.part, &args.units)?;
+    let options = crate::tool_choice::ToolChoiceOptions {
+        tolerance: args.tolerance,
+        max_points: args.points,
+        max_tilt_deg: args.max_tilt,
+        table_margin: if args.no_table { None } else { Some(2.0) },
+        ..Default::default()
+    };
+    let output = job::tools(
+        &raw,
+        &name,
+        &library,
+        &args.library.display().to_string(),
+        &options,
+        !args.no_timings,
+    )?;
+    job::write_tools_outputs(&args.out, &output)?;
+    let r = &output.report.choice;
+    say!(
+        "{name}: {} of {} points evaluated; smallest concave radius {}, smallest safe ball {:.3} mm",
+        r.points_evaluated,
+        r.vertices,
+        r.shape
+            .min_concave_radius_mm
+            .map_or("none".to_string(), |c| format!("{c:.3} mm")),
+        r.shape.min_safe_ball_mm
+    );
+    for t in &r.proposal {
+        say!(
+            "  T{} {:<28} {:6.2} % of the area, {} region(s)",
+            t.id,
+            t.name,
+            t.percent,
+            t.regions
+        );
+    }
+    say!(
+        "  unreachable {:6.2} % ({} region(s)) -> {}",
+        r.unreachable.percent,
+        r.unreachable.regions,
+        args.out.display()
+    );
     Ok(())
 }
 

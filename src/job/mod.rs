@@ -1,6 +1,7 @@
 //! Jobs: the job file, and the pipeline that wires the stages together into a plan.
 //!
-//! [`access`] computes the visibility maps `wavemill access` writes.
+//! [`access`] computes the visibility maps `wavemill access` writes; [`tools`] proposes tools
+//! from a library for `wavemill tools`.
 //!
 //! [`plan`] is what `wavemill plan` runs and what other planners call: it takes a raw part mesh
 //! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
@@ -16,6 +17,7 @@ mod pipeline;
 mod preview;
 mod report;
 mod samples;
+mod tools;
 
 pub use access::{
     AccessOptions, AccessOutput, AccessReport, access, parse_query_csv, write_access_outputs,
@@ -33,3 +35,4 @@ pub use output::{write_atomically, write_outputs};
 pub use pipeline::{Observer, PlanOutput, Quiet, load_part, plan};
 pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use samples::{SamplePart, sample_files};
+pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

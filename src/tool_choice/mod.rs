@@ -230,10 +230,11 @@ pub fn choose_tools(
         .iter()
         .map(|&i| PreparedTool::new(&library.tools[i], &options.margins))
         .collect();
+    // The safe-ball search goes as far as the largest cutter: beyond that no tool cares.
     let largest_ball = library
         .tools
         .iter()
-        .filter_map(|t| t.ball_radius())
+        .map(|t| t.cutter.diameter() / 2.0)
         .fold(0.0, f64::max);
     let axes = AxisRings::new(options.max_tilt_deg, options.tilt_step_deg);
 
@@ -375,12 +376,26 @@ fn touch(
     // The ray starts inside the cutter's end, so it does not see the face it touches.
     let lift = 0.5 * cutter.end_height() + 1e-3;
     let mut exact = 0;
-    let mut last = Refusal::Occluded;
+    // Why, when nothing fits: the last exact test's answer, else the table, else the rays.
+    let mut last_exact = None;
+    let mut table = false;
     for l in &axes.local {
         let axis = t1 * l.x + t2 * l.y + n * l.z;
         let Some(tip) = cutter.tip_touching(p, n, &axis) else {
             continue;
         };
+        let pose = ToolPose {
+            tip,
+            axis: Direction::new_normalize(axis),
+        };
+        // The table first: it is plain arithmetic, and it rules out every axis at the underside.
+        if collider
+            .table()
+            .is_some_and(|t| collider.table_clearance(tool, &pose, 0.0) < t.margin)
+        {
+            table = true;
+            continue;
+        }
         // Screened by rays along the axis: from the axis and from four points of the flank at
         // 0.9 of the cutter's radius (a flank that grazes a wall it finishes still escapes; one
         // that would run into the opposite wall does not), which spares most exact tests.
@@ -396,13 +411,7 @@ fn touch(
         exact += 1;
         let checked = if tool.ball_radius > 0.0 {
             // The ball was checked once for the point: only the bodies above depend on the axis.
-            collider.check_bodies(
-                tool,
-                &ToolPose {
-                    tip,
-                    axis: Direction::new_normalize(axis),
-                },
-            )
+            collider.check_bodies(tool, &pose)
         } else {
             collider
                 .check_touching(tool, p, n, &axis, options.tolerance)
@@ -410,13 +419,17 @@ fn touch(
         };
         match checked {
             Ok(()) => return Ok(axis),
-            Err(c) => last = Refusal::of(c),
+            Err(c) => last_exact = Some(Refusal::of(c)),
         }
         if exact >= options.max_exact_tests {
             break;
         }
     }
-    Err(last)
+    Err(last_exact.unwrap_or(if table {
+        Refusal::Table
+    } else {
+        Refusal::Occluded
+    }))
 }
 
 /// A third of the area of the triangles around each vertex.
