@@ -150,6 +150,15 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     assert!(report.clearance.min_holder_clearance >= job.safety.holder_margin);
     assert!(report.clearance.min_shank_clearance >= job.safety.shank_margin);
     assert_eq!(report.poses.total, rows.len());
+    // Axis smoothing evened the passes: fewer moves over the per-mm bound, never a faster turn
+    // (every smoothed axis passed the same collision tests, checked again above).
+    let smoothing = &report.strategy.axis_smoothing;
+    assert!(smoothing.max_change_deg_per_mm > 0.0);
+    assert!(
+        smoothing.moves_over_bound < smoothing.moves_over_bound_before,
+        "{smoothing:?}"
+    );
+    assert!(smoothing.max_rate_after_deg_per_mm <= smoothing.max_rate_before_deg_per_mm);
     let cut_length: f64 = out
         .toolpath
         .moves

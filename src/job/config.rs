@@ -202,6 +202,12 @@ pub struct StrategySection {
     pub max_axis_deviation_deg: f64,
     /// Largest axis change between consecutive poses, degrees.
     pub max_axis_turn_deg: f64,
+    /// Axis smoothing along each pass: largest axis change per mm of travel, degrees; 0 keeps
+    /// the point-by-point choice. Smoothed axes are checked like chosen ones.
+    pub max_axis_change_deg_per_mm: f64,
+    /// Width (σ) of the Gaussian average of the axes along a pass, mm; 0 leaves only the rate
+    /// limit.
+    pub axis_smoothing_window_mm: f64,
 }
 
 impl Default for StrategySection {
@@ -215,6 +221,8 @@ impl Default for StrategySection {
             tilt_deg: 0.0,
             max_axis_deviation_deg: 70.0,
             max_axis_turn_deg: 5.0,
+            max_axis_change_deg_per_mm: 2.0,
+            axis_smoothing_window_mm: 2.0,
         }
     }
 }
@@ -327,6 +335,14 @@ impl Job {
         non_negative(
             "strategy.max_axis_deviation_deg",
             self.strategy.max_axis_deviation_deg,
+        )?;
+        non_negative(
+            "strategy.max_axis_change_deg_per_mm",
+            self.strategy.max_axis_change_deg_per_mm,
+        )?;
+        non_negative(
+            "strategy.axis_smoothing_window_mm",
+            self.strategy.axis_smoothing_window_mm,
         )?;
         if self.strategy.scallop_height >= self.tool.diameter / 2.0 {
             return Err(format!(

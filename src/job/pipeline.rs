@@ -17,7 +17,7 @@ use crate::geom::{Point3, Vector3, positive_zero};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, PrepareOptions, prepare};
 use crate::multires::Hierarchy;
-use crate::orient::{AxisChooser, AxisOptions};
+use crate::orient::{AxisChooser, AxisOptions, SmoothingOptions};
 use crate::path::{
     self, FinishingContext, FinishingOptions, LinkOptions, MoveKind, ToolPose, Toolpath,
 };
@@ -220,6 +220,12 @@ pub fn plan(
         tolerance: job.strategy.tolerance,
         max_step: job.strategy.max_step,
         max_axis_turn_deg: job.strategy.max_axis_turn_deg,
+        axis_smoothing: (job.strategy.max_axis_change_deg_per_mm > 0.0).then_some(
+            SmoothingOptions {
+                max_turn_deg_per_mm: job.strategy.max_axis_change_deg_per_mm,
+                window_mm: job.strategy.axis_smoothing_window_mm,
+            },
+        ),
     };
     let stepover = path::stepover_for_scallop(job.tool.diameter / 2.0, options.scallop_height);
     let extent = part
@@ -357,6 +363,14 @@ pub fn plan(
             splits_at_refinement: finishing.splits_at_refinement,
             lead_deg: job.strategy.lead_deg,
             tilt_deg: job.strategy.tilt_deg,
+            axis_smoothing: AxisSmoothingSummary {
+                max_change_deg_per_mm: job.strategy.max_axis_change_deg_per_mm,
+                window_mm: job.strategy.axis_smoothing_window_mm,
+                max_rate_before_deg_per_mm: finishing.smoothing.max_rate_before,
+                max_rate_after_deg_per_mm: finishing.smoothing.max_rate_after,
+                moves_over_bound_before: finishing.smoothing.moves_over_bound_before,
+                moves_over_bound: finishing.smoothing.moves_over_bound,
+            },
         },
         poses: pose_counts(&toolpath),
         cutting_length_mm: length(MoveKind::Cut),

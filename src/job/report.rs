@@ -96,6 +96,22 @@ pub struct StrategySummary {
     pub splits_at_refinement: usize,
     pub lead_deg: f64,
     pub tilt_deg: f64,
+    pub axis_smoothing: AxisSmoothingSummary,
+}
+
+/// The axis smoothing along the passes, before chord refinement (`orient::smooth_axes`).
+#[derive(Clone, Debug, Serialize)]
+pub struct AxisSmoothingSummary {
+    /// The bound, degrees per mm (0: off) and the averaging window, mm.
+    pub max_change_deg_per_mm: f64,
+    pub window_mm: f64,
+    /// Largest axis change per mm between neighbouring drive points, as chosen and as smoothed.
+    pub max_rate_before_deg_per_mm: f64,
+    pub max_rate_after_deg_per_mm: f64,
+    /// Moves over the bound as chosen, and still over it after smoothing (no valid axis
+    /// closer to the neighbours' there).
+    pub moves_over_bound_before: usize,
+    pub moves_over_bound: usize,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]

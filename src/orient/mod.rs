@@ -5,7 +5,12 @@
 //! how far they turn from the preferred axis and from the previous point's axis (smoothness).
 //! The first candidate that the machine can reach, whose axis ray escapes the part, and whose
 //! shank and holder clear the part exactly, wins. Visibility maps (issue 5) will replace the
-//! ray screening; the exact body test stays the last word.
+//! ray screening; the exact body test stays the last word. `smooth` then evens the chosen
+//! axes along each pass (bounded turn per mm), keeping every axis valid.
+
+mod smooth;
+
+pub use smooth::{SmoothingOptions, SmoothingStats, smooth_axes};
 
 use crate::access::RayScene;
 use crate::collide::{Collision, PartCollider, PreparedTool};

@@ -24,7 +24,9 @@ use crate::access::RayScene;
 use crate::collide::{PartCollider, PreparedTool};
 use crate::geom::{Direction, Point3, Vector3, angle_between, slerp};
 use crate::mesh::Mesh;
-use crate::orient::{AxisChooser, NoAxis, axis_is_valid};
+use crate::orient::{
+    AxisChooser, NoAxis, SmoothingOptions, SmoothingStats, axis_is_valid, smooth_axes,
+};
 
 /// Options of the plane-section finishing strategy.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,6 +42,9 @@ pub struct FinishingOptions {
     pub max_step: f64,
     /// Largest axis turn between consecutive poses, degrees.
     pub max_axis_turn_deg: f64,
+    /// Smoothing of the axes along each pass (bounded turn per mm, never leaving the valid
+    /// axes); `None` keeps the point-by-point choice.
+    pub axis_smoothing: Option<SmoothingOptions>,
 }
 
 impl Default for FinishingOptions {
@@ -50,6 +55,7 @@ impl Default for FinishingOptions {
             tolerance: 0.01,
             max_step: 1.0,
             max_axis_turn_deg: 5.0,
+            axis_smoothing: Some(SmoothingOptions::default()),
         }
     }
 }
@@ -109,6 +115,8 @@ pub struct Finishing {
     pub splits_at_unreachable: usize,
     /// Passes split because refinement could not make a move safe or smooth enough.
     pub splits_at_refinement: usize,
+    /// What the axis smoothing did (before refinement).
+    pub smoothing: SmoothingStats,
 }
 
 /// Everything the per-point work needs, borrowed.
@@ -179,6 +187,7 @@ pub fn finishing_passes(
         out.inserted_poses += p.inserted_poses;
         out.splits_at_unreachable += p.splits_at_unreachable;
         out.splits_at_refinement += p.splits_at_refinement;
+        out.smoothing.merge(&p.smoothing);
     }
     out
 }
@@ -209,55 +218,79 @@ fn drive_curve(
     out: &mut Finishing,
 ) {
     let r = ctx.tool.ball_radius;
-    let mut current: Vec<ToolPose> = Vec::new();
-    let mut last: Option<Placed> = None;
-    let flush = |current: &mut Vec<ToolPose>, out: &mut Finishing| {
-        if current.len() >= 2 {
-            out.segments.push(CutSegment {
-                poses: std::mem::take(current),
-            });
-        }
-        current.clear();
-    };
+    // 1. Place every drive point; unreachable ones split the curve into runs.
+    let mut runs: Vec<Vec<(Placed, Vector3)>> = Vec::new();
+    let mut run: Vec<(Placed, Vector3)> = Vec::new();
     for i in 0..points.len() {
         out.drive_points += 1;
         let drive = points[i];
         let feed = feed_direction(points, i);
-        let placed = place(
-            ctx,
-            &drive,
-            &feed,
-            last.map(|l| l.axis.into_inner()).as_ref(),
-            None,
-        );
-        let placed = match placed {
-            Ok(p) => p,
+        let previous = run
+            .last()
+            .map(|(l, _): &(Placed, Vector3)| l.axis.into_inner());
+        match place(ctx, &drive, &feed, previous.as_ref(), None) {
+            Ok(p) => run.push((p, feed)),
             Err(why) => {
                 out.unreachable.push((drive.point, why));
-                if !current.is_empty() {
+                if !run.is_empty() {
                     out.splits_at_unreachable += 1;
-                }
-                flush(&mut current, out);
-                last = None;
-                continue;
-            }
-        };
-        if let Some(prev) = last {
-            match refine(ctx, options, &prev, &placed, &feed, 0) {
-                Some(inner) => {
-                    out.inserted_poses += inner.len();
-                    current.extend(inner.iter().map(|p| pose_of(p, r)));
-                }
-                None => {
-                    out.splits_at_refinement += 1;
-                    flush(&mut current, out);
+                    runs.push(std::mem::take(&mut run));
                 }
             }
         }
-        current.push(pose_of(&placed, r));
-        last = Some(placed);
     }
-    flush(&mut current, out);
+    if !run.is_empty() {
+        runs.push(run);
+    }
+    for mut run in runs {
+        // 2. Smooth the run's axes, each new one checked exactly like the chosen ones.
+        if let Some(smoothing) = &options.axis_smoothing {
+            let centres: Vec<Point3> = run.iter().map(|(p, _)| p.centre).collect();
+            let axes: Vec<Vector3> = run.iter().map(|(p, _)| p.axis.into_inner()).collect();
+            let valid = |i: usize, axis: &Vector3| {
+                axis_is_valid(
+                    ctx.part,
+                    ctx.rays,
+                    ctx.tool,
+                    &centres[i],
+                    axis,
+                    ctx.reachable,
+                )
+                .is_ok()
+            };
+            let (smoothed, stats) = smooth_axes(&centres, &axes, &valid, smoothing);
+            out.smoothing.merge(&stats);
+            for ((p, _), axis) in run.iter_mut().zip(smoothed) {
+                p.axis = Direction::new_normalize(axis);
+            }
+        }
+        // 3. Refine the moves between consecutive poses; split where that fails.
+        let mut current: Vec<ToolPose> = Vec::new();
+        for k in 0..run.len() {
+            let (placed, feed) = &run[k];
+            if k > 0 {
+                match refine(ctx, options, &run[k - 1].0, placed, feed, 0) {
+                    Some(inner) => {
+                        out.inserted_poses += inner.len();
+                        current.extend(inner.iter().map(|p| pose_of(p, r)));
+                    }
+                    None => {
+                        out.splits_at_refinement += 1;
+                        if current.len() >= 2 {
+                            out.segments.push(CutSegment {
+                                poses: std::mem::take(&mut current),
+                            });
+                        }
+                        current.clear();
+                    }
+                }
+            }
+            current.push(pose_of(placed, r));
+        }
+        if current.len() >= 2 {
+            out.segments.push(CutSegment { poses: current });
+        }
+    }
 }
 
 fn pose_of(p: &Placed, r: f64) -> ToolPose {
