@@ -60,7 +60,7 @@ pub struct OffsetsTimings {
 
 /// The level surfaces and bounds for `allowances`: shape i offsets level min(i, finest), with
 /// bound = exact L∞ deviation of that level's truncated surface from the finest level + the
-/// finest level's Hausdorff distance to the part.
+/// finest level's Hausdorff distance to the part, and the same per vertex as local bounds.
 pub(crate) fn level_specs(
     analysed: &AnalysedHierarchy,
     allowances: &[f64],
@@ -81,6 +81,13 @@ pub(crate) fn level_specs(
                 .wavelets
                 .deviation_to_finest(&analysed.analysed, level)
                 .map_err(wavelet_error)?;
+            // The deviation is linear over each finest triangle, so a part point near a point
+            // of triangle t is within max |deviation| of t's corners + the Hausdorff distance.
+            let vertex_bounds = deviation
+                .per_vertex
+                .iter()
+                .map(|d| d.norm() + finest_hausdorff)
+                .collect();
             Ok((
                 level,
                 ShapeSpec {
@@ -90,6 +97,7 @@ pub(crate) fn level_specs(
                     },
                     allowance,
                     bound: deviation.linf + finest_hausdorff,
+                    vertex_bounds: Some(vertex_bounds),
                 },
             ))
         })

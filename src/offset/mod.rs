@@ -30,6 +30,12 @@
 //! keeps its small offset exact; it is refused (and made on the grid) where a triangle would
 //! flip, which happens on the fitted finest levels of the CAD impellers.
 //!
+//! Local bounds (DESIGN.md §3.4 "locally per region"): with per-vertex bounds eᵥ, a triangle
+//! needs only the largest of its corners' (the deviation is linear over it), so tube(Lⱼ, tⱼ) is
+//! the union of tubes around the triangles of each bound class — eⱼ, eⱼ/2, eⱼ/4, eⱼ/8 and below,
+//! each rounded up to its class — and the shape stays as thin as the level is close to the part
+//! where it is close. Thinner tubes are still raised to two grid cells.
+//!
 //! Nothing above is trusted: `verify` checks every shape with exact f64 distance queries on
 //! dense samples of the shape (clearance), of the part (inside by ray parity, at depth), and of
 //! the next shape (nesting), pushes out the triangles that fail and checks again.
@@ -66,6 +72,91 @@ pub struct ShapeSpec {
     pub allowance: f64,
     /// eⱼ, mm: every point of the part is within this distance of `surface`.
     pub bound: f64,
+    /// Local bounds (≤ `bound`), one per surface vertex: every point of the part is within
+    /// max(e of t's corners) of some point of a triangle t (DESIGN.md §3.4 "locally per
+    /// region"; for a level at the finest connectivity, eᵥ = |deviation at v| + the finest
+    /// level's Hausdorff distance, since the deviation is linear over each triangle). `None`:
+    /// `bound` everywhere.
+    pub vertex_bounds: Option<Vec<f64>>,
+}
+
+/// Triangles whose local bounds round up to the same value share one tube: the bound classes
+/// are `bound`·2⁻ᵏ for k < this (the last class takes everything smaller).
+const BOUND_CLASSES: usize = 4;
+
+impl ShapeSpec {
+    /// The surface split into classes of local bound, each with the bound its triangles round
+    /// up to (module docs): one class, the whole surface at `bound`, without local bounds.
+    fn bound_classes(&self) -> Vec<(Mesh, f64)> {
+        let Some(local) = &self.vertex_bounds else {
+            return vec![(self.surface.clone(), self.bound)];
+        };
+        let levels: Vec<f64> = (0..BOUND_CLASSES)
+            .map(|k| self.bound * 0.5f64.powi(k as i32))
+            .collect();
+        let mut classes: Vec<Vec<[u32; 3]>> = vec![Vec::new(); BOUND_CLASSES];
+        for t in &self.surface.triangles {
+            let e = t.iter().map(|&v| local[v as usize]).fold(0.0, f64::max);
+            let class = (0..BOUND_CLASSES)
+                .rev()
+                .find(|&k| levels[k] >= e)
+                .unwrap_or(0);
+            classes[class].push(*t);
+        }
+        classes
+            .into_iter()
+            .zip(levels)
+            .filter(|(triangles, _)| !triangles.is_empty())
+            .map(|(triangles, level)| (compact(&self.surface.positions, triangles), level))
+            .collect()
+    }
+
+    /// The local bound each vertex is pushed out by in a normal offset: the largest class bound
+    /// of its triangles.
+    fn vertex_offsets(&self, clearance: f64) -> Vec<f64> {
+        let classes = self.bound_classes();
+        let mut bound = vec![0.0f64; self.surface.positions.len()];
+        match &self.vertex_bounds {
+            None => bound.fill(self.bound),
+            Some(local) => {
+                let levels: Vec<f64> = classes.iter().map(|(_, e)| *e).collect();
+                for t in &self.surface.triangles {
+                    let e = t.iter().map(|&v| local[v as usize]).fold(0.0, f64::max);
+                    let class = levels
+                        .iter()
+                        .copied()
+                        .filter(|&l| l >= e)
+                        .fold(self.bound, f64::min);
+                    for &v in t {
+                        bound[v as usize] = bound[v as usize].max(class);
+                    }
+                }
+            }
+        }
+        bound.iter().map(|e| clearance + e).collect()
+    }
+}
+
+/// The triangles with only the vertices they use.
+fn compact(positions: &[Point3], triangles: Vec<[u32; 3]>) -> Mesh {
+    let mut index = vec![u32::MAX; positions.len()];
+    let mut kept = Vec::new();
+    let triangles = triangles
+        .into_iter()
+        .map(|t| {
+            t.map(|v| {
+                if index[v as usize] == u32::MAX {
+                    index[v as usize] = kept.len() as u32;
+                    kept.push(positions[v as usize]);
+                }
+                index[v as usize]
+            })
+        })
+        .collect();
+    Mesh {
+        positions: kept,
+        triangles,
+    }
 }
 
 /// How to build and verify the shapes.
@@ -119,6 +210,10 @@ pub enum OffsetError {
     Bound { index: usize, value: f64 },
     #[error("shape {index}: the level surface has no triangles")]
     EmptySurface { index: usize },
+    #[error(
+        "shape {index}: local bounds must be one per surface vertex, finite, within 0 and the bound"
+    )]
+    LocalBounds { index: usize },
     #[error("the part has no triangles")]
     EmptyPart,
     #[error("shape {index}: {reason}")]
@@ -287,6 +382,15 @@ fn check_inputs(
         if s.surface.triangles.is_empty() {
             return Err(OffsetError::EmptySurface { index });
         }
+        if let Some(local) = &s.vertex_bounds {
+            let bad = local.len() != s.surface.positions.len()
+                || local
+                    .iter()
+                    .any(|e| !(e.is_finite() && *e >= 0.0 && *e <= s.bound));
+            if bad {
+                return Err(OffsetError::LocalBounds { index });
+            }
+        }
     }
     Ok(())
 }
@@ -305,15 +409,18 @@ pub fn nested_offsets(part: &Mesh, specs: &[ShapeSpec]) -> Result<Vec<OffsetShap
 /// from the surface would put sign changes outside the band.
 fn region_terms<'a>(
     part: &'a PartQuery,
-    (surface, offset): (&'a SurfaceDistance, f64),
-    finer: &'a [(SurfaceDistance, f64, f64)],
+    tubes: &'a [(SurfaceDistance, f64)],
+    finer: &'a [(Vec<(SurfaceDistance, f64)>, f64)],
     clearance: f64,
 ) -> Vec<field::Term<'a>> {
-    let mut terms = vec![field::Term {
-        surface,
-        closed: false,
-        level: offset,
-    }];
+    let mut terms: Vec<field::Term<'a>> = tubes
+        .iter()
+        .map(|(surface, offset)| field::Term {
+            surface,
+            closed: false,
+            level: *offset,
+        })
+        .collect();
     if part.closed {
         terms.push(field::Term {
             surface: &part.surface,
@@ -321,15 +428,13 @@ fn region_terms<'a>(
             level: 0.0,
         });
     }
-    terms.extend(
-        finer
-            .iter()
-            .map(|(s, offset, inner_clearance)| field::Term {
-                surface: s,
-                closed: false,
-                level: offset + (clearance - inner_clearance),
-            }),
-    );
+    for (classes, inner_clearance) in finer {
+        terms.extend(classes.iter().map(|(s, offset)| field::Term {
+            surface: s,
+            closed: false,
+            level: offset + (clearance - inner_clearance),
+        }));
+    }
     terms
 }
 
@@ -346,49 +451,64 @@ pub fn nested_offsets_opt(
     let part_samples = sample_surface(part, None);
     let diagonal = part.aabb().diagonal();
     let mut built: Vec<(OffsetShape, Samples)> = Vec::with_capacity(specs.len());
-    // The level surfaces of the shapes built so far (innermost first), with the offset each
-    // was extracted at and its clearance a + r.
-    let mut tubes: Vec<(SurfaceDistance, f64, f64)> = Vec::with_capacity(specs.len());
+    // The level surfaces of the shapes built so far (innermost first), by bound class with the
+    // offset each was extracted at, and their clearance a + r.
+    let mut tubes: Vec<(Vec<(SurfaceDistance, f64)>, f64)> = Vec::with_capacity(specs.len());
     for (index, spec) in specs.iter().enumerate().rev() {
         let inner = built.last().map(|(shape, samples)| (shape, samples));
         let clearance = spec.allowance + options.tool_radius;
         let mut offset = clearance + spec.bound;
+        let classes = spec.bound_classes();
         let started = Instant::now();
         let normal = if inner.is_none() && is_closed(&spec.surface) {
-            normal_offset::normal_offset(&spec.surface, offset)
+            normal_offset::normal_offset(&spec.surface, &spec.vertex_offsets(clearance))
         } else {
             None
         };
-        let (mut mesh, method) = match normal {
-            Some(mesh) => (mesh, Method::NormalOffset),
+        let (mut mesh, method, class_tubes) = match normal {
+            Some(mesh) => {
+                let class_tubes = classes
+                    .iter()
+                    .map(|(m, e)| (SurfaceDistance::new(m), clearance + e))
+                    .collect();
+                (mesh, Method::NormalOffset, class_tubes)
+            }
             None => {
                 let spacing =
                     (offset / options.cells_per_offset).max(diagonal / options.max_cells_across);
                 // A shell thinner than two cells is not resolved by the grid (its sign changes
                 // are missed between corners): the offset is raised to two cells, which keeps
                 // every guarantee and costs excess, reported.
-                offset = offset.max(MIN_CELLS_PER_OFFSET * spacing);
-                let surface = SurfaceDistance::new(&spec.surface);
+                let thinnest = MIN_CELLS_PER_OFFSET * spacing;
+                offset = offset.max(thinnest);
+                let class_tubes: Vec<(SurfaceDistance, f64)> = classes
+                    .iter()
+                    .map(|(m, e)| (SurfaceDistance::new(m), (clearance + e).max(thinnest)))
+                    .collect();
                 let mut seeds = spec.surface.positions.clone();
                 seeds.extend_from_slice(&part.positions);
                 for (shape, _) in &built {
                     seeds.extend_from_slice(&shape.mesh.positions);
                 }
                 let field = field::Field {
-                    terms: region_terms(&query, (&surface, offset), &tubes, clearance),
+                    terms: region_terms(&query, &class_tubes, &tubes, clearance),
                 };
                 let mesh = extract::extract(&field, &seeds, spacing)
                     .map_err(|reason| OffsetError::Grid { index, reason })?;
-                let mesh = field.project_vertices(mesh, offset);
+                // The chord margin follows the thinnest tube (the sharpest offset curvature).
+                let thinnest_tube = class_tubes.iter().map(|(_, o)| *o).fold(offset, f64::min);
+                let mesh = field.project_vertices(mesh, thinnest_tube);
+                drop(field);
                 (
                     mesh,
                     Method::DistanceGrid {
                         spacing_mm: spacing,
                     },
+                    class_tubes,
                 )
             }
         };
-        tubes.push((SurfaceDistance::new(&spec.surface), offset, clearance));
+        tubes.push((class_tubes, clearance));
         let build_s = started.elapsed().as_secs_f64();
         let started = Instant::now();
         let outcome = verify::verify_and_repair(

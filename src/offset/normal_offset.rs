@@ -36,8 +36,10 @@ pub(super) fn vertex_normals(mesh: &Mesh) -> Vec<Vector3> {
     normals
 }
 
-/// The surface offset by `distance`, or `None` when a triangle would flip.
-pub(super) fn normal_offset(surface: &Mesh, distance: f64) -> Option<Mesh> {
+/// The surface offset by `distance[v]` at each vertex, or `None` when a triangle would flip.
+/// (With distances that vary, each point of a moved triangle is still in front of its old plane
+/// by at least the smallest of its corners' distances.)
+pub(super) fn normal_offset(surface: &Mesh, distance: &[f64]) -> Option<Mesh> {
     let normals = vertex_normals(surface);
     let mut least = vec![1.0f64; surface.positions.len()];
     for (t, tri) in surface.triangles.iter().enumerate() {
@@ -49,8 +51,8 @@ pub(super) fn normal_offset(surface: &Mesh, distance: f64) -> Option<Mesh> {
     let positions: Vec<Point3> = surface
         .positions
         .iter()
-        .zip(normals.iter().zip(&least))
-        .map(|(p, (n, k))| p + n * (distance / k.max(1.0 / MAX_STRETCH)))
+        .zip(normals.iter().zip(&least).zip(distance))
+        .map(|(p, ((n, k), d))| p + n * (d / k.max(1.0 / MAX_STRETCH)))
         .collect();
     let moved = Mesh {
         positions,

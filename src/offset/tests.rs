@@ -22,6 +22,7 @@ fn specs(surface: &Mesh, allowances: &[f64], bound: f64) -> Vec<ShapeSpec> {
             surface: surface.clone(),
             allowance,
             bound,
+            vertex_bounds: None,
         })
         .collect()
 }
@@ -171,4 +172,74 @@ fn bad_inputs_are_refused_by_name() {
     let options = OffsetOptions::default().with_tool_radius(-1.0);
     let err = nested_offsets_opt(&part, &specs(&part, &[1.0], 0.0), &options).unwrap_err();
     assert!(err.to_string().contains("tool_radius"), "{err}");
+}
+
+/// Local bounds (DESIGN.md §3.4, "locally per region"): a level surface that lies 0.8 mm inside
+/// the part on the upper half and on it below, with the bound 0.8 given only where it is
+/// needed. The shape keeps every guarantee, is no thicker than the uniform-bound shape
+/// anywhere, and is thinner where the local bound is small.
+#[test]
+fn local_bounds_tighten_the_shape_where_the_level_is_close() {
+    let part = uv_sphere(10.0, 24, 48);
+    let mut level = part.clone();
+    for p in &mut level.positions {
+        if p.z > 0.0 {
+            *p = Point3::from(p.coords * (9.2 / 10.0));
+        }
+    }
+    let bound = 0.8 + 1e-9;
+    // Vertices on the equator (z = 0) stay where the part is, but their triangles reach up to
+    // the shrunk half: their bound must be the large one too.
+    let local: Vec<f64> = level
+        .positions
+        .iter()
+        .map(|p| if p.z >= -1e-9 { bound } else { 0.0 })
+        .collect();
+    // Two shapes: the inner one is pushed along vertex directions, the outer one extracted
+    // from the distance field: both ways of building take the local bounds.
+    let uniform = specs(&level, &[1.5, 1.0], bound);
+    let mut varying = uniform.clone();
+    for spec in &mut varying {
+        spec.vertex_bounds = Some(local.clone());
+    }
+    let options = OffsetOptions {
+        max_cells_across: 600.0,
+        ..Default::default()
+    };
+    let wide = nested_offsets_opt(&part, &uniform, &options).unwrap();
+    let tight = nested_offsets_opt(&part, &varying, &options).unwrap();
+    assert_guarantees(&wide);
+    assert_guarantees(&tight);
+    let thickness = |shapes: &[OffsetShape], j: usize, lower: bool| {
+        let below: Vec<f64> = shapes[j]
+            .mesh
+            .positions
+            .iter()
+            .filter(|v| (v.z < -3.0) == lower && (v.z > 3.0) != lower)
+            .map(|v| brute_distance(&part, v))
+            .collect();
+        below.iter().sum::<f64>() / below.len() as f64
+    };
+    for j in 0..2 {
+        assert!(matches!(
+            (j, tight[j].report.method),
+            (0, Method::DistanceGrid { .. }) | (1, Method::NormalOffset)
+        ));
+        // Below, the local bound is 0: about the allowance instead of allowance + 0.8.
+        assert!(thickness(&tight, j, true) < thickness(&wide, j, true) - 0.5, "shape {j}");
+        assert!(tight[j].report.mean_excess_mm < wide[j].report.mean_excess_mm);
+        // Above, both need the full bound.
+        assert!((thickness(&tight, j, false) - thickness(&wide, j, false)).abs() < 0.2);
+    }
+}
+
+#[test]
+fn local_bounds_must_fit_the_surface_and_the_bound() {
+    let part = uv_sphere(10.0, 8, 16);
+    let mut spec = specs(&part, &[1.0], 0.5);
+    spec[0].vertex_bounds = Some(vec![0.1; part.positions.len() - 1]);
+    let err = nested_offsets(&part, &spec).unwrap_err();
+    assert!(err.to_string().contains("local bounds"), "{err}");
+    spec[0].vertex_bounds = Some(vec![0.6; part.positions.len()]);
+    assert!(nested_offsets(&part, &spec).is_err());
 }
