@@ -1,7 +1,8 @@
 //! The tool-body collision tests (`collide`, parry3d in f32) against references that share no
 //! code with them (issue 5 item 4): random poses near the sample impeller decided by brute
-//! force over dense samples of the part's surface and closed-form point-to-frustum distances,
-//! and a ball in a spherical cavity against its closed-form clearance.
+//! force over dense samples of the part's surface and closed-form point-to-frustum distances.
+//! (The closed-form cases — a ball in a spherical cavity, bodies above a plate — are unit tests
+//! of `collide`.)
 
 mod common;
 
@@ -10,7 +11,7 @@ use nalgebra::{Point3, Unit, Vector3};
 use wavemill::collide::{Collision, F32_SLACK, Margins, PartCollider, PreparedTool};
 use wavemill::geom::orthonormal_frame;
 use wavemill::job;
-use wavemill::mesh::{Mesh, PrepareOptions, prepare};
+use wavemill::mesh::{PrepareOptions, prepare};
 use wavemill::path::ToolPose;
 use wavemill::tool::{Body, BodyRole, Cutter, Neck, Section, ToolAssembly};
 
@@ -146,69 +147,4 @@ fn body_tests_agree_with_brute_force_on_random_poses_near_the_sample_impeller() 
         clear > 30 && colliding > 30,
         "{clear} clear, {colliding} colliding"
     );
-}
-
-#[test]
-fn a_ball_in_a_spherical_cavity_has_its_closed_form_clearance() {
-    // The inside of a sphere of radius R as the part's surface (normals inward): a ball of
-    // radius r centred c from the cavity's centre clears the wall by R − c − r, less the
-    // facets' sagitta.
-    let big_r = 20.0;
-    let (stacks, slices) = (90u32, 180u32);
-    let mut positions = vec![Point3::new(0.0, 0.0, big_r)];
-    for i in 1..stacks {
-        let phi = std::f64::consts::PI * i as f64 / stacks as f64;
-        for j in 0..slices {
-            let th = std::f64::consts::TAU * j as f64 / slices as f64;
-            positions.push(Point3::new(
-                big_r * phi.sin() * th.cos(),
-                big_r * phi.sin() * th.sin(),
-                big_r * phi.cos(),
-            ));
-        }
-    }
-    positions.push(Point3::new(0.0, 0.0, -big_r));
-    let south = positions.len() as u32 - 1;
-    let ring = |i: u32, j: u32| 1 + (i - 1) * slices + (j % slices);
-    let mut triangles = Vec::new();
-    for j in 0..slices {
-        // Wound inward: the cavity's wall faces its centre.
-        triangles.push([0, ring(1, j + 1), ring(1, j)]);
-        triangles.push([south, ring(stacks - 1, j), ring(stacks - 1, j + 1)]);
-    }
-    for i in 1..stacks - 1 {
-        for j in 0..slices {
-            let (a, b, c, d) = (
-                ring(i, j),
-                ring(i, j + 1),
-                ring(i + 1, j),
-                ring(i + 1, j + 1),
-            );
-            triangles.push([a, d, c]);
-            triangles.push([a, b, d]);
-        }
-    }
-    let cavity = Mesh {
-        positions,
-        triangles,
-    };
-    let collider = PartCollider::new(&cavity).unwrap();
-    let sagitta = big_r * (1.0 - (std::f64::consts::PI / stacks as f64).cos());
-    for (c, r) in [(0.0, 5.0), (7.0, 6.0), (12.0, 7.5), (10.0, 9.99)] {
-        let centre = Point3::new(c * 0.6, -c * 0.48, c * 0.64);
-        let clearance = collider.check_ball(&centre, r, 0.0).unwrap();
-        let expected = big_r - centre.coords.norm() - r;
-        assert!(
-            clearance <= expected + 1e-9 && clearance >= expected - 2.0 * sagitta,
-            "c {c} r {r}: {clearance} vs {expected}"
-        );
-    }
-    // A ball that reaches past the wall gouges by about the overlap.
-    let centre = Point3::new(0.0, 12.0, 0.0);
-    match collider.check_ball(&centre, 8.5, 0.0) {
-        Err(Collision::Gouge { depth }) => {
-            assert!((depth - 0.5).abs() <= 2.0 * sagitta, "{depth}")
-        }
-        other => panic!("{other:?}"),
-    }
 }

@@ -798,4 +798,33 @@ mod tests {
         assert!(part.check_ball_sweep(&prepared(), &p, 60.0).is_ok());
         assert!(part.check_ball_sweep(&prepared(), &p, 90.0).is_err());
     }
+
+    /// The inside of a sphere of radius R as the surface (wound inward): a ball of radius r
+    /// centred c from the centre clears the wall by R − c − r, less the facets' sagitta.
+    #[test]
+    fn a_ball_in_a_spherical_cavity_has_its_closed_form_clearance() {
+        let big_r = 20.0;
+        let mut cavity = crate::mesh::fixtures::uv_sphere(big_r, 90, 180);
+        for t in &mut cavity.triangles {
+            t.swap(1, 2);
+        }
+        let collider = PartCollider::new(&cavity).unwrap();
+        let sagitta = big_r * (1.0 - (std::f64::consts::PI / 90.0).cos());
+        for (c, r) in [(0.0, 5.0), (7.0, 6.0), (12.0, 7.5), (10.0, 9.99)] {
+            let centre = Point3::new(c * 0.6, -c * 0.48, c * 0.64);
+            let clearance = collider.check_ball(&centre, r, 0.0).unwrap();
+            let expected = big_r - centre.coords.norm() - r;
+            assert!(
+                clearance <= expected + 1e-9 && clearance >= expected - 2.0 * sagitta,
+                "c {c} r {r}: {clearance} vs {expected}"
+            );
+        }
+        // A ball reaching past the wall gouges by the overlap.
+        match collider.check_ball(&Point3::new(0.0, 12.0, 0.0), 8.5, 0.0) {
+            Err(Collision::Gouge { depth }) => {
+                assert!((depth - 0.5).abs() <= 2.0 * sagitta, "{depth}")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
 }

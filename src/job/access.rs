@@ -20,7 +20,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::config::Job;
-use super::output::write_atomically;
+use super::output::{create_output_dir, write_atomically, write_json};
 use crate::access::{
     DirectionSet, RayScene, SurfacePoint, VisibilityOptions, level_for_count, vertex_points,
     visibility_brute_force, visibility_hierarchical,
@@ -422,15 +422,9 @@ pub fn parse_query_csv(text: &str, file: &str) -> Result<Vec<SurfacePoint>> {
 /// Writes `access.glb`, `access.json` and, with queries, `query.csv` into `dir` (created if
 /// missing), each atomically.
 pub fn write_access_outputs(dir: &Path, output: &AccessOutput) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.display().to_string(),
-        source,
-    })?;
+    create_output_dir(dir)?;
     write_atomically(&dir.join("access.glb"), &output.glb)?;
-    let json = serde_json::to_string_pretty(&output.report)
-        .map_err(|e| Error::Job(format!("access.json: {e}")))?
-        + "\n";
-    write_atomically(&dir.join("access.json"), json.as_bytes())?;
+    write_json(dir, "access.json", &output.report)?;
     if let Some(csv) = &output.query_csv {
         write_atomically(&dir.join("query.csv"), csv.as_bytes())?;
     }

@@ -30,6 +30,21 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     result.map_err(io)
 }
 
+/// Creates the output folder `dir` (and its parents) if missing.
+pub(crate) fn create_output_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        path: dir.display().to_string(),
+        source,
+    })
+}
+
+/// Writes `value` as pretty JSON with a final newline to `dir/name`, atomically.
+pub(crate) fn write_json(dir: &Path, name: &str, value: &impl serde::Serialize) -> Result<()> {
+    let json =
+        serde_json::to_string_pretty(value).map_err(|e| Error::Job(format!("{name}: {e}")))? + "\n";
+    write_atomically(&dir.join(name), json.as_bytes())
+}
+
 /// Writes `job.nc`, `cl.csv`, `report.json` and `paths.glb` into `dir` (created if missing).
 /// With `timings = false` the report leaves out the per-stage timings, the only part of the
 /// outputs that differs between runs. A path that failed verification gets only its report

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::output::write_atomically;
+use super::output::{create_output_dir, write_atomically, write_json};
 use crate::error::{Error, Result};
 use crate::mesh::io::{GlbBuilder, RawMesh};
 use crate::mesh::{PrepareOptions, prepare};
@@ -141,13 +141,7 @@ pub fn tools(
 
 /// Writes `tools.glb` and `tools.json` into `dir` (created if missing), each atomically.
 pub fn write_tools_outputs(dir: &Path, output: &ToolsOutput) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.display().to_string(),
-        source,
-    })?;
+    create_output_dir(dir)?;
     write_atomically(&dir.join("tools.glb"), &output.glb)?;
-    let json = serde_json::to_string_pretty(&output.report)
-        .map_err(|e| Error::Job(format!("tools.json: {e}")))?
-        + "\n";
-    write_atomically(&dir.join("tools.json"), json.as_bytes())
+    write_json(dir, "tools.json", &output.report)
 }

@@ -226,7 +226,10 @@ fn local_bounds_tighten_the_shape_where_the_level_is_close() {
             (0, Method::DistanceGrid { .. }) | (1, Method::NormalOffset)
         ));
         // Below, the local bound is 0: about the allowance instead of allowance + 0.8.
-        assert!(thickness(&tight, j, true) < thickness(&wide, j, true) - 0.5, "shape {j}");
+        assert!(
+            thickness(&tight, j, true) < thickness(&wide, j, true) - 0.5,
+            "shape {j}"
+        );
         assert!(tight[j].report.mean_excess_mm < wide[j].report.mean_excess_mm);
         // Above, both need the full bound.
         assert!((thickness(&tight, j, false) - thickness(&wide, j, false)).abs() < 0.2);
