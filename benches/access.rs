@@ -89,6 +89,10 @@ fn visibility(c: &mut Criterion) {
         for (label, other) in [
             ("start at 42", options.clone().with_start_level(1)),
             (
+                "triangles then edges",
+                options.clone().with_refine(Refine::TrianglesThenEdges),
+            ),
+            (
                 "parent rings",
                 options.clone().with_refine(Refine::ParentRings),
             ),

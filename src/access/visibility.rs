@@ -55,6 +55,10 @@ pub enum Refine {
     /// The corners of the two coarse triangles the direction lies in (its parents and the two
     /// opposite directions) agree: fewer rays, and no border pass.
     Triangles,
+    /// [`Refine::Triangles`] up to the level below the finest, then only the two parents at the
+    /// finest level: a direction there is half a spacing from both, so a border between them
+    /// is the only one its answer can sit behind (up to windows narrower than that spacing).
+    TrianglesThenEdges,
 }
 
 impl Default for VisibilityOptions {
@@ -345,6 +349,7 @@ fn hierarchical_map(
                 && match refine {
                     Refine::ParentRings => !border[a] && !border[b],
                     Refine::Triangles => agree(c) && agree(d),
+                    Refine::TrianglesThenEdges => k == level || (agree(c) && agree(d)),
                 };
             if settled {
                 map.set(i, map.contains(a));

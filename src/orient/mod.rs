@@ -33,6 +33,12 @@ pub struct AxisOptions {
     pub smoothness_weight: f64,
     /// At most this many candidates get the exact (expensive) body test per point.
     pub max_exact_tests: usize,
+    /// Angular clearance, degrees: when the preferred axis is not valid, the first valid
+    /// candidate lies on the border of the valid set, a hair from a collision; the axis is
+    /// turned this much further from the preferred one when that is valid too, so that small
+    /// changes (smoothing, interpolation between poses, the real holder's tolerances) keep it
+    /// valid. 0 keeps the border axis.
+    pub clearance_deg: f64,
 }
 
 impl Default for AxisOptions {
@@ -44,6 +50,7 @@ impl Default for AxisOptions {
             step_deg: 5.0,
             smoothness_weight: 1.0,
             max_exact_tests: 48,
+            clearance_deg: 3.0,
         }
     }
 }
@@ -168,7 +175,11 @@ impl AxisChooser {
         let mut exact_tests = 0;
         for (_, _, axis) in candidates {
             match axis_is_valid(part, rays, tool, centre, &axis, reachable) {
-                Ok(()) => return Ok(Direction::new_unchecked(axis)),
+                Ok(()) => {
+                    return Ok(Direction::new_unchecked(self.with_clearance(
+                        part, rays, tool, centre, &preferred, axis, reachable,
+                    )));
+                }
                 Err(NoAxis::MachineLimits) => {}
                 Err(cheap @ (NoAxis::Occluded | NoAxis::Table)) => {
                     if why == NoAxis::MachineLimits
@@ -187,6 +198,44 @@ impl AxisChooser {
             }
         }
         Err(why)
+    }
+}
+
+impl AxisChooser {
+    /// `axis` (valid) turned `clearance_deg` further from `preferred` when that is valid too
+    /// and within the allowed deviation (see [`AxisOptions::clearance_deg`]); `axis` otherwise,
+    /// and always when it is the preferred axis itself (nothing invalid next to it then).
+    #[allow(clippy::too_many_arguments)]
+    fn with_clearance(
+        &self,
+        part: &PartCollider,
+        rays: &RayScene,
+        tool: &PreparedTool,
+        centre: &Point3,
+        preferred: &Vector3,
+        axis: Vector3,
+        reachable: &dyn Fn(&Vector3) -> bool,
+    ) -> Vector3 {
+        let turned = angle_between(preferred, &axis);
+        let extra = self.options.clearance_deg.to_radians();
+        if turned < 1e-9
+            || extra <= 0.0
+            || (turned + extra).to_degrees() > self.options.max_deviation_deg
+        {
+            return axis;
+        }
+        // Rotate about preferred × axis, away from the preferred axis.
+        let Some(about) = preferred.cross(&axis).try_normalize(1e-12) else {
+            return axis;
+        };
+        let further =
+            nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(about), extra)
+                * axis;
+        if axis_is_valid(part, rays, tool, centre, &further, reachable).is_ok() {
+            further
+        } else {
+            axis
+        }
     }
 }
 
@@ -233,5 +282,80 @@ mod tests {
             worst = worst.max(best.to_degrees());
         }
         assert!(worst < 5.0, "worst gap {worst}°");
+    }
+
+    /// A plate with a tall wall beside the point: the preferred axis (10° lead toward the wall)
+    /// puts the holder into the wall, so the chosen axis turns away; with a clearance angle it
+    /// turns that much further, and can then turn back part of the way and still be valid.
+    #[test]
+    fn a_clearance_angle_keeps_the_axis_off_the_border_of_the_valid_set() {
+        use crate::collide::Margins;
+        use crate::mesh::fixtures::cuboid;
+        use crate::tool::{Cutter, Section, ToolAssembly};
+        let mut part = cuboid(100.0, 100.0, 10.0);
+        let wall = cuboid(10.0, 100.0, 60.0);
+        let base = part.positions.len() as u32;
+        part.positions.extend(
+            wall.positions
+                .iter()
+                .map(|p| Point3::new(p.x + 60.0, p.y, p.z)),
+        );
+        part.triangles
+            .extend(wall.triangles.iter().map(|t| t.map(|v| v + base)));
+        let collider = PartCollider::new(&part).unwrap();
+        let rays = RayScene::new(&part);
+        let tool = PreparedTool::new(
+            &ToolAssembly {
+                id: 1,
+                name: String::new(),
+                cutter: Cutter::Ball {
+                    diameter: 6.0,
+                    flute_length: 12.0,
+                },
+                neck: None,
+                shank_diameter: 6.0,
+                stickout: 30.0,
+                holder: vec![Section::cylinder(30.0, 20.0)],
+            },
+            &Margins {
+                shank: 0.5,
+                holder: 2.0,
+            },
+        );
+        let centre = Point3::new(50.0, 50.0, 13.0);
+        let (normal, feed) = (Vector3::z(), Vector3::x());
+        let anywhere = |_: &Vector3| true;
+        let choose = |clearance_deg: f64| {
+            AxisChooser::new(AxisOptions {
+                clearance_deg,
+                ..AxisOptions::default()
+            })
+            .choose(
+                &collider, &rays, &tool, &centre, &normal, &feed, None, &anywhere,
+            )
+            .unwrap()
+            .into_inner()
+        };
+        let preferred = preferred_axis(&normal, &feed, 10.0, 0.0);
+        let valid =
+            |a: &Vector3| axis_is_valid(&collider, &rays, &tool, &centre, a, &anywhere).is_ok();
+        assert!(!valid(&preferred));
+        let (border, clear) = (choose(0.0), choose(3.0));
+        assert!(valid(&border) && valid(&clear));
+        let turn = |a: &Vector3| angle_between(&preferred, a).to_degrees();
+        assert!(
+            (turn(&clear) - turn(&border) - 3.0).abs() < 1e-6,
+            "{} {}",
+            turn(&clear),
+            turn(&border)
+        );
+        // Turned back toward the preferred axis by 2.5°, the clear axis is still valid.
+        let back = slerp_toward(&clear, &preferred, 2.5);
+        assert!(valid(&back));
+    }
+
+    /// `from` turned toward `to` by `deg` degrees.
+    fn slerp_toward(from: &Vector3, to: &Vector3, deg: f64) -> Vector3 {
+        crate::geom::slerp(from, to, deg / angle_between(from, to).to_degrees())
     }
 }
