@@ -88,10 +88,7 @@ fn visibility(c: &mut Criterion) {
         // more cautious parent-ring rule.
         for (label, other) in [
             ("start at 42", options.clone().with_start_level(1)),
-            (
-                "triangles then edges",
-                options.clone().with_refine(Refine::TrianglesThenEdges),
-            ),
+            ("triangles", options.clone().with_refine(Refine::Triangles)),
             (
                 "parent rings",
                 options.clone().with_refine(Refine::ParentRings),
