@@ -827,4 +827,32 @@ mod tests {
             other => panic!("{other:?}"),
         }
     }
+
+    /// A tapered holder (cone 20 → 40 mm over 30 mm) beside the vertical edge of a tall block,
+    /// axis parallel to the edge: the clearance is the distance to the edge line less the
+    /// largest radius the edge faces, D − 20, within the circumscribed prism's 0.5 %.
+    #[test]
+    fn a_tapered_holder_beside_an_edge_has_its_closed_form_clearance() {
+        let block = cuboid(20.0, 20.0, 100.0);
+        let part = PartCollider::new(&block).unwrap();
+        let mut t = tool();
+        t.holder = vec![Section {
+            diameter: 20.0,
+            top_diameter: Some(40.0),
+            length: 30.0,
+        }];
+        let prepared = PreparedTool::new(&t, &M);
+        // The tool axis vertical, 30 mm from the edge x = 20, y = 20 along the diagonal.
+        let d = 30.0;
+        let s = d / std::f64::consts::SQRT_2;
+        let tip = [20.0 + s, 20.0 + s, 10.0];
+        let c = part.clearances(&prepared, &pose(tip, [0.0, 0.0, 1.0]), &far());
+        let exact = d - 20.0;
+        assert!(
+            c.holder <= exact + 5e-3 && c.holder >= exact - 0.005 * 20.0 - 5e-3,
+            "{c:?} vs {exact}"
+        );
+        // Shank (radius 3, up to 30 mm) at 30 mm from the edge: 27.
+        assert!((c.shank - (d - 3.0)).abs() < 5e-3, "{c:?}");
+    }
 }
