@@ -33,12 +33,15 @@ pub struct AxisOptions {
     pub smoothness_weight: f64,
     /// At most this many candidates get the exact (expensive) body test per point.
     pub max_exact_tests: usize,
-    /// Angular clearance, degrees: when the preferred axis is not valid, the first valid
-    /// candidate lies on the border of the valid set, a hair from a collision; the axis is
-    /// turned this much further from the preferred one when that is valid too, so that small
-    /// changes (smoothing, interpolation between poses, the real holder's tolerances) keep it
-    /// valid. 0 keeps the border axis.
+    /// Angular clearance, degrees: an axis is preferred when the four axes this far from it
+    /// (across and along its turn from the preferred axis) are valid too, so that small changes
+    /// (smoothing, interpolation between poses, the real holder's tolerances) keep it valid.
+    /// Candidates are taken in order of cost as before; the first valid one with that clearance
+    /// wins, and if none of the first `clearance_tries` valid ones has it, the first valid one
+    /// (on the border of the valid set). 0 takes the first valid candidate.
     pub clearance_deg: f64,
+    /// Valid candidates checked for clearance per point before falling back. Default 4.
+    pub clearance_tries: usize,
 }
 
 impl Default for AxisOptions {
@@ -51,6 +54,7 @@ impl Default for AxisOptions {
             smoothness_weight: 1.0,
             max_exact_tests: 48,
             clearance_deg: 3.0,
+            clearance_tries: 4,
         }
     }
 }
@@ -173,12 +177,42 @@ impl AxisChooser {
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut why = NoAxis::MachineLimits;
         let mut exact_tests = 0;
-        for (_, _, axis) in candidates {
+        let mut first_valid: Option<(f64, Vector3)> = None;
+        let mut tried = 0;
+        let delta = self.options.clearance_deg.to_radians();
+        for (_, i, axis) in candidates {
+            let angle = self.cones[i].0;
+            // Past a valid axis without clearance, only candidates at least the clearance
+            // angle further out can have it (the border runs between).
+            if first_valid.is_some_and(|(a0, _)| angle < a0 + delta) {
+                continue;
+            }
             match axis_is_valid(part, rays, tool, centre, &axis, reachable) {
                 Ok(()) => {
-                    return Ok(Direction::new_unchecked(self.with_clearance(
-                        part, rays, tool, centre, &preferred, axis, reachable,
-                    )));
+                    let clear = self.options.clearance_deg <= 0.0
+                        || self
+                            .has_clearance(part, rays, tool, centre, &preferred, &axis, reachable);
+                    if clear {
+                        return Ok(Direction::new_unchecked(axis));
+                    }
+                    if first_valid.is_none() {
+                        // The border is most likely between this axis and the preferred one:
+                        // first try the axis turned the clearance angle further out.
+                        if let Some(further) = turned_away(&preferred, &axis, delta)
+                            && angle + delta <= self.options.max_deviation_deg.to_radians()
+                            && axis_is_valid(part, rays, tool, centre, &further, reachable).is_ok()
+                            && self.has_clearance(
+                                part, rays, tool, centre, &preferred, &further, reachable,
+                            )
+                        {
+                            return Ok(Direction::new_normalize(further));
+                        }
+                    }
+                    first_valid.get_or_insert((angle, axis));
+                    tried += 1;
+                    if tried >= self.options.clearance_tries {
+                        break;
+                    }
                 }
                 Err(NoAxis::MachineLimits) => {}
                 Err(cheap @ (NoAxis::Occluded | NoAxis::Table)) => {
@@ -197,45 +231,51 @@ impl AxisChooser {
                 }
             }
         }
-        Err(why)
+        first_valid
+            .map(|(_, axis)| Direction::new_unchecked(axis))
+            .ok_or(why)
     }
 }
 
+/// `axis` turned by `angle` (radians) further from `preferred`, along their great circle; `None`
+/// when the two coincide.
+fn turned_away(preferred: &Vector3, axis: &Vector3, angle: f64) -> Option<Vector3> {
+    let about = preferred.cross(axis).try_normalize(1e-12)?;
+    Some(nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(about), angle) * axis)
+}
+
 impl AxisChooser {
-    /// `axis` (valid) turned `clearance_deg` further from `preferred` when that is valid too
-    /// and within the allowed deviation (see [`AxisOptions::clearance_deg`]); `axis` otherwise,
-    /// and always when it is the preferred axis itself (nothing invalid next to it then).
+    /// Whether the four axes `clearance_deg` from `axis` — toward and away from `preferred`,
+    /// and to either side — are valid too (see [`AxisOptions::clearance_deg`]).
     #[allow(clippy::too_many_arguments)]
-    fn with_clearance(
+    fn has_clearance(
         &self,
         part: &PartCollider,
         rays: &RayScene,
         tool: &PreparedTool,
         centre: &Point3,
         preferred: &Vector3,
-        axis: Vector3,
+        axis: &Vector3,
         reachable: &dyn Fn(&Vector3) -> bool,
-    ) -> Vector3 {
-        let turned = angle_between(preferred, &axis);
-        let extra = self.options.clearance_deg.to_radians();
-        if turned < 1e-9
-            || extra <= 0.0
-            || (turned + extra).to_degrees() > self.options.max_deviation_deg
-        {
-            return axis;
-        }
-        // Rotate about preferred × axis, away from the preferred axis.
-        let Some(about) = preferred.cross(&axis).try_normalize(1e-12) else {
-            return axis;
-        };
-        let further =
-            nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_unchecked(about), extra)
-                * axis;
-        if axis_is_valid(part, rays, tool, centre, &further, reachable).is_ok() {
-            further
-        } else {
-            axis
-        }
+    ) -> bool {
+        let delta = self.options.clearance_deg.to_radians();
+        // Along the turn from the preferred axis, and across it; any frame at the preferred
+        // axis itself.
+        let along = (axis - preferred * preferred.dot(axis))
+            .try_normalize(1e-9)
+            .map(|w| {
+                // The tangent at `axis` of the great circle from `preferred`.
+                (w * axis.dot(preferred) - preferred * w.dot(axis))
+                    .try_normalize(1e-12)
+                    .unwrap_or(w)
+            })
+            .unwrap_or_else(|| orthonormal_frame(axis).0);
+        let along = (along - axis * axis.dot(&along)).normalize();
+        let across = axis.cross(&along);
+        [along, -along, across, -across].iter().all(|w| {
+            let probe = axis * delta.cos() + w * delta.sin();
+            axis_is_valid(part, rays, tool, centre, &probe, reachable).is_ok()
+        })
     }
 }
 
@@ -326,8 +366,11 @@ mod tests {
         let (normal, feed) = (Vector3::z(), Vector3::x());
         let anywhere = |_: &Vector3| true;
         let choose = |clearance_deg: f64| {
+            // 1° cones: the first valid candidate is within 1° of the border.
             AxisChooser::new(AxisOptions {
                 clearance_deg,
+                step_deg: 1.0,
+                max_exact_tests: 10_000,
                 ..AxisOptions::default()
             })
             .choose(
@@ -344,14 +387,15 @@ mod tests {
         assert!(valid(&border) && valid(&clear));
         let turn = |a: &Vector3| angle_between(&preferred, a).to_degrees();
         assert!(
-            (turn(&clear) - turn(&border) - 3.0).abs() < 1e-6,
+            turn(&clear) > turn(&border),
             "{} {}",
             turn(&clear),
             turn(&border)
         );
-        // Turned back toward the preferred axis by 2.5°, the clear axis is still valid.
-        let back = slerp_toward(&clear, &preferred, 2.5);
-        assert!(valid(&back));
+        // The border axis has an invalid axis within 3° toward the preferred one; the chosen
+        // one does not: turned back by 3° it is still valid.
+        assert!(!valid(&slerp_toward(&border, &preferred, 3.0)));
+        assert!(valid(&slerp_toward(&clear, &preferred, 3.0)));
     }
 
     /// `from` turned toward `to` by `deg` degrees.
