@@ -291,6 +291,18 @@ impl PartCollider {
         c
     }
 
+    /// Whether a cylinder around the axis of `pose`, from `from` to `to` mm above the tip and of
+    /// radius `radius` (a circumscribed 32-gon prism), stays clear of the part.
+    pub fn cylinder_clear(&self, pose: &ToolPose, from: f64, to: f64, radius: f64) -> bool {
+        let body = Revolved {
+            from,
+            to,
+            radius_from: radius,
+            radius_to: radius,
+        };
+        !self.intersects(body.shape(false).as_ref(), &body.place(pose, self))
+    }
+
     fn intersects(&self, shape: &dyn Shape, at: &Pose) -> bool {
         query::intersection_test(at, shape, &Pose::IDENTITY, &self.trimesh)
             .map(|i| i.intersecting)

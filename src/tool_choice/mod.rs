@@ -51,6 +51,9 @@ pub struct ToolChoiceOptions {
     pub tilt_step_deg: f64,
     /// At most this many axes per tool and point get the exact body test. Default 48.
     pub max_exact_tests: usize,
+    /// The reach is measured on at most this many points, evenly spread (it costs about ten
+    /// holder-sized collision tests where the part is in the way). Default 2000.
+    pub reach_points: usize,
     /// Shank and holder margins, mm (the job's defaults 0.5 and 2).
     pub margins: Margins,
     /// The machine table at the part's lowest point, with this margin; `None` leaves it out.
@@ -66,6 +69,7 @@ impl Default for ToolChoiceOptions {
             max_tilt_deg: 90.0,
             tilt_step_deg: 10.0,
             max_exact_tests: 48,
+            reach_points: 2000,
             margins: Margins {
                 shank: 0.5,
                 holder: 2.0,
@@ -116,6 +120,10 @@ pub struct PointChoice {
     pub refusal: Option<Refusal>,
     /// Radius of the largest ball that fits here (lower bound of the bisection), mm.
     pub safe_ball: f64,
+    /// Reach needed with the chosen tool and axis, mm: how far from the tip a cylinder as wide
+    /// as the tool's holder (plus its margin) must start to clear the part. Measured on an
+    /// even subset of the points (`reach_points`); `None` elsewhere and without a tool.
+    pub reach: Option<f64>,
 }
 
 /// Everything `choose_tools` finds, as plain data.
@@ -167,6 +175,9 @@ pub struct ProposedTool {
     pub regions: usize,
     /// Why the next larger tool was refused on this tool's points (point counts).
     pub larger_refused_for: BTreeMap<Refusal, usize>,
+    /// The longest reach needed on its points, mm, against the tool's stickout.
+    pub reach_needed_mm: f64,
+    pub stickout_mm: f64,
     /// The largest regions (at most 10).
     pub largest_regions: Vec<Region>,
 }
@@ -181,6 +192,8 @@ pub struct Region {
     pub min_concave_radius_mm: Option<f64>,
     /// The largest ball that fits at every evaluated point of the region, mm.
     pub largest_safe_ball_mm: f64,
+    /// The longest reach its tool needs there (`PointChoice::reach`, on the measured points), mm.
+    pub reach_needed_mm: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -244,9 +257,11 @@ pub fn choose_tools(
     let stride = candidates.len().div_ceil(options.max_points.max(1)).max(1);
     let evaluated: Vec<u32> = candidates.iter().copied().step_by(stride).collect();
 
+    let reach_stride = evaluated.len().div_ceil(options.reach_points.max(1)).max(1);
     let points: Vec<PointChoice> = evaluated
         .par_iter()
-        .map(|&v| {
+        .enumerate()
+        .map(|(k, &v)| {
             let p = part.positions[v as usize];
             let n = normals[v as usize];
             let (safe_ball, too_big) =
@@ -269,12 +284,16 @@ pub fn choose_tools(
                 };
                 match outcome {
                     Ok(axis) => {
+                        let assembly = &library.tools[order[rank]];
                         return PointChoice {
                             vertex: v,
                             tool: Some(order[rank]),
                             axis,
                             refusal,
                             safe_ball,
+                            reach: (k % reach_stride == 0).then(|| {
+                                reach_needed(&collider, tool, assembly, &p, &n, &axis, options)
+                            }),
                         };
                     }
                     Err(why) => refusal = Some(why),
@@ -286,6 +305,7 @@ pub fn choose_tools(
                 axis: Vector3::zeros(),
                 refusal,
                 safe_ball,
+                reach: None,
             }
         })
         .collect();
@@ -308,6 +328,58 @@ pub fn choose_tools(
         vertex_tool,
         report,
     })
+}
+
+/// The reach `tool` needs at `p` along `axis` (see [`PointChoice::reach`]): the lowest start,
+/// by bisection to 0.1 mm between the flute top and twice the stickout, of a cylinder of the
+/// holder's largest radius plus its margin, as long as the holder, that clears the part. The
+/// tool's own stickout is enough when its holder clears; a reach above it says how much
+/// longer a tool with a straight holder that wide would have to stick out.
+fn reach_needed(
+    collider: &PartCollider,
+    tool: &PreparedTool,
+    assembly: &crate::tool::ToolAssembly,
+    p: &crate::geom::Point3,
+    n: &Vector3,
+    axis: &Vector3,
+    options: &ToolChoiceOptions,
+) -> f64 {
+    let Some(tip) = tool.cutter().tip_touching(p, n, axis) else {
+        return 0.0;
+    };
+    let pose = ToolPose {
+        tip,
+        axis: Direction::new_normalize(*axis),
+    };
+    let radius = assembly
+        .holder
+        .iter()
+        .map(|s| s.diameter.max(s.top()) / 2.0)
+        .fold(assembly.shank_diameter / 2.0, f64::max)
+        + options.margins.holder;
+    let length: f64 = assembly
+        .holder
+        .iter()
+        .map(|s| s.length)
+        .sum::<f64>()
+        .max(1.0);
+    let clear = |s: f64| collider.cylinder_clear(&pose, s, s + length, radius);
+    let (mut lo, mut hi) = (assembly.flute_length(), 2.0 * assembly.stickout);
+    if clear(lo) {
+        return lo;
+    }
+    if !clear(hi) {
+        return hi;
+    }
+    while hi - lo > 0.1 {
+        let mid = 0.5 * (lo + hi);
+        if clear(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
 }
 
 /// The largest ball radius (≤ `cap`) touching `p` along `n` within `tolerance`, by bisection:
@@ -532,35 +604,40 @@ fn summarise(
 
     let (label, region_count) = regions(ring, vertex_tool);
     // Per region: vertices, area, weighted centre, min concave radius, min safe ball.
-    let mut per_region =
-        vec![(0usize, 0.0f64, Vector3::zeros(), None::<f64>, f64::INFINITY); region_count];
+    let mut per_region = vec![
+        Region {
+            vertices: 0,
+            area_mm2: 0.0,
+            centre: [0.0; 3],
+            min_concave_radius_mm: None,
+            largest_safe_ball_mm: f64::INFINITY,
+            reach_needed_mm: 0.0,
+        };
+        region_count
+    ];
+    let mut moments = vec![Vector3::zeros(); region_count];
     for v in 0..part.positions.len() {
         if label[v] == u32::MAX {
             continue;
         }
         let r = &mut per_region[label[v] as usize];
-        r.0 += 1;
-        r.1 += areas[v];
-        r.2 += part.positions[v].coords * areas[v];
+        r.vertices += 1;
+        r.area_mm2 += areas[v];
+        moments[label[v] as usize] += part.positions[v].coords * areas[v];
         if let Some(c) = curvatures[v].and_then(|k| k.concave_radius(flat)) {
-            r.3 = Some(r.3.map_or(c, |m: f64| m.min(c)));
+            r.min_concave_radius_mm = Some(r.min_concave_radius_mm.map_or(c, |m| m.min(c)));
         }
     }
     for p in points {
         let r = &mut per_region[label[p.vertex as usize] as usize];
-        r.4 = r.4.min(p.safe_ball);
+        r.largest_safe_ball_mm = r.largest_safe_ball_mm.min(p.safe_ball);
+        r.reach_needed_mm = r.reach_needed_mm.max(p.reach.unwrap_or(0.0));
     }
-    let region_of = |index: usize| {
-        let (n, area, sum, concave, ball) = per_region[index];
-        let c = if area > 0.0 { sum / area } else { sum };
-        Region {
-            vertices: n,
-            area_mm2: area,
-            centre: [c.x, c.y, c.z],
-            min_concave_radius_mm: concave,
-            largest_safe_ball_mm: ball,
-        }
-    };
+    for (r, m) in per_region.iter_mut().zip(&moments) {
+        let c = if r.area_mm2 > 0.0 { m / r.area_mm2 } else { *m };
+        r.centre = [c.x, c.y, c.z];
+    }
+    let region_of = |index: usize| per_region[index].clone();
     let mut regions_of_tool: BTreeMap<Option<usize>, Vec<usize>> = BTreeMap::new();
     let mut seen = vec![false; region_count];
     for v in 0..part.positions.len() {
@@ -619,11 +696,20 @@ fn summarise(
             vertices,
             regions: list.len(),
             larger_refused_for: refusals(Some(i)),
+            reach_needed_mm: points
+                .iter()
+                .filter(|p| p.tool == Some(i))
+                .filter_map(|p| p.reach)
+                .fold(0.0, f64::max),
+            stickout_mm: tool.stickout,
             largest_regions: regions,
         });
     }
     let unreachable_regions = regions_of_tool.get(&None).cloned().unwrap_or_default();
-    let unreachable_area: f64 = unreachable_regions.iter().map(|&r| per_region[r].1).sum();
+    let unreachable_area: f64 = unreachable_regions
+        .iter()
+        .map(|&r| per_region[r].area_mm2)
+        .sum();
     ToolChoiceReport {
         vertices: part.positions.len(),
         points_evaluated: points.len(),
@@ -639,7 +725,10 @@ fn summarise(
         proposal,
         not_used,
         unreachable: Unreachable {
-            vertices: unreachable_regions.iter().map(|&r| per_region[r].0).sum(),
+            vertices: unreachable_regions
+                .iter()
+                .map(|&r| per_region[r].vertices)
+                .sum(),
             area_mm2: unreachable_area,
             percent: pct(unreachable_area),
             regions: unreachable_regions.len(),

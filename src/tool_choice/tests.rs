@@ -195,11 +195,29 @@ fn tools_are_chosen_largest_first_and_every_choice_holds_against_brute_force() {
         let on_top = x.z == 20.0 && n.z > 0.99;
         if on_top {
             assert_eq!(p.tool, Some(1), "top at {x:?}");
+            // Nothing above the top: the holder-wide cylinder clears from the flute top on.
+            assert_eq!(p.reach, Some(library.tools[1].flute_length()));
         }
         if on_slot_wall {
             // D12 and D8 do not fit a 7 mm slot; D6 does.
             assert_eq!(p.tool, Some(0), "slot wall at {x:?}: {p:?}");
             assert_eq!(p.refusal, Some(Refusal::Gouge));
+            // The holder-wide cylinder (radius 9 + 2, 40 long) from the reported reach on holds
+            // no vertex of the part (a 2 mm grid), checked point by point.
+            let tip = library.tools[0]
+                .cutter
+                .tip_touching(&x, &n, &p.axis)
+                .unwrap();
+            let reach = p.reach.unwrap();
+            for q in &part.positions {
+                let d = q - tip;
+                let h = d.dot(&p.axis);
+                let rho = (d - p.axis * h).norm();
+                assert!(
+                    !(h >= reach && h <= reach + 40.0 && rho < 11.0 - 1e-6),
+                    "{q:?} inside the cylinder from {reach} at {x:?}"
+                );
+            }
             in_slot += 1;
         }
         // Independent check: the chosen ball, touching along the normal, is within the
