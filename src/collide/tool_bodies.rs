@@ -646,16 +646,7 @@ mod tests {
     fn holder_hits_a_wall_when_tilted_toward_it() {
         // Ball on the plate near the wall of a tall block: tilt the tool toward the block and
         // the holder (radius 15) reaches it; tilt away and it does not.
-        let mut m = cuboid(100.0, 100.0, 20.0);
-        let wall = cuboid(10.0, 100.0, 60.0);
-        let base = m.positions.len() as u32;
-        m.positions.extend(
-            wall.positions
-                .iter()
-                .map(|p| Point3::new(p.x + 120.0, p.y, p.z)),
-        );
-        m.triangles
-            .extend(wall.triangles.iter().map(|t| t.map(|i| i + base)));
+        let m = crate::mesh::fixtures::plate_and_wall(20.0, 120.0);
         let part = PartCollider::new(&m).unwrap();
         // The ball (r = 3) rests on the plate at x = 95; the tip moves with the axis.
         let on_ball = |axis: [f64; 3]| {

@@ -148,6 +148,22 @@ pub(crate) mod fixtures {
     }
 
     /// A UV sphere of radius `r` around the origin, outward.
+    /// A 100 × 100 plate `plate_height` thick with a 10 × 100 × 60 block (a wall) standing at
+    /// x = `wall_x`: two closed pieces, for tests of tools near walls.
+    pub fn plate_and_wall(plate_height: f64, wall_x: f64) -> Mesh {
+        let mut m = cuboid(100.0, 100.0, plate_height);
+        let wall = cuboid(10.0, 100.0, 60.0);
+        let base = m.positions.len() as u32;
+        m.positions.extend(
+            wall.positions
+                .iter()
+                .map(|p| Point3::new(p.x + wall_x, p.y, p.z)),
+        );
+        m.triangles
+            .extend(wall.triangles.iter().map(|t| t.map(|i| i + base)));
+        m
+    }
+
     pub fn uv_sphere(r: f64, stacks: u32, slices: u32) -> Mesh {
         let mut positions = vec![Point3::new(0.0, 0.0, r)];
         for i in 1..stacks {

@@ -330,18 +330,8 @@ mod tests {
     #[test]
     fn a_clearance_angle_keeps_the_axis_off_the_border_of_the_valid_set() {
         use crate::collide::Margins;
-        use crate::mesh::fixtures::cuboid;
         use crate::tool::{Cutter, Section, ToolAssembly};
-        let mut part = cuboid(100.0, 100.0, 10.0);
-        let wall = cuboid(10.0, 100.0, 60.0);
-        let base = part.positions.len() as u32;
-        part.positions.extend(
-            wall.positions
-                .iter()
-                .map(|p| Point3::new(p.x + 60.0, p.y, p.z)),
-        );
-        part.triangles
-            .extend(wall.triangles.iter().map(|t| t.map(|v| v + base)));
+        let part = crate::mesh::fixtures::plate_and_wall(10.0, 60.0);
         let collider = PartCollider::new(&part).unwrap();
         let rays = RayScene::new(&part);
         let tool = PreparedTool::new(
