@@ -9,7 +9,7 @@
 //! leaves it.
 
 pub mod distance;
-mod tool_bodies;
+pub(crate) mod tool_bodies;
 
 pub use distance::{Closest, SurfaceDistance};
 pub use tool_bodies::{

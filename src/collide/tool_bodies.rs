@@ -569,13 +569,14 @@ fn to_f32(v: &Vector3) -> Vec3 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::geom::Direction;
     use crate::mesh::fixtures::cuboid;
     use crate::tool::{Cutter, Section};
 
-    fn tool() -> ToolAssembly {
+    /// Ball D6, 12 mm flutes, D6 shank sticking out 30 mm, a D30 × 20 holder.
+    pub(crate) fn tool() -> ToolAssembly {
         ToolAssembly {
             id: 1,
             name: String::new(),

@@ -330,23 +330,11 @@ mod tests {
     #[test]
     fn a_clearance_angle_keeps_the_axis_off_the_border_of_the_valid_set() {
         use crate::collide::Margins;
-        use crate::tool::{Cutter, Section, ToolAssembly};
         let part = crate::mesh::fixtures::plate_and_wall(10.0, 60.0);
         let collider = PartCollider::new(&part).unwrap();
         let rays = RayScene::new(&part);
         let tool = PreparedTool::new(
-            &ToolAssembly {
-                id: 1,
-                name: String::new(),
-                cutter: Cutter::Ball {
-                    diameter: 6.0,
-                    flute_length: 12.0,
-                },
-                neck: None,
-                shank_diameter: 6.0,
-                stickout: 30.0,
-                holder: vec![Section::cylinder(30.0, 20.0)],
-            },
+            &crate::collide::tool_bodies::tests::tool(),
             &Margins {
                 shank: 0.5,
                 holder: 2.0,
