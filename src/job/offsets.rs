@@ -14,7 +14,9 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::mesh::io::GlbBuilder;
 use crate::multires::{RemeshOptions, WaveletOptions};
-use crate::offset::{OffsetOptions, OffsetShape, ShapeReport, ShapeSpec, nested_offsets_opt};
+use crate::offset::{
+    OffsetOptions, OffsetShape, ShapeReport, ShapeSpec, local_fit, nested_offsets_opt,
+};
 
 /// `offsets.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -60,14 +62,26 @@ pub struct OffsetsTimings {
 
 /// The level surfaces and bounds for `allowances`: shape i offsets level min(i, finest), with
 /// bound = exact L∞ deviation of that level's truncated surface from the finest level + the
-/// finest level's Hausdorff distance to the part, and the same per vertex as local bounds.
+/// finest level's fit to the part (the larger of its Hausdorff distance and its largest local
+/// fit), and per vertex as local bounds |deviation at v| + the finest level's local fit at v.
 pub(crate) fn level_specs(
+    part: &Mesh,
     analysed: &AnalysedHierarchy,
     allowances: &[f64],
 ) -> Result<Vec<(usize, ShapeSpec)>> {
     let finest_level = analysed.hierarchy.levels.len() - 1;
-    let finest_hausdorff = analysed.hierarchy.finest().hausdorff;
     let triangles = analysed.wavelets.finest_triangles().to_vec();
+    let finest = Mesh {
+        positions: analysed.hierarchy.finest().mesh.positions.clone(),
+        triangles: triangles.clone(),
+    };
+    // Half the finest level's mean edge: the fit varies from one level triangle to the next.
+    let spacing = 0.5 * (2.0 * finest.surface_area() / finest.triangles.len().max(1) as f64).sqrt();
+    let fit = local_fit(part, &finest, spacing);
+    let finest_fit = fit
+        .iter()
+        .copied()
+        .fold(analysed.hierarchy.finest().hausdorff, f64::max);
     allowances
         .iter()
         .enumerate()
@@ -82,11 +96,12 @@ pub(crate) fn level_specs(
                 .deviation_to_finest(&analysed.analysed, level)
                 .map_err(wavelet_error)?;
             // The deviation is linear over each finest triangle, so a part point near a point
-            // of triangle t is within max |deviation| of t's corners + the Hausdorff distance.
+            // of triangle t is within max |deviation| of t's corners + the finest fit there.
             let vertex_bounds = deviation
                 .per_vertex
                 .iter()
-                .map(|d| d.norm() + finest_hausdorff)
+                .zip(&fit)
+                .map(|(d, f)| d.norm() + f)
                 .collect();
             Ok((
                 level,
@@ -96,7 +111,7 @@ pub(crate) fn level_specs(
                         triangles: triangles.clone(),
                     },
                     allowance,
-                    bound: deviation.linf + finest_hausdorff,
+                    bound: deviation.linf + finest_fit,
                     vertex_bounds: Some(vertex_bounds),
                 },
             ))
@@ -119,7 +134,7 @@ pub fn offset_specs(
     allowances: &[f64],
 ) -> Result<Vec<ShapeSpec>> {
     let analysed = analyse_hierarchy(part, remesh, &tight_levels())?;
-    Ok(level_specs(&analysed, allowances)?
+    Ok(level_specs(part, &analysed, allowances)?
         .into_iter()
         .map(|(_, spec)| spec)
         .collect())
@@ -183,7 +198,7 @@ pub fn offsets(
         ));
     }
     let analysed = analyse_hierarchy(part, remesh, &tight_levels())?;
-    let specs = level_specs(&analysed, allowances)?;
+    let specs = level_specs(part, &analysed, allowances)?;
     let t = Instant::now();
     let plain: Vec<ShapeSpec> = specs.iter().map(|(_, s)| s.clone()).collect();
     let shapes = nested_offsets_opt(part, &plain, options)

@@ -13,6 +13,9 @@ use crate::mesh::Mesh;
 /// terms are both near zero) settle in one or two rounds; more buys nothing.
 const PROJECTION_ROUNDS: usize = 4;
 
+/// Rounds of shortening the moves of vertices that would turn a triangle over.
+const REVERT_ROUNDS: usize = 4;
+
 /// One term: the region within `level` of a surface, and its inside when it is closed
 /// (signed distance by pseudo-normals). Without the inside, the tube around a closed surface
 /// would also have an inner sheet: a cavity that splits the shape in two.
@@ -117,7 +120,8 @@ impl Field<'_> {
     /// ℓ²/(6·offset) (ℓ its longest edge: the sag of a triangle of that size inscribed in a
     /// sphere of radius `offset`, the smallest radius of a convex part of the offset), so that
     /// edges and faces, not just vertices, keep their distance. A vertex whose move would flip
-    /// an incident triangle stays where the grid put it; the verification judges it.
+    /// an incident triangle goes only part of the way, or stays where the grid put it; the
+    /// verification judges it.
     pub fn project_vertices(&self, mut mesh: Mesh, offset: f64) -> Mesh {
         let mut longest = vec![0.0f64; mesh.positions.len()];
         for t in &mesh.triangles {
@@ -132,22 +136,36 @@ impl Field<'_> {
             .map(|t| mesh.face_normal(t))
             .collect();
         let original = mesh.positions.clone();
-        mesh.positions = original
+        let projected: Vec<Point3> = original
             .par_iter()
             .zip(&longest)
             .map(|(p, l)| self.project(p, l * l / (6.0 * offset.max(f64::MIN_POSITIVE))))
             .collect();
-        let mut revert = vec![false; original.len()];
-        for (t, tri) in mesh.triangles.iter().enumerate() {
-            if mesh.face_normal(t).dot(&before[t]) <= 0.0 {
-                for &v in tri {
-                    revert[v as usize] = true;
+        // A vertex whose move turns an incident triangle over goes only part of the way
+        // (halved each round); after the last round it stays where the grid put it.
+        let mut share = vec![1.0f64; original.len()];
+        for round in 0..=REVERT_ROUNDS {
+            for v in 0..original.len() {
+                mesh.positions[v] = original[v] + (projected[v] - original[v]) * share[v];
+            }
+            if round == REVERT_ROUNDS {
+                break;
+            }
+            let mut turned = false;
+            for (t, tri) in mesh.triangles.iter().enumerate() {
+                if mesh.face_normal(t).dot(&before[t]) <= 0.0 {
+                    turned = true;
+                    for &v in tri {
+                        share[v as usize] = if round + 1 == REVERT_ROUNDS {
+                            0.0
+                        } else {
+                            share[v as usize] * 0.5
+                        };
+                    }
                 }
             }
-        }
-        for (v, r) in revert.iter().enumerate() {
-            if *r {
-                mesh.positions[v] = original[v];
+            if !turned {
+                break;
             }
         }
         mesh

@@ -42,6 +42,7 @@
 
 mod extract;
 mod field;
+mod fit;
 mod normal_offset;
 mod verify;
 
@@ -58,6 +59,7 @@ use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 use crate::mesh::topology::Topology;
 
+pub use fit::local_fit;
 pub use verify::{CLEARANCE_SLACK_MM, Samples, sample_surface};
 
 /// The fewest grid cells across the offset a shape is extracted with (see `OffsetOptions`).
@@ -401,6 +403,14 @@ pub fn nested_offsets(part: &Mesh, specs: &[ShapeSpec]) -> Result<Vec<OffsetShap
     nested_offsets_opt(part, specs, &OffsetOptions::default())
 }
 
+/// One bound class of a level surface as a tube: the radius the grid extracted it at (raised
+/// to two cells where thinner) and its own radius, which the vertices are projected down to.
+struct Tube {
+    surface: SurfaceDistance,
+    extracted: f64,
+    radius: f64,
+}
+
 /// The terms of Rⱼ (module docs): the part's inside (exact sign: the part is a prepared,
 /// closed, manifold mesh), the tube around level j, and the tubes around every finer level
 /// grown by the difference of clearances, which holds the finer shapes (nesting, whatever the
@@ -409,16 +419,18 @@ pub fn nested_offsets(part: &Mesh, specs: &[ShapeSpec]) -> Result<Vec<OffsetShap
 /// from the surface would put sign changes outside the band.
 fn region_terms<'a>(
     part: &'a PartQuery,
-    tubes: &'a [(SurfaceDistance, f64)],
-    finer: &'a [(Vec<(SurfaceDistance, f64)>, f64)],
+    tubes: &'a [Tube],
+    finer: &'a [(Vec<Tube>, f64)],
     clearance: f64,
+    extracted: bool,
 ) -> Vec<field::Term<'a>> {
+    let level = |t: &Tube| if extracted { t.extracted } else { t.radius };
     let mut terms: Vec<field::Term<'a>> = tubes
         .iter()
-        .map(|(surface, offset)| field::Term {
-            surface,
+        .map(|t| field::Term {
+            surface: &t.surface,
             closed: false,
-            level: *offset,
+            level: level(t),
         })
         .collect();
     if part.closed {
@@ -429,10 +441,10 @@ fn region_terms<'a>(
         });
     }
     for (classes, inner_clearance) in finer {
-        terms.extend(classes.iter().map(|(s, offset)| field::Term {
-            surface: s,
+        terms.extend(classes.iter().map(|t| field::Term {
+            surface: &t.surface,
             closed: false,
-            level: offset + (clearance - inner_clearance),
+            level: level(t) + (clearance - inner_clearance),
         }));
     }
     terms
@@ -453,7 +465,7 @@ pub fn nested_offsets_opt(
     let mut built: Vec<(OffsetShape, Samples)> = Vec::with_capacity(specs.len());
     // The level surfaces of the shapes built so far (innermost first), by bound class with the
     // offset each was extracted at, and their clearance a + r.
-    let mut tubes: Vec<(Vec<(SurfaceDistance, f64)>, f64)> = Vec::with_capacity(specs.len());
+    let mut tubes: Vec<(Vec<Tube>, f64)> = Vec::with_capacity(specs.len());
     for (index, spec) in specs.iter().enumerate().rev() {
         let inner = built.last().map(|(shape, samples)| (shape, samples));
         let clearance = spec.allowance + options.tool_radius;
@@ -469,7 +481,11 @@ pub fn nested_offsets_opt(
             Some(mesh) => {
                 let class_tubes = classes
                     .iter()
-                    .map(|(m, e)| (SurfaceDistance::new(m), clearance + e))
+                    .map(|(m, e)| Tube {
+                        surface: SurfaceDistance::new(m),
+                        extracted: clearance + e,
+                        radius: clearance + e,
+                    })
                     .collect();
                 (mesh, Method::NormalOffset, class_tubes)
             }
@@ -481,9 +497,13 @@ pub fn nested_offsets_opt(
                 // every guarantee and costs excess, reported.
                 let thinnest = MIN_CELLS_PER_OFFSET * spacing;
                 offset = offset.max(thinnest);
-                let class_tubes: Vec<(SurfaceDistance, f64)> = classes
+                let class_tubes: Vec<Tube> = classes
                     .iter()
-                    .map(|(m, e)| (SurfaceDistance::new(m), (clearance + e).max(thinnest)))
+                    .map(|(m, e)| Tube {
+                        surface: SurfaceDistance::new(m),
+                        extracted: (clearance + e).max(thinnest),
+                        radius: clearance + e,
+                    })
                     .collect();
                 let mut seeds = spec.surface.positions.clone();
                 seeds.extend_from_slice(&part.positions);
@@ -491,13 +511,32 @@ pub fn nested_offsets_opt(
                     seeds.extend_from_slice(&shape.mesh.positions);
                 }
                 let field = field::Field {
-                    terms: region_terms(&query, &class_tubes, &tubes, clearance),
+                    terms: region_terms(&query, &class_tubes, &tubes, clearance, true),
                 };
                 let mesh = extract::extract(&field, &seeds, spacing)
                     .map_err(|reason| OffsetError::Grid { index, reason })?;
                 // The chord margin follows the thinnest tube (the sharpest offset curvature).
-                let thinnest_tube = class_tubes.iter().map(|(_, o)| *o).fold(offset, f64::min);
-                let mesh = field.project_vertices(mesh, thinnest_tube);
+                let thinnest_tube = class_tubes
+                    .iter()
+                    .map(|t| t.extracted)
+                    .fold(offset, f64::min);
+                let raised = class_tubes.iter().any(|t| t.radius < t.extracted)
+                    || tubes
+                        .iter()
+                        .flat_map(|(t, _)| t)
+                        .any(|t| t.radius < t.extracted);
+                let mesh = if raised {
+                    // The grid resolved the shape at two cells; its vertices now go down onto
+                    // the tubes' own radii. Where the coarse triangles cut a sharp convex
+                    // offset the verification pushes them back out.
+                    let thin = field::Field {
+                        terms: region_terms(&query, &class_tubes, &tubes, clearance, false),
+                    };
+                    offset = clearance + spec.bound;
+                    thin.project_vertices(mesh, thinnest_tube)
+                } else {
+                    field.project_vertices(mesh, thinnest_tube)
+                };
                 drop(field);
                 (
                     mesh,
@@ -546,7 +585,7 @@ pub fn nested_offsets_opt(
             build_s,
             verify_s,
         };
-        let vertex_excess = mesh
+        let vertex_excess: Vec<f64> = mesh
             .positions
             .par_iter()
             .map(|p| query.signed_distance(p) - clearance)

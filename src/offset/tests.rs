@@ -246,3 +246,28 @@ fn local_bounds_must_fit_the_surface_and_the_bound() {
     spec[0].vertex_bounds = Some(vec![0.6; part.positions.len()]);
     assert!(nested_offsets(&part, &spec).is_err());
 }
+
+/// A shell thinner than two grid cells is extracted at two cells and then projected down to
+/// its own radius: the excess is the chord margin, not the grid's floor.
+#[test]
+fn a_thin_shell_is_projected_down_from_the_grid_floor() {
+    let part = uv_sphere(10.0, 48, 96);
+    let allowance = 0.05;
+    // An open level surface (one triangle short) is never offset along its normals.
+    let mut level = part.clone();
+    level.triangles.pop();
+    let shapes = nested_offsets(&part, &specs(&level, &[allowance], 0.0)).unwrap();
+    assert_guarantees(&shapes);
+    let r = &shapes[0].report;
+    let Method::DistanceGrid { spacing_mm } = r.method else {
+        panic!("a sphere's own surface is offset on the grid here: {r:?}");
+    };
+    assert!(
+        2.0 * spacing_mm > 2.0 * allowance,
+        "the floor is thicker: {r:?}"
+    );
+    assert!(r.mean_excess_mm < 0.5 * allowance, "{r:?}");
+    for p in shapes[0].mesh.positions.iter().step_by(97) {
+        assert!(brute_distance(&part, p) >= allowance - 1e-6);
+    }
+}
