@@ -141,8 +141,10 @@ fn offsets_of_the_shared_manifold_meshes() {
 
 /// Rotate and translate the part: the hierarchy and the grid meet it differently, so the
 /// shapes differ in their triangles, but their figures stay within 10 % and half a grid cell
-/// (the grid is anchored to the origin, and where the shell is raised to two cells its
-/// excess is set by where the lattice falls).
+/// (the grid is anchored to the origin). The max excess of a shell extracted at two cells and
+/// projected down is an exception: the few vertices whose move would turn a triangle over stay
+/// up to two cells out, and which ones do is set by where the lattice falls; it is held to
+/// 10 % and two cells.
 #[test]
 fn a_rigid_motion_leaves_the_figures() {
     let part = load(&common::repo_file("data/blade.glb"), "mm");
@@ -162,15 +164,16 @@ fn a_rigid_motion_leaves_the_figures() {
             wavemill::offset::Method::DistanceGrid { spacing_mm } => spacing_mm,
             wavemill::offset::Method::NormalOffset => 0.0,
         };
-        let close = |p: f64, q: f64, what: &str| {
+        let within = |p: f64, q: f64, cells: f64, what: &str| {
             assert!(
-                (p - q).abs() <= 0.1 * p.abs().max(q.abs()) + 0.5 * spacing + 1e-6,
+                (p - q).abs() <= 0.1 * p.abs().max(q.abs()) + cells * spacing + 1e-6,
                 "{what}: {p} vs {q}"
             );
         };
+        let close = |p: f64, q: f64, what: &str| within(p, q, 0.5, what);
         close(x.bound_mm, y.bound_mm, "bound");
         close(x.mean_excess_mm, y.mean_excess_mm, "mean excess");
-        close(x.max_excess_mm, y.max_excess_mm, "max excess");
+        within(x.max_excess_mm, y.max_excess_mm, 2.0, "max excess");
         close(
             x.min_clearance_minus_allowance_mm,
             y.min_clearance_minus_allowance_mm,

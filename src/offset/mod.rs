@@ -24,17 +24,21 @@
 //! region's distance field on a sparse narrow-band grid (surface nets), so the folds an offset
 //! makes in concave regions never appear: the result is the boundary of the offset region. Each
 //! vertex is then moved exactly onto the level set (plus a chord margin). The grid spacing is
-//! tⱼ/4, but no finer than the part's diagonal / 300; a shell thinner than two cells is raised
-//! to two cells (reported as a larger `offset_mm` and excess). The innermost shape is first
+//! tⱼ/4, but no finer than the part's diagonal / 300; a shell thinner than two cells (or a thin
+//! part feature) would slip between the grid's corners, so such a shape is extracted from the
+//! region with every tube raised to two cells, and its vertices are then projected down onto
+//! the tubes' own radii (moves that would turn a triangle over are shortened); the
+//! verification pushes out whatever the coarse triangles cut off. The innermost shape is first
 //! tried as the closed level surface pushed out along conservative vertex directions, which
 //! keeps its small offset exact; it is refused (and made on the grid) where a triangle would
 //! flip, which happens on the fitted finest levels of the CAD impellers.
 //!
-//! Local bounds (DESIGN.md §3.4 "locally per region"): with per-vertex bounds eᵥ, a triangle
+//! Local bounds (DESIGN.md §3.4 "locally per region"; [`local_fit`] measures the finest
+//! level's part of them): with per-vertex bounds eᵥ, a triangle
 //! needs only the largest of its corners' (the deviation is linear over it), so tube(Lⱼ, tⱼ) is
 //! the union of tubes around the triangles of each bound class — eⱼ, eⱼ/2, eⱼ/4, eⱼ/8 and below,
 //! each rounded up to its class — and the shape stays as thin as the level is close to the part
-//! where it is close. Thinner tubes are still raised to two grid cells.
+//! where it is close.
 //!
 //! Nothing above is trusted: `verify` checks every shape with exact f64 distance queries on
 //! dense samples of the shape (clearance), of the part (inside by ray parity, at depth), and of
@@ -249,8 +253,8 @@ pub struct ShapeReport {
     pub tool_radius_mm: f64,
     /// eⱼ.
     pub bound_mm: f64,
-    /// The offset of the level surface: tⱼ = aⱼ + r + eⱼ, or two grid cells when that is more
-    /// (a thinner shell is not resolved by the grid).
+    /// The offset of the level surface: tⱼ = aⱼ + r + eⱼ (a thinner shell is extracted at two
+    /// grid cells and projected down to it).
     pub offset_mm: f64,
     pub method: Method,
     pub vertices: usize,
@@ -493,8 +497,7 @@ pub fn nested_offsets_opt(
                 let spacing =
                     (offset / options.cells_per_offset).max(diagonal / options.max_cells_across);
                 // A shell thinner than two cells is not resolved by the grid (its sign changes
-                // are missed between corners): the offset is raised to two cells, which keeps
-                // every guarantee and costs excess, reported.
+                // are missed between corners): it is extracted at two cells, then projected.
                 let thinnest = MIN_CELLS_PER_OFFSET * spacing;
                 offset = offset.max(thinnest);
                 let class_tubes: Vec<Tube> = classes
