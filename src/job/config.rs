@@ -208,6 +208,13 @@ pub struct StrategySection {
     /// Width (σ) of the Gaussian average of the axes along a pass, mm; 0 leaves only the rate
     /// limit.
     pub axis_smoothing_window_mm: f64,
+    /// Stock to leave by semi-finishing before the finishing passes, mm, strictly decreasing
+    /// (issue 4): one intermediate shape of the part's hierarchy per allowance (shape j offsets
+    /// level j, as `wavemill offsets` builds them), each machined with the ball centre driven
+    /// on the shape, coarsest first. Empty: finishing only.
+    pub semi_finish_allowances: Vec<f64>,
+    /// Scallop height of the semi-finishing passes, mm.
+    pub semi_finish_scallop_height: f64,
 }
 
 impl Default for StrategySection {
@@ -223,6 +230,8 @@ impl Default for StrategySection {
             max_axis_turn_deg: 5.0,
             max_axis_change_deg_per_mm: 2.0,
             axis_smoothing_window_mm: 2.0,
+            semi_finish_allowances: Vec::new(),
+            semi_finish_scallop_height: 0.05,
         }
     }
 }
@@ -328,6 +337,18 @@ impl Job {
         positive("strategy.scallop_height", self.strategy.scallop_height)?;
         positive("strategy.tolerance", self.strategy.tolerance)?;
         positive("strategy.max_step", self.strategy.max_step)?;
+        positive(
+            "strategy.semi_finish_scallop_height",
+            self.strategy.semi_finish_scallop_height,
+        )?;
+        let allowances = &self.strategy.semi_finish_allowances;
+        for (i, &a) in allowances.iter().enumerate() {
+            if !(a.is_finite() && a > 0.0 && (i == 0 || a < allowances[i - 1])) {
+                return Err(format!(
+                    "strategy.semi_finish_allowances must be finite, > 0 mm and strictly decreasing; entry {i} is {a}"
+                ));
+            }
+        }
         positive(
             "strategy.max_axis_turn_deg",
             self.strategy.max_axis_turn_deg,

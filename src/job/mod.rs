@@ -17,6 +17,7 @@ mod pipeline;
 mod preview;
 mod report;
 mod samples;
+mod semi_finish;
 mod tools;
 
 pub use access::{
@@ -32,7 +33,8 @@ pub use contour::{
 pub use levels::{LevelSummary, LevelsReport, levels};
 pub use offsets::{OffsetsOutput, OffsetsReport, ShapeSummary, offset_specs, offsets, shape_glb};
 pub use output::{write_atomically, write_outputs};
-pub use pipeline::{Observer, PlanOutput, Quiet, load_part, plan};
+pub use pipeline::{Observer, Operation, PlanOutput, Quiet, load_part, plan};
 pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use samples::{SamplePart, sample_files};
+pub use semi_finish::SemiFinishSummary;
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

@@ -140,6 +140,25 @@ pub fn offset_specs(
         .collect())
 }
 
+/// The verified stock-to-leave shapes of `part` for `allowances` (coarsest first), each with
+/// the hierarchy level it offsets: what `plan` semi-finishes to.
+pub(crate) fn stock_shapes(
+    part: &Mesh,
+    remesh: &RemeshOptions,
+    allowances: &[f64],
+) -> Result<Vec<(usize, OffsetShape)>> {
+    let analysed = analyse_hierarchy(part, remesh, &tight_levels())?;
+    let specs = level_specs(part, &analysed, allowances)?;
+    let plain: Vec<ShapeSpec> = specs.iter().map(|(_, s)| s.clone()).collect();
+    let shapes = nested_offsets_opt(part, &plain, &OffsetOptions::default())
+        .map_err(|e| Error::Job(format!("stock-to-leave shapes: {e}")))?;
+    Ok(specs
+        .into_iter()
+        .map(|(level, _)| level)
+        .zip(shapes)
+        .collect())
+}
+
 /// Blue (no excess) through green to red (excess = `scale` or more), linear RGBA.
 fn excess_colour(excess: f64, scale: f64) -> [f32; 4] {
     let s = if scale > 0.0 {

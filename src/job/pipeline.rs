@@ -3,13 +3,13 @@
 //! this file only wires them and times them.
 
 use std::borrow::Cow;
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
 use super::config::{Job, SurfaceSection};
 use super::preview::preview;
 use super::report::*;
+use super::semi_finish::{SemiFinishContext, semi_finishing};
 use crate::access::RayScene;
 use crate::collide::{Margins, PartCollider, PreparedTool, Table};
 use crate::error::{Error, Result};
@@ -48,6 +48,9 @@ pub struct PlanOutput {
     /// The part as planned (welded, oriented).
     pub part: Mesh,
     pub toolpath: Toolpath,
+    /// The operations of `toolpath`, in order: semi-finishing to each stock-to-leave shape,
+    /// then finishing (stock to leave 0).
+    pub operations: Vec<Operation>,
     pub gcode: String,
     pub cl_csv: String,
     pub report: PlanReport,
@@ -55,6 +58,13 @@ pub struct PlanOutput {
     /// What the independent re-check of the finished path found wrong, if anything. A path
     /// that fails must not be run; [`super::write_outputs`] then writes only the report.
     pub verification_failure: Option<String>,
+}
+
+/// One operation of a plan: the stock it leaves on the part and its moves in the toolpath.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Operation {
+    pub stock_to_leave_mm: f64,
+    pub moves: std::ops::Range<usize>,
 }
 
 /// The surface the passes are driven on: the part when it already has subdivision
@@ -227,6 +237,59 @@ pub fn plan(
             },
         ),
     };
+    let link_options = LinkOptions {
+        pivot,
+        safe_distance,
+        clearance: job.feeds.clearance,
+        cut_feed: job.feeds.cut,
+        approach_feed: job.feeds.approach,
+        retract_feed: job.feeds.retract,
+        rapid_feed: job.machine.rapid_feed,
+    };
+    let search = job.safety.holder_margin.max(job.safety.shank_margin) + 5.0;
+    timings.finishing_passes = ms(t);
+
+    let t = Instant::now();
+    let allowances = &job.strategy.semi_finish_allowances;
+    let semi = if allowances.is_empty() {
+        None
+    } else {
+        observer.stage("stock-to-leave shapes and semi-finishing", 0);
+        let semi_ctx = SemiFinishContext {
+            part: &part,
+            part_collider: &collider,
+            table,
+            tool: &prepared,
+            tool_id: tool.id,
+            chooser: &chooser,
+            reachable: &reachable,
+            finishing: &options,
+            link: &link_options,
+            shank_margin: margins.shank,
+            holder_margin: margins.holder,
+            search,
+        };
+        // As `wavemill offsets` does: shape j offsets level j of a hierarchy with one level
+        // above the base per allowance, so the finest allowance is not on the coarsest level.
+        let remesh = crate::multires::RemeshOptions {
+            tolerance: 0.0,
+            base_triangles: job.surface.base_triangles,
+            base_max_error: None,
+            max_levels: allowances.len() as u32,
+            crease_angle_deg: job.surface.crease_angle_deg,
+            ..Default::default()
+        };
+        Some(semi_finishing(
+            &semi_ctx,
+            &remesh,
+            allowances,
+            job.strategy.semi_finish_scallop_height,
+            &|| observer.advance(),
+        )?)
+    };
+    timings.semi_finishing = ms(t);
+
+    let t = Instant::now();
     let stepover = path::stepover_for_scallop(job.tool.diameter / 2.0, options.scallop_height);
     let extent = part
         .aabb()
@@ -239,31 +302,40 @@ pub fn plan(
     );
     // Sections follow the drive surface; every pose is placed and checked against the part.
     let finishing = path::finishing_passes(&drive, &ctx, &options, &|| observer.advance());
-    timings.finishing_passes = ms(t);
+    timings.finishing_passes += ms(t);
 
     let t = Instant::now();
     observer.stage("linking", 0);
-    let link_options = LinkOptions {
-        pivot,
-        safe_distance,
-        clearance: job.feeds.clearance,
-        cut_feed: job.feeds.cut,
-        approach_feed: job.feeds.approach,
-        retract_feed: job.feeds.retract,
-        rapid_feed: job.machine.rapid_feed,
-    };
-    let (toolpath, link_report) = path::link(
+    let (finishing_path, link_report) = path::link(
         &finishing.segments,
         &collider,
         &prepared,
         tool.id,
         &link_options,
     );
+    // One program: the semi-finishing operations, coarsest first, then finishing. Each
+    // operation starts and ends on the safe plane, as its segments do.
+    let mut toolpath = Toolpath {
+        tool_id: finishing_path.tool_id,
+        moves: Vec::new(),
+    };
+    let mut operations = Vec::new();
+    let mut append = |moves: &[path::Move], stock_to_leave_mm: f64| {
+        let start = toolpath.moves.len();
+        toolpath.moves.extend_from_slice(moves);
+        operations.push(Operation {
+            stock_to_leave_mm,
+            moves: start..toolpath.moves.len(),
+        });
+    };
+    for (operation, allowance) in semi.iter().flat_map(|s| &s.toolpaths).zip(allowances) {
+        append(&operation.moves, *allowance);
+    }
+    append(&finishing_path.moves, 0.0);
     timings.linking = ms(t);
 
     let t = Instant::now();
     observer.stage("verification", 0);
-    let search = job.safety.holder_margin.max(job.safety.shank_margin) + 5.0;
     let verification = verify(&toolpath, &collider, &prepared, search);
     timings.verification = ms(t);
     let verification_failure = verification
@@ -272,11 +344,12 @@ pub fn plan(
             job.safety.shank_margin,
             job.safety.holder_margin,
         )
-        .err();
+        .err()
+        .or_else(|| semi.as_ref().and_then(|s| s.failure.clone()));
 
     let t = Instant::now();
     observer.stage("post-processing", 0);
-    let header = ProgramHeader {
+    let mut header = ProgramHeader {
         program_name: format!("wavemill finishing of {part_name}"),
         part_name: part_name.to_string(),
         tool_description: vec![tool.describe()],
@@ -291,6 +364,20 @@ pub fn plan(
             format!("safe plane {safe_distance:.3} mm from the pivot along the tool axis"),
         ],
     };
+    if !allowances.is_empty() {
+        header.comments.insert(
+            0,
+            format!(
+                "first semi-finishing to stock-to-leave shapes of {} mm, scallop {} mm",
+                allowances
+                    .iter()
+                    .map(|a| a.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                job.strategy.semi_finish_scallop_height
+            ),
+        );
+    }
     let linearise = LineariseOptions::default().with_tolerance_mm(job.strategy.tolerance);
     let program = post::linearise_opt(&kinematics, &toolpath, &linearise)?;
     let mut writer = post::GcodeWriter::new(&kinematics, GcodeOptions::default());
@@ -315,17 +402,7 @@ pub fn plan(
             .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
             .sum()
     };
-    let mut by_reason = BTreeMap::new();
-    for (_, why) in &finishing.unreachable {
-        *by_reason
-            .entry(
-                serde_json::to_value(why)
-                    .ok()
-                    .and_then(|v| v.as_str().map(String::from))
-                    .unwrap_or_default(),
-            )
-            .or_insert(0) += 1;
-    }
+    let by_reason = unreachable_by_reason(&finishing.unreachable);
     let report = PlanReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),
         part: PartSummary {
@@ -372,6 +449,7 @@ pub fn plan(
                 moves_over_bound: finishing.smoothing.moves_over_bound,
             },
         },
+        stock_to_leave: semi.map(|s| s.summaries).unwrap_or_default(),
         poses: pose_counts(&toolpath),
         cutting_length_mm: length(MoveKind::Cut),
         approach_length_mm: length(MoveKind::Approach),
@@ -398,6 +476,7 @@ pub fn plan(
     Ok(PlanOutput {
         part,
         toolpath,
+        operations,
         gcode,
         cl_csv,
         report,
@@ -528,6 +607,68 @@ mod tests {
         assert!(
             r.clearance.min_cutter_clearance >= -1e-9 && r.clearance.min_table_clearance >= 2.0
         );
+    }
+
+    /// Semi-finishing to two stock-to-leave shapes, then finishing: the report names the
+    /// shapes, and every semi-finishing ball centre is, by an independent brute-force distance
+    /// to the part's triangles, at least r + aⱼ − tolerance from it.
+    #[test]
+    fn semi_finishing_leaves_the_stock_of_each_shape() {
+        let mut job = Job::default();
+        job.strategy.scallop_height = 0.5;
+        job.strategy.max_step = 3.0;
+        job.strategy.semi_finish_allowances = vec![1.0, 0.3];
+        job.strategy.semi_finish_scallop_height = 0.5;
+        let part = cuboid(30.0, 30.0, 10.0);
+        let raw = RawMesh {
+            mesh: part.clone(),
+            warnings: Vec::new(),
+        };
+        let out = plan(&raw, "block", "mm", &job, &Quiet).unwrap();
+        assert!(
+            out.verification_failure.is_none(),
+            "{:?}",
+            out.verification_failure
+        );
+        let stock = &out.report.stock_to_leave;
+        assert_eq!(stock.len(), 2);
+        for (j, s) in stock.iter().enumerate() {
+            // Shape j offsets level j, or the finest when the hierarchy is shallower (a block
+            // is exact on its base).
+            assert!(s.level <= j);
+            assert!(s.shape_verified && s.segments > 0, "{s:?}");
+            assert!(s.min_stock_left_minus_allowance_mm >= -job.strategy.tolerance);
+        }
+        let allowances: Vec<f64> = out.operations.iter().map(|o| o.stock_to_leave_mm).collect();
+        assert_eq!(allowances, [1.0, 0.3, 0.0]);
+        assert_eq!(
+            out.operations.last().unwrap().moves.end,
+            out.toolpath.moves.len()
+        );
+        let radius = job.tool.diameter / 2.0;
+        let distance = |p: &Point3| {
+            (0..part.triangles.len())
+                .map(|t| {
+                    let [a, b, c] = part.corners(t);
+                    (crate::geom::closest_point_on_triangle(p, &a, &b, &c).0 - p).norm()
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        for operation in &out.operations[..2] {
+            let cuts: Vec<&path::Move> = out.toolpath.moves[operation.moves.clone()]
+                .iter()
+                .filter(|m| m.kind == MoveKind::Cut)
+                .collect();
+            assert!(cuts.len() > 20);
+            let closest = cuts
+                .iter()
+                .map(|m| distance(&(m.pose.tip + m.pose.axis.into_inner() * radius)))
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                closest >= radius + operation.stock_to_leave_mm - job.strategy.tolerance,
+                "{closest}"
+            );
+        }
     }
 
     #[test]

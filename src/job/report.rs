@@ -18,6 +18,11 @@ pub struct PlanReport {
     pub machine: MachineSummary,
     pub surface: SurfaceSummary,
     pub strategy: StrategySummary,
+    /// The semi-finishing operations before finishing, in machining order: which shapes were
+    /// used as stock to leave, and what the checks measured (issue 4 point 5). Empty: none.
+    pub stock_to_leave: Vec<super::semi_finish::SemiFinishSummary>,
+    /// Poses, lengths, time, clearances and blocks are of the whole program (semi-finishing
+    /// and finishing); the strategy and unreachable figures are of the finishing passes.
     pub poses: PoseCounts,
     pub cutting_length_mm: f64,
     pub approach_length_mm: f64,
@@ -144,6 +149,7 @@ pub struct StageTimings {
     pub prepare: f64,
     pub drive_surface: f64,
     pub collision_structures: f64,
+    pub semi_finishing: f64,
     pub finishing_passes: f64,
     pub linking: f64,
     pub verification: f64,
@@ -164,4 +170,22 @@ impl PlanReport {
         s.push('\n');
         s
     }
+}
+
+/// Unreachable drive points counted by reason (the reasons' JSON names).
+pub(crate) fn unreachable_by_reason(
+    unreachable: &[(crate::geom::Point3, crate::path::Unreachable)],
+) -> std::collections::BTreeMap<String, usize> {
+    let mut by_reason = std::collections::BTreeMap::new();
+    for (_, why) in unreachable {
+        *by_reason
+            .entry(
+                serde_json::to_value(why)
+                    .ok()
+                    .and_then(|v| v.as_str().map(String::from))
+                    .unwrap_or_default(),
+            )
+            .or_insert(0) += 1;
+    }
+    by_reason
 }

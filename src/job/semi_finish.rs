@@ -1,0 +1,177 @@
+//! Semi-finishing to stock-to-leave shapes (issue 4 point 5; DESIGN.md §3.4, seed 004 ch. 5
+//! step 3): before the finishing passes, the ball is driven over each intermediate shape Sⱼ
+//! of the part's hierarchy, coarsest first, with the same plane sections, axis choice,
+//! smoothing, linking and verification as finishing, but with Sⱼ in place of the part.
+//!
+//! Why this leaves aⱼ: the ball centre is kept at r or more from Sⱼ (the finishing placement
+//! against Sⱼ's exact f64 distance), and every point of Sⱼ is verified to be aⱼ or more from
+//! the part, so the ball stays aⱼ or more off the part. Nothing here trusts that argument: each
+//! operation is re-verified against its shape and, independently, its ball centres are
+//! measured against the part itself.
+//!
+//! The shank, holder and table are checked against Sⱼ, which holds the part: an honest model of
+//! the material left by the operation before would be the previous, larger shape (or the raw
+//! stock), which this planner does not yet track.
+
+use serde::Serialize;
+
+use super::offsets::stock_shapes;
+use super::report::unreachable_by_reason;
+use crate::access::RayScene;
+use crate::collide::{PartCollider, PreparedTool, Table};
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::multires::RemeshOptions;
+use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions, MoveKind, Toolpath};
+use crate::verify::verify;
+
+/// One semi-finishing operation in `report.json`: the shape it machined to and what the checks
+/// measured (mm).
+#[derive(Clone, Debug, Serialize)]
+pub struct SemiFinishSummary {
+    /// Stock to leave, aⱼ.
+    pub allowance_mm: f64,
+    /// The hierarchy level the shape offsets, and its deviation bound eⱼ.
+    pub level: usize,
+    pub bound_mm: f64,
+    pub shape_triangles: usize,
+    /// The shape's own verification (issue 4 point 2) and tightness.
+    pub shape_verified: bool,
+    pub shape_min_clearance_minus_allowance_mm: f64,
+    pub shape_mean_excess_mm: f64,
+    pub shape_max_excess_mm: f64,
+    pub scallop_height_mm: f64,
+    pub drive_planes: usize,
+    pub drive_points: usize,
+    pub unreachable: usize,
+    pub unreachable_by_reason: std::collections::BTreeMap<String, usize>,
+    pub segments: usize,
+    pub cutting_length_mm: f64,
+    /// min over poses and chord midpoints of (ball centre to the shape − r): ≥ −tolerance.
+    pub min_clearance_to_shape_mm: f64,
+    /// min over poses and chord midpoints of (ball centre to the part − r) − aⱼ, measured on
+    /// the part itself: ≥ −tolerance means the stock left is at least the allowance.
+    pub min_stock_left_minus_allowance_mm: f64,
+}
+
+/// The operations, in machining order.
+pub(crate) struct SemiFinishing {
+    pub toolpaths: Vec<Toolpath>,
+    pub summaries: Vec<SemiFinishSummary>,
+    /// What the checks found wrong, if anything (the plan then must not be run).
+    pub failure: Option<String>,
+}
+
+/// What every operation shares with finishing.
+pub(crate) struct SemiFinishContext<'a> {
+    pub part: &'a Mesh,
+    pub part_collider: &'a PartCollider,
+    pub table: Table,
+    pub tool: &'a PreparedTool,
+    pub tool_id: u32,
+    pub chooser: &'a crate::orient::AxisChooser,
+    pub reachable: &'a (dyn Fn(&crate::geom::Vector3) -> bool + Sync),
+    pub finishing: &'a FinishingOptions,
+    pub link: &'a LinkOptions,
+    pub shank_margin: f64,
+    pub holder_margin: f64,
+    pub search: f64,
+}
+
+/// Builds the shapes for `allowances` (`remesh` sizes their hierarchy) and plans one
+/// semi-finishing operation per shape at `scallop_height`.
+pub(crate) fn semi_finishing(
+    ctx: &SemiFinishContext,
+    remesh: &RemeshOptions,
+    allowances: &[f64],
+    scallop_height: f64,
+    advance: &(dyn Fn() + Sync),
+) -> Result<SemiFinishing> {
+    let shapes = stock_shapes(ctx.part, remesh, allowances)?;
+    let tolerance = ctx.finishing.tolerance;
+    let mut result = SemiFinishing {
+        toolpaths: Vec::with_capacity(shapes.len()),
+        summaries: Vec::with_capacity(shapes.len()),
+        failure: None,
+    };
+    for (level, shape) in &shapes {
+        let figures = &shape.report;
+        if !figures.verified {
+            result.failure.get_or_insert(format!(
+                "the stock-to-leave shape for {} mm did not verify",
+                figures.allowance_mm
+            ));
+        }
+        let collider = PartCollider::new(&shape.mesh)
+            .map_err(|e| {
+                Error::Job(format!(
+                    "stock-to-leave shape {} mm: {e}",
+                    figures.allowance_mm
+                ))
+            })?
+            .with_table(ctx.table);
+        let rays = RayScene::new(&shape.mesh);
+        let finishing_ctx = FinishingContext {
+            part: &collider,
+            rays: &rays,
+            tool: ctx.tool,
+            chooser: ctx.chooser,
+            reachable: ctx.reachable,
+        };
+        let options = FinishingOptions {
+            scallop_height,
+            ..ctx.finishing.clone()
+        };
+        let passes = path::finishing_passes(&shape.mesh, &finishing_ctx, &options, advance);
+        let (toolpath, linking) =
+            path::link(&passes.segments, &collider, ctx.tool, ctx.tool_id, ctx.link);
+        let on_shape = verify(&toolpath, &collider, ctx.tool, ctx.search);
+        if let Err(e) = on_shape.passes(tolerance, ctx.shank_margin, ctx.holder_margin) {
+            result.failure.get_or_insert(format!(
+                "semi-finishing to {} mm: {e}",
+                figures.allowance_mm
+            ));
+        }
+        let on_part = verify(&toolpath, ctx.part_collider, ctx.tool, ctx.search);
+        let stock_left = on_part
+            .min_cutter_clearance
+            .min(on_part.min_chord_clearance)
+            - figures.allowance_mm;
+        if stock_left < -tolerance {
+            result.failure.get_or_insert(format!(
+                "semi-finishing to {} mm leaves only {:.4} mm on the part",
+                figures.allowance_mm,
+                stock_left + figures.allowance_mm
+            ));
+        }
+        let cutting_length_mm = toolpath
+            .moves
+            .windows(2)
+            .filter(|w| w[1].kind == MoveKind::Cut)
+            .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+            .sum();
+        result.summaries.push(SemiFinishSummary {
+            allowance_mm: figures.allowance_mm,
+            level: *level,
+            bound_mm: figures.bound_mm,
+            shape_triangles: figures.triangles,
+            shape_verified: figures.verified,
+            shape_min_clearance_minus_allowance_mm: figures.min_clearance_minus_allowance_mm,
+            shape_mean_excess_mm: figures.mean_excess_mm,
+            shape_max_excess_mm: figures.max_excess_mm,
+            scallop_height_mm: scallop_height,
+            drive_planes: passes.planes,
+            drive_points: passes.drive_points,
+            unreachable: passes.unreachable.len(),
+            unreachable_by_reason: unreachable_by_reason(&passes.unreachable),
+            segments: linking.segments,
+            cutting_length_mm,
+            min_clearance_to_shape_mm: on_shape
+                .min_cutter_clearance
+                .min(on_shape.min_chord_clearance),
+            min_stock_left_minus_allowance_mm: stock_left,
+        });
+        result.toolpaths.push(toolpath);
+    }
+    Ok(result)
+}
