@@ -90,6 +90,14 @@ fn check(label: &str, part: &Mesh, out: &OffsetsOutput) {
                 "{label} shape {j}"
             );
         }
+        let topology = wavemill::mesh::topology::Topology::analyse(
+            &shape.mesh.triangles,
+            shape.mesh.positions.len(),
+        );
+        assert!(
+            topology.is_closed_manifold() && topology.inconsistent_edges == 0,
+            "{label} shape {j}: {topology:?}"
+        );
         let a = r.allowance_mm;
         for v in shape.mesh.positions.iter().step_by(13) {
             let d = part_oracle.distance_below(v, a + 1.0);
