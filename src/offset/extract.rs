@@ -196,6 +196,8 @@ const MANIFOLD_PATTERN: [bool; 256] = {
     table
 };
 
+/// Which corners of `cell` are inside (bit i = corner i of [`CORNERS`]) and where their values
+/// are; `None` where a corner lies outside the kept blocks.
 fn inside_mask(cell: [i64; 3], corners: &SortedValues<f64>) -> Option<(u8, [usize; 8])> {
     let mut mask = 0u8;
     let mut index = [0usize; 8];
@@ -319,13 +321,11 @@ fn inside(value: f64) -> bool {
 /// Surface nets over `cells` with corner values `corners`.
 fn surface_nets(cells: &[[i64; 3]], corners: &SortedValues<f64>, h: f64) -> Result<Mesh, String> {
     let cell_vertex = |cell: [i64; 3]| -> Option<Point3> {
-        let mut f = [0.0; 8];
-        for (slot, offset) in f.iter_mut().zip(CORNERS) {
-            *slot = corners.values[corners.index(add(cell, offset))?];
-        }
-        if f.iter().all(|&v| inside(v)) || f.iter().all(|&v| !inside(v)) {
+        let (mask, index) = inside_mask(cell, corners)?;
+        if mask == 0 || mask == u8::MAX {
             return None;
         }
+        let f = index.map(|i| corners.values[i]);
         let mut sum = nalgebra::Vector3::zeros();
         let mut count = 0.0;
         for (a, b) in EDGES {
