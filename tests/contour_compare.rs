@@ -51,6 +51,36 @@ fn assert_verified(r: &CompareReport, what: &str) {
         r.wavelet.uncut_area_mm2,
         r.contour_parallel.uncut_area_mm2
     );
+    // Two independent measures of what each path removes: the material map's replay (plunges,
+    // passes, links) and the exact scanline region minus the exact uncut area. They agree to
+    // the map's quantisation (cells of min(r, s)/16 along the region's boundaries).
+    for (m, name) in [
+        (&r.wavelet, "wavelet"),
+        (&r.contour_parallel, "contour-parallel"),
+    ] {
+        let replayed = m.pass_area_mm2 + m.entry_area_mm2 + m.link_area_mm2;
+        let exact = r.region_area_mm2 - m.uncut_area_mm2;
+        assert!(
+            (replayed - exact).abs() <= 0.01 * exact,
+            "{what}, {name}: the map removed {replayed} mm², the exact measure {exact} mm²"
+        );
+        assert!(
+            m.engagement_mean_mm <= m.engagement_p99_mm
+                && m.engagement_p99_mm <= m.engagement_max_mm,
+            "{what}, {name}: engagement {} / {} / {}",
+            m.engagement_mean_mm,
+            m.engagement_p99_mm,
+            m.engagement_max_mm
+        );
+    }
+    // The baseline's passes remove no more than a stepover per mm of pass on average: the
+    // stepover is the engagement of passes one stepover apart, less on passes around convex
+    // shapes.
+    assert!(
+        r.contour_parallel.engagement_mean_mm <= r.stepover_mm,
+        "{what}: contour-parallel mean engagement {}",
+        r.contour_parallel.engagement_mean_mm
+    );
 }
 
 #[test]

@@ -39,6 +39,7 @@ pub mod error;
 pub mod gcode;
 pub mod geometry;
 pub mod input;
+pub mod material;
 pub mod multires;
 pub mod parallel;
 pub mod region;

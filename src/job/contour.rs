@@ -22,6 +22,7 @@ use serde::Serialize;
 use super::output::write_atomically;
 use crate::contour::geometry::{Contour, Vertex};
 use crate::contour::geometry::{Point2, Shape};
+use crate::contour::material::engagement;
 use crate::contour::region::{RegionIndex, check_inside};
 use crate::contour::{
     CenterPath, ContourError, MachineParams, MultiresOptions, MultiresReport, OutlineOptions,
@@ -157,6 +158,19 @@ pub struct MethodFigures {
     pub pass_spacing_p95_mm: f64,
     /// Links made by retract, rapid and plunge (each 3 blocks and a plunge at feed).
     pub rapid_links: usize,
+    /// Radial engagement replayed on a material map (`contour::material`, cells of
+    /// min(r, s)/16, averaged over r of travel): the passes' largest, 99th-percentile and mean
+    /// engagement (mean = area removed by the passes / pass length), mm, and the feed links'
+    /// largest (a step-over link meets up to a full-width slot for a moment).
+    pub engagement_max_mm: f64,
+    pub engagement_max_at: [f64; 2],
+    pub engagement_p99_mm: f64,
+    pub engagement_mean_mm: f64,
+    pub link_engagement_max_mm: f64,
+    /// Area removed by the passes, by the plunges and by the feed links, mm² (on the map).
+    pub pass_area_mm2: f64,
+    pub entry_area_mm2: f64,
+    pub link_area_mm2: f64,
     /// The time split of the model: feed (cut, feed links, plunges), rapid, block dwell.
     pub feed_min: f64,
     pub rapid_min: f64,
@@ -425,6 +439,8 @@ fn method_figures(
     let u = uncut_area(path, &p.part, &p.stock, Some(p.row_step)).map_err(contour_error(file))?;
     let sp = pass_spacing(path, &p.part, 0.5 * p.s, 0.25 * p.s).map_err(contour_error(file))?;
     let ps = path_stats(path);
+    let e = engagement(path, &p.part, &p.stock, p.r.min(p.s) / 16.0, p.r)
+        .map_err(contour_error(file))?;
     Ok((
         MethodFigures {
             min_clearance_minus_r_mm: c.clearance,
@@ -438,6 +454,14 @@ fn method_figures(
             pass_spacing_max_at: [sp.max_at.x, sp.max_at.y],
             pass_spacing_p95_mm: sp.p95,
             rapid_links: ps.rapid_links,
+            engagement_max_mm: e.pass_max,
+            engagement_max_at: [e.pass_max_at.x, e.pass_max_at.y],
+            engagement_p99_mm: e.pass_p99,
+            engagement_mean_mm: e.pass_mean,
+            link_engagement_max_mm: e.link_max,
+            pass_area_mm2: e.pass_area,
+            entry_area_mm2: e.entry_area,
+            link_area_mm2: e.link_area,
             feed_min: st.feed_minutes,
             rapid_min: st.rapid_minutes,
             dwell_min: st.dwell_minutes,
