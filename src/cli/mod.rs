@@ -149,6 +149,12 @@ pub struct ContourArgs {
     /// One outline unit is this many mm (outline files and a stock outline).
     #[arg(long, default_value_t = 1.0)]
     pub scale: f64,
+    /// Which way the roughing passes run, both methods. `mixed`: an open roughing pass (an
+    /// offset loop cut off by the stock or the hull) starts at its nearer end, so neighbouring
+    /// fragments join at depth instead of by a retract each; `climb`: every pass climb.
+    /// Closed passes and the finishing contour are always climb (M3 spindle).
+    #[arg(long, value_enum, default_value_t = Direction::Mixed)]
+    pub direction: Direction,
     /// Also write the contour-parallel baseline (contour_parallel.nc), compare.json and
     /// paths.svg / paths.png with both paths side by side.
     #[arg(long)]
@@ -281,6 +287,14 @@ pub struct InfoArgs {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum Direction {
+    /// Every pass climb milling.
+    Climb,
+    /// Open roughing passes either way (zig-zag), closed and finishing passes climb.
+    Mixed,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum SampleKind {
     /// A centrifugal impeller: hub with a bore, twisted blades, narrow channels.
     Impeller,
@@ -376,6 +390,10 @@ fn contour(args: &ContourArgs) -> Result<()> {
     options.stepover = args.stepover;
     options.band = args.band;
     options.scale = args.scale;
+    options.direction = match args.direction {
+        Direction::Climb => crate::contour::CutDirection::Climb,
+        Direction::Mixed => crate::contour::CutDirection::Mixed,
+    };
     options.timings = !args.no_timings;
     let figures_line = |name: &str, f: &job::MethodFigures| {
         say!(

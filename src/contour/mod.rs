@@ -53,7 +53,7 @@ pub use gcode::{MachineParams, Program, ProgramStats};
 pub use input::{OutlineError, OutlineOptions, mesh_section, read_outline};
 pub use multires::{MultiresOptions, MultiresPlan, MultiresReport, multires_paths};
 pub use parallel::{ParallelOptions, contour_parallel};
-pub use toolpath::{CenterPath, Link, Pass};
+pub use toolpath::{CenterPath, CutDirection, Link, Pass};
 pub use verify::{
     Clearance, PassSpacing, PathStats, UncutArea, clearance, pass_spacing, path_stats, uncut_area,
 };

@@ -38,8 +38,12 @@
 //! pocket the same rule goes centre-out, ending on the pocket wall. Among the passes allowed
 //! next, the one with the nearest entry point is taken (greedy nearest neighbour; a closed pass
 //! is entered at its point nearest to the tool). Passes keep the offset orientation — the part
-//! on their left — which with a clockwise (M3) spindle is climb milling everywhere; open
-//! (clipped) passes are therefore never reversed.
+//! on their left — which with a clockwise (M3) spindle is climb milling. With
+//! [`CutDirection::Mixed`] (the default) an open roughing pass — an offset loop cut off by the
+//! stock — is entered at its nearer end instead: neighbouring fragments then join by a short
+//! link at depth rather than by a retract, rapid and plunge each (zig-zag: half of them
+//! conventional). Closed passes and the finishing passes (level r) always stay climb;
+//! [`CutDirection::Climb`] keeps every pass climb.
 //!
 //! # Linking
 //!
@@ -56,7 +60,7 @@ use crate::contour::region::RegionIndex;
 use crate::contour::segops::{
     bbox, intersections, point_at, point_distance, segment_distance, sub_segment,
 };
-use crate::contour::toolpath::{CenterPath, Link, Pass};
+use crate::contour::toolpath::{CenterPath, CutDirection, Link, Pass};
 
 /// The stock is grown by r − `CLIP_EPS` for clipping: a level lying exactly r from the stock
 /// (e.g. the first level of a part whose outline is the stock's) touches the stock in a line
@@ -76,6 +80,8 @@ pub struct ParallelOptions {
     pub stepover: f64,
     /// Longest straight link made at cutting depth, mm; `None` = tool diameter 2r.
     pub max_feed_link: Option<f64>,
+    /// Which way the roughing passes may run.
+    pub direction: CutDirection,
     /// Upper bound on the number of offset levels (guards absurd stock/stepover ratios).
     pub max_levels: usize,
 }
@@ -87,6 +93,7 @@ impl ParallelOptions {
             tool_radius,
             stepover,
             max_feed_link: None,
+            direction: CutDirection::default(),
             max_levels: 100_000,
         }
     }
@@ -203,7 +210,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
             break;
         }
     }
-    let ordered = order_pieces(pieces, s);
+    let ordered = order_pieces(pieces, s, opts.direction);
     link(ordered, &part_index, r, max_feed_link)
 }
 
@@ -288,8 +295,10 @@ fn run_to_pass(segs: &[Segment], run: &[(usize, f64, f64)], offset: f64) -> Resu
 }
 
 /// Orders pieces far-side first (a piece waits for every piece one level farther within s of
-/// it), nearest entry next; closed passes are re-started at their point nearest to the tool.
-pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64) -> Vec<Pass> {
+/// it), nearest entry next; closed passes are re-started at their point nearest to the tool,
+/// and with [`CutDirection::Mixed`] open roughing pieces (level > 0) are entered at their
+/// nearer end.
+pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64, direction: CutDirection) -> Vec<Pass> {
     let n = pieces.len();
     if n == 0 {
         return Vec::new();
@@ -332,22 +341,24 @@ pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64) -> Vec<Pass> {
     }
 
     let piece_level: Vec<usize> = pieces.iter().map(|p| p.level).collect();
+    let mixed = direction == CutDirection::Mixed;
     let mut done = vec![false; n];
     let mut passes: Vec<Option<Pass>> = pieces.into_iter().map(|p| Some(p.pass)).collect();
     let mut order = Vec::with_capacity(n);
     let mut current: Option<Point2> = None;
     for _ in 0..n {
         // (key, piece, entry of a closed pass)
-        type Choice = (f64, usize, Option<(usize, f64)>);
+        type Choice = (f64, usize, Entry);
         let mut best: Option<Choice> = None;
         for i in (0..n).filter(|&i| !done[i] && pending[i] == 0) {
             let Some(pass) = passes[i].as_ref() else {
                 continue;
             };
+            let reversible = mixed && piece_level[i] > 0;
             let (key, entry) = match current {
                 // First pass: the farthest level, lowest index.
-                None => (-(piece_level[i] as f64), None),
-                Some(pos) => entry_point(pass, pos),
+                None => (-(piece_level[i] as f64), Entry::Start),
+                Some(pos) => entry_point(pass, pos, reversible),
             };
             if best.as_ref().is_none_or(|b| key < b.0) {
                 best = Some((key, i, entry));
@@ -361,8 +372,10 @@ pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64) -> Vec<Pass> {
         let Some(mut pass) = passes[i].take() else {
             break;
         };
-        if let Some((seg, t)) = entry {
-            pass = restart_closed(&pass, seg, t);
+        match entry {
+            Entry::Start => {}
+            Entry::End => pass = pass.reversed(),
+            Entry::Closed { segment, t } => pass = restart_closed(&pass, segment, t),
         }
         current = Some(pass.end());
         order.push(pass);
@@ -370,11 +383,27 @@ pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64) -> Vec<Pass> {
     order
 }
 
-/// Distance from `pos` to where the tool would enter `pass`, and for a closed pass the entry
-/// (segment, parameter).
-fn entry_point(pass: &Pass, pos: Point2) -> (f64, Option<(usize, f64)>) {
+/// Where the tool enters a pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Entry {
+    /// At its start, as planned.
+    Start,
+    /// At its end: the open pass is cut backwards.
+    End,
+    /// A closed pass, at parameter `t` of segment `segment`.
+    Closed { segment: usize, t: f64 },
+}
+
+/// Distance from `pos` to where the tool would enter `pass`, and that entry; an open pass is
+/// entered at its nearer end when `reversible`.
+fn entry_point(pass: &Pass, pos: Point2, reversible: bool) -> (f64, Entry) {
     if !pass.is_closed() {
-        return ((pass.start() - pos).norm(), None);
+        let (to_start, to_end) = ((pass.start() - pos).norm(), (pass.end() - pos).norm());
+        return if reversible && to_end < to_start {
+            (to_end, Entry::End)
+        } else {
+            (to_start, Entry::Start)
+        };
     }
     let mut best = (f64::INFINITY, 0usize, Point2::origin());
     for (i, seg) in pass.segments().enumerate() {
@@ -385,7 +414,7 @@ fn entry_point(pass: &Pass, pos: Point2) -> (f64, Option<(usize, f64)>) {
     }
     let segs: Vec<Segment> = pass.segments().collect();
     let t = crate::contour::segops::param_on(&segs[best.1], best.2);
-    (best.0, Some((best.1, t)))
+    (best.0, Entry::Closed { segment: best.1, t })
 }
 
 /// The closed pass re-started at parameter `t` of segment `seg`.
@@ -548,6 +577,76 @@ pub(crate) mod tests {
         assert!((last.length() - 2.0 * PI * 23.0).abs() < 1e-9);
     }
 
+    /// Zig-zag roughing: the same passes as climb-only, some cut backwards, far side still
+    /// first, the finishing circle still climb (part on its left), and the corner fragments
+    /// joined at depth where climb-only retracts between them.
+    #[test]
+    fn mixed_direction_reverses_only_open_roughing_passes() {
+        let part = Shape {
+            contours: vec![circle(0.0, 0.0, 20.0, true)],
+        };
+        let stock = Shape {
+            contours: vec![rect(-32.0, -32.0, 32.0, 32.0, true)],
+        };
+        let plan = |direction| {
+            let opts = ParallelOptions {
+                direction,
+                ..ParallelOptions::new(3.0, 2.4)
+            };
+            contour_parallel(&part, &stock, &opts).expect("plan")
+        };
+        let (climb, mixed) = (plan(CutDirection::Climb), plan(CutDirection::Mixed));
+        assert_far_side_first(&mixed, 2.4);
+        let (cs, ms) = (
+            crate::contour::verify::path_stats(&climb),
+            crate::contour::verify::path_stats(&mixed),
+        );
+        assert_eq!(cs.passes, ms.passes);
+        assert!((cs.cut_length - ms.cut_length).abs() < 1e-9);
+        assert!(
+            ms.rapid_links < cs.rapid_links,
+            "mixed {} vs climb {} rapid links",
+            ms.rapid_links,
+            cs.rapid_links
+        );
+        let mut reversed = 0;
+        for p in mixed.passes() {
+            if p.is_closed() {
+                // Re-started wherever the tool is, but still counter-clockwise round the part.
+                let area = Contour {
+                    vertices: p.vertices().to_vec(),
+                }
+                .signed_area();
+                assert!(area > 0.0, "closed pass reversed: {p:?}");
+                continue;
+            }
+            let matches = |a: &Pass| {
+                climb.passes().iter().any(|q| {
+                    (q.start() - a.start()).norm() < 1e-12
+                        && (q.end() - a.end()).norm() < 1e-12
+                        && (q.length() - a.length()).abs() < 1e-9
+                })
+            };
+            if matches(p) {
+                continue;
+            }
+            assert!(matches(&p.reversed()), "not a climb pass either way: {p:?}");
+            assert!(p.offset() > 3.0, "a finishing pass was reversed: {p:?}");
+            reversed += 1;
+        }
+        assert!(reversed > 0);
+        // Climb means the part on the left: r along the left normal of the finishing circle
+        // lands on the part.
+        for p in mixed.passes().iter().filter(|p| p.offset() == 3.0) {
+            for seg in p.segments() {
+                let Segment::Arc { center, sweep, .. } = seg else {
+                    panic!("line in a circle offset")
+                };
+                assert!(center.coords.norm() < 1e-9 && sweep > 0.0, "{seg:?}");
+            }
+        }
+    }
+
     #[test]
     fn options_are_validated() {
         let part = Shape {
@@ -574,10 +673,12 @@ pub(crate) mod tests {
     #[test]
     fn closed_pass_restart_preserves_geometry() {
         let pass = Pass::closed(circle(0.0, 0.0, 2.0, true).vertices, 1.0).expect("pass");
-        let (d, entry) = entry_point(&pass, Point2::new(0.0, 5.0));
+        let (d, entry) = entry_point(&pass, Point2::new(0.0, 5.0), true);
         assert!((d - 3.0).abs() < 1e-12);
-        let (seg, t) = entry.expect("closed");
-        let re = restart_closed(&pass, seg, t);
+        let Entry::Closed { segment, t } = entry else {
+            panic!("a closed pass is entered on its loop: {entry:?}")
+        };
+        let re = restart_closed(&pass, segment, t);
         assert!((re.start() - Point2::new(0.0, 2.0)).norm() < 1e-12);
         assert!((re.length() - pass.length()).abs() < 1e-12);
         assert_eq!(re.segment_count(), 3);

@@ -107,6 +107,36 @@ impl Pass {
         }
     }
 
+    /// The same path run the other way (bulges negated); a closed pass keeps its start.
+    pub fn reversed(&self) -> Pass {
+        let n = self.vertices.len();
+        let vertices = if self.closed {
+            // Vertex k is old vertex n − k; its segment runs back along old segment n − k − 1.
+            (0..n)
+                .map(|k| Vertex {
+                    point: self.vertices[(n - k) % n].point,
+                    bulge: -self.vertices[(2 * n - k - 1) % n].bulge,
+                })
+                .collect()
+        } else {
+            (0..n)
+                .map(|k| Vertex {
+                    point: self.vertices[n - 1 - k].point,
+                    bulge: if k + 1 < n {
+                        -self.vertices[n - 2 - k].bulge
+                    } else {
+                        0.0
+                    },
+                })
+                .collect()
+        };
+        Pass {
+            vertices,
+            closed: self.closed,
+            offset: self.offset,
+        }
+    }
+
     /// Exact length (arc lengths are R·|sweep|).
     pub fn length(&self) -> f64 {
         self.segments().map(|s| s.length()).sum()
@@ -123,6 +153,20 @@ fn check_finite(vertices: &[Vertex]) -> Result<()> {
         ))),
         None => Ok(()),
     }
+}
+
+/// Which way the passes run. With a clockwise (M3) spindle a pass that keeps the part on its
+/// left — the orientation of every offset loop — is climb milling.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CutDirection {
+    /// Every pass keeps the part on its left: climb milling everywhere.
+    Climb,
+    /// Open roughing passes (offset loops cut off by the stock or the hull) are entered at
+    /// whichever end is nearer the tool, so neighbouring fragments join by a short link at
+    /// depth instead of a retract, rapid and plunge — zig-zag, half of them conventional.
+    /// Closed passes and the finishing passes (level r) stay climb.
+    #[default]
+    Mixed,
 }
 
 /// How the tool gets from the end of one pass to the start of the next.
@@ -262,7 +306,56 @@ impl CenterPath {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contour::segops::{point_at, point_distance};
     use std::f64::consts::PI;
+
+    /// A reversed pass runs through the same points the other way: every point of the
+    /// reversed pass at parameter t of segment k is on the original's mirrored segment, the
+    /// ends swap (open) or stay (closed), lengths and turning sense flip consistently.
+    #[test]
+    fn reversed_passes_trace_the_same_curve_backwards() {
+        let v = vec![
+            Vertex {
+                point: Point2::new(0.0, 0.0),
+                bulge: 0.4,
+            },
+            Vertex::line(4.0, 1.0),
+            Vertex {
+                point: Point2::new(5.0, 3.0),
+                bulge: -0.7,
+            },
+            Vertex::line(1.0, 4.0),
+        ];
+        for closed in [false, true] {
+            let pass = if closed {
+                Pass::closed(v.clone(), 2.0)
+            } else {
+                Pass::open(v.clone(), 2.0)
+            }
+            .expect("pass");
+            let back = pass.reversed();
+            assert_eq!(back.segment_count(), pass.segment_count());
+            assert!((back.length() - pass.length()).abs() < 1e-12);
+            assert_eq!(back.start(), pass.end());
+            assert_eq!(back.end(), pass.start());
+            assert_eq!(back.reversed(), pass);
+            let fwd: Vec<Segment> = pass.segments().collect();
+            let bwd: Vec<Segment> = back.segments().collect();
+            let m = fwd.len();
+            for (k, seg) in bwd.iter().enumerate() {
+                let original = &fwd[m - 1 - k];
+                for t in [0.0, 0.3, 0.5, 0.9, 1.0] {
+                    let p = point_at(seg, t);
+                    let q = point_at(original, 1.0 - t);
+                    assert!(
+                        (p - q).norm() < 1e-12,
+                        "closed {closed}, segment {k}, t {t}"
+                    );
+                    assert!(point_distance(p, original).0 < 1e-12);
+                }
+            }
+        }
+    }
 
     #[test]
     fn pass_lengths_and_links_are_checked() {

@@ -25,9 +25,9 @@ use crate::contour::geometry::{Point2, Shape};
 use crate::contour::material::engagement;
 use crate::contour::region::{RegionIndex, check_inside};
 use crate::contour::{
-    CenterPath, ContourError, MachineParams, MultiresOptions, MultiresReport, OutlineOptions,
-    ParallelOptions, Program, clearance, contour_parallel, mesh_section, multires_paths,
-    pass_spacing, path_stats, read_outline, uncut_area,
+    CenterPath, ContourError, CutDirection, MachineParams, MultiresOptions, MultiresReport,
+    OutlineOptions, ParallelOptions, Program, clearance, contour_parallel, mesh_section,
+    multires_paths, pass_spacing, path_stats, read_outline, uncut_area,
 };
 use crate::error::{Error, Result};
 use crate::mesh::{PrepareOptions, prepare as prepare_mesh};
@@ -78,6 +78,8 @@ pub struct ContourJobOptions {
     pub band: Option<f64>,
     /// Outline scale (one outline unit = `scale` mm); outline files only (meshes: `units`).
     pub scale: f64,
+    /// Which way the roughing passes may run (both methods).
+    pub direction: CutDirection,
     /// Machine parameters and the time model.
     pub machine: MachineParams,
     /// Keep the run-dependent `timings_ms` in `compare.json`.
@@ -96,6 +98,7 @@ impl ContourJobOptions {
             stepover: None,
             band: None,
             scale: 1.0,
+            direction: CutDirection::default(),
             machine: MachineParams::default(),
             timings: true,
         }
@@ -203,6 +206,8 @@ pub struct CompareReport {
     pub stepover_mm: f64,
     /// `margin:M` or `outline:FILE`, as given.
     pub stock: String,
+    /// Cut direction of the roughing passes, both methods: `climb` or `mixed`.
+    pub cut_direction: String,
     /// Height of the section plane when the part is a mesh, mm.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub section_z_mm: Option<f64>,
@@ -474,6 +479,7 @@ fn method_figures(
 fn multires_options(p: &Prepared, opts: &ContourJobOptions) -> MultiresOptions {
     let mut m = MultiresOptions::new(p.r, p.s);
     m.tolerance = opts.band;
+    m.direction = opts.direction;
     m
 }
 
@@ -499,8 +505,15 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
         multires_paths(part, stock, &multires_options(&p, opts)).map_err(contour_error(file))?;
     let t_wavelet = ms(t);
     let t = Instant::now();
-    let base =
-        contour_parallel(part, stock, &ParallelOptions::new(r, s)).map_err(contour_error(file))?;
+    let base = contour_parallel(
+        part,
+        stock,
+        &ParallelOptions {
+            direction: opts.direction,
+            ..ParallelOptions::new(r, s)
+        },
+    )
+    .map_err(contour_error(file))?;
     let t_parallel = ms(t);
 
     let t = Instant::now();
@@ -522,6 +535,11 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
         tool_diameter_mm: 2.0 * r,
         stepover_mm: s,
         stock: opts.stock.describe(),
+        cut_direction: match opts.direction {
+            CutDirection::Climb => "climb",
+            CutDirection::Mixed => "mixed",
+        }
+        .into(),
         section_z_mm: p.z,
         scale: opts.scale,
         region_area_mm2: region,

@@ -83,7 +83,7 @@ use crate::contour::error::{ContourError, Result};
 use crate::contour::geometry::{Contour, Point2, Shape};
 use crate::contour::parallel::{CLIP_EPS, Piece, Setup, clip_loop, link, order_pieces, setup};
 use crate::contour::region::RegionIndex;
-use crate::contour::toolpath::{CenterPath, Pass};
+use crate::contour::toolpath::{CenterPath, CutDirection, Pass};
 use corners::CornerOptions;
 use sample::sample_closed;
 
@@ -114,6 +114,8 @@ pub struct MultiresOptions {
     pub hull_max_growth: Option<f64>,
     /// Longest straight link made at cutting depth, mm; `None` = 2r.
     pub max_feed_link: Option<f64>,
+    /// Which way the roughing passes may run (as in [`crate::contour::parallel`]).
+    pub direction: CutDirection,
     /// Upper bound on the number of levels of each family.
     pub max_levels: usize,
 }
@@ -129,6 +131,7 @@ impl MultiresOptions {
             hull_min_leg: None,
             hull_max_growth: None,
             max_feed_link: None,
+            direction: CutDirection::default(),
             max_levels: 100_000,
         }
     }
@@ -332,7 +335,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         }
         m += 1;
     }
-    let ordered = order_pieces(pieces, s + 2.0 * tol);
+    let ordered = order_pieces(pieces, s + 2.0 * tol, opts.direction);
     let path = link(ordered, &part_index, r, max_feed_link)?;
     Ok(MultiresPlan {
         path,
