@@ -397,13 +397,15 @@ fn contour(args: &ContourArgs) -> Result<()> {
     options.timings = !args.no_timings;
     let figures_line = |name: &str, f: &job::MethodFigures| {
         say!(
-            "{name:>16}: {:9.1} mm cut, {:6} blocks, {:7.2} min, uncut {:8.2} mm², clearance − r {:+.6} mm, spacing ≤ {:.3} mm",
+            "{name:>16}: {:9.1} mm cut, {:6} blocks, {:7.2} min, uncut {:8.2} mm², clearance − r {:+.6} mm, spacing ≤ {:.3} mm, engagement mean {:.2} / max {:.2} mm",
             f.cutting_length_mm,
             f.nc_blocks,
             f.machining_time_min,
             f.uncut_area_mm2,
             f.min_clearance_minus_r_mm,
-            f.pass_spacing_max_mm
+            f.pass_spacing_max_mm,
+            f.engagement_mean_mm,
+            f.engagement_max_mm
         );
     };
     if !args.compare {

@@ -152,17 +152,41 @@ impl MaterialMap {
         })
     }
 
-    /// Clears the material cells whose centres lie within r of `p`; returns how many.
-    fn stamp(&mut self, p: Point2) -> usize {
-        let rows: Vec<(usize, usize, usize)> = self.disc_rows(p, self.radius).collect();
+    /// Clears the material cells whose centres lie within r of `p`; returns how many. When the
+    /// disc at `previous` was cleared just before, only the cells outside it are visited (on
+    /// each row, the new span minus the old one): a step of one cell visits a thin crescent
+    /// instead of the whole disc.
+    fn stamp(&mut self, p: Point2, previous: Option<Point2>) -> usize {
+        let r = self.radius;
+        let rows: Vec<(usize, usize, usize)> = self.disc_rows(p, r).collect();
         let mut count = 0;
         for (j, lo, hi) in rows {
+            let old = previous.and_then(|q| {
+                let dy = self.origin.y + (j as f64 + 0.5) * self.cell - q.y;
+                let w2 = r * r - dy * dy;
+                (w2 >= 0.0)
+                    .then(|| self.columns(q.x - w2.sqrt(), q.x + w2.sqrt()))
+                    .flatten()
+            });
             let row = j * self.width;
-            for c in &mut self.state[row + lo..=row + hi] {
-                if *c == MATERIAL {
-                    *c = CLEARED;
-                    count += 1;
+            let mut clear = |a: usize, b: usize| {
+                for c in &mut self.state[row + a..=row + b] {
+                    if *c == MATERIAL {
+                        *c = CLEARED;
+                        count += 1;
+                    }
                 }
+            };
+            match old {
+                Some((old_lo, old_hi)) if old_lo <= hi && old_hi >= lo => {
+                    if lo < old_lo {
+                        clear(lo, old_lo - 1);
+                    }
+                    if old_hi < hi {
+                        clear(old_hi + 1, hi);
+                    }
+                }
+                _ => clear(lo, hi),
             }
         }
         count
@@ -170,7 +194,7 @@ impl MaterialMap {
 
     /// The tool plunges at `p`: clears the disc there and returns the area it cleared.
     pub fn plunge(&mut self, p: Point2) -> f64 {
-        self.stamp(p) as f64 * self.cell * self.cell
+        self.stamp(p, None) as f64 * self.cell * self.cell
     }
 
     /// Cuts `seg` from its start (already swept) to its end, feeding `window` with the area
@@ -179,10 +203,14 @@ impl MaterialMap {
         let len = seg.length();
         let n = ((len / self.cell).ceil() as usize).max(1);
         let area = self.cell * self.cell;
+        // The first stamp clears its whole disc: the start of the segment was swept as the end
+        // of the move before, whose rounding may differ in the last bit.
+        let mut previous = None;
         for k in 1..=n {
             let p = point_at(seg, k as f64 / n as f64);
-            let fresh = self.stamp(p) as f64 * area;
+            let fresh = self.stamp(p, previous) as f64 * area;
             window.push(fresh, len / n as f64, p);
+            previous = Some(p);
         }
     }
 }
