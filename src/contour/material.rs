@@ -346,6 +346,10 @@ pub struct Engagement {
     pub pass_area: f64,
     pub entry_area: f64,
     pub link_area: f64,
+    /// Most material one plunge went into, mm² (πr² = straight down into uncut stock), and
+    /// where.
+    pub entry_max: f64,
+    pub entry_max_at: Point2,
 }
 
 impl Engagement {
@@ -385,11 +389,18 @@ pub fn engagement(
         pass_area: 0.0,
         entry_area: 0.0,
         link_area: 0.0,
+        entry_max: 0.0,
+        entry_max_at: Point2::origin(),
     };
     let mut pass_length = 0.0;
     for (i, pass) in path.passes().iter().enumerate() {
         if i == 0 || matches!(path.links()[i - 1], Link::Rapid { .. }) {
-            e.entry_area += map.plunge(pass.start());
+            let fresh = map.plunge(pass.start());
+            e.entry_area += fresh;
+            if fresh > e.entry_max {
+                e.entry_max = fresh;
+                e.entry_max_at = pass.start();
+            }
         }
         let mut run = Window::new(window);
         for seg in pass.segments() {

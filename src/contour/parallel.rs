@@ -294,7 +294,7 @@ fn run_to_pass(segs: &[Segment], run: &[(usize, f64, f64)], offset: f64) -> Resu
     Pass::open(vertices, offset)
 }
 
-/// Orders pieces far-side first (a piece waits for every piece one level farther within s of
+/// Orders pieces far-side first (a piece waits for every piece of a farther level within s of
 /// it), nearest entry next; closed passes are re-started at their point nearest to the tool,
 /// and with [`CutDirection::Mixed`] open roughing pieces (level > 0) are entered at their
 /// nearer end.
@@ -321,16 +321,19 @@ pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64, direction: CutDirection) 
     let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
     let mut pending = vec![0usize; n];
     for (pi, p) in pieces.iter().enumerate() {
-        if p.level == max_level {
-            continue;
-        }
-        let up = &level_bvh[p.level + 1];
+        // Every farther level, not only the next: where a level is cut off (by the stock, or
+        // by the hull in the multiresolution paths) the next pass outward can be a level or
+        // more farther out, and its material must still go first.
         let mut parents: Vec<usize> = Vec::new();
-        for seg in p.pass.segments() {
-            for j in up.candidates_near(&bbox(&seg), thr) {
-                let owner = level_owner[p.level + 1][j];
-                if !parents.contains(&owner) && segment_distance(&seg, &up.segments()[j]).0 <= thr {
-                    parents.push(owner);
+        for (up, owners) in level_bvh.iter().zip(&level_owner).skip(p.level + 1) {
+            for seg in p.pass.segments() {
+                for j in up.candidates_near(&bbox(&seg), thr) {
+                    let owner = owners[j];
+                    if !parents.contains(&owner)
+                        && segment_distance(&seg, &up.segments()[j]).0 <= thr
+                    {
+                        parents.push(owner);
+                    }
                 }
             }
         }

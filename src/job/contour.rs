@@ -174,6 +174,8 @@ pub struct MethodFigures {
     pub pass_area_mm2: f64,
     pub entry_area_mm2: f64,
     pub link_area_mm2: f64,
+    /// Most material one plunge went into, mm² (π r² = straight down into uncut stock).
+    pub entry_area_max_mm2: f64,
     /// The time split of the model: feed (cut, feed links, plunges), rapid, block dwell.
     pub feed_min: f64,
     pub rapid_min: f64,
@@ -467,6 +469,7 @@ fn method_figures(
             pass_area_mm2: e.pass_area,
             entry_area_mm2: e.entry_area,
             link_area_mm2: e.link_area,
+            entry_area_max_mm2: e.entry_max,
             feed_min: st.feed_minutes,
             rapid_min: st.rapid_minutes,
             dwell_min: st.dwell_minutes,

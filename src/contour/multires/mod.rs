@@ -335,7 +335,9 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         }
         m += 1;
     }
-    let ordered = order_pieces(pieces, s + 2.0 * tol, opts.direction);
+    // Neighbouring part levels are up to s + 2τ apart; a part level cut off at H is r from
+    // the first hull pass.
+    let ordered = order_pieces(pieces, (s + 2.0 * tol).max(r), opts.direction);
     let path = link(ordered, &part_index, r, max_feed_link)?;
     Ok(MultiresPlan {
         path,

@@ -151,6 +151,33 @@ fn mountain_no_overcut_no_more_uncut() {
     );
 }
 
+/// Far side first across the hull: a part level cut off at the loose hull waits for the hull
+/// passes outside it, so it is entered next to cleared stock — no plunge goes straight down
+/// into uncut material (more than half the tool's disc), and the passes remove what the
+/// exact measure says they do.
+#[test]
+fn part_levels_wait_for_the_hull_passes() {
+    let part = mountain();
+    let stock = stock_around(&part, 10.0);
+    let (r, s) = (3.0, 2.4);
+    let plan = multires_paths(&part, &stock, &MultiresOptions::new(r, s)).expect("plan");
+    let e = crate::contour::material::engagement(&plan.path, &part, &stock, 0.05, r)
+        .expect("engagement");
+    let half_disc = 0.5 * std::f64::consts::PI * r * r;
+    assert!(
+        e.entry_max <= 1.05 * half_disc,
+        "a plunge into {} mm² of stock at {:?}",
+        e.entry_max,
+        e.entry_max_at
+    );
+    let u = uncut_area(&plan.path, &part, &stock, Some(0.05)).expect("uncut");
+    let exact = u.region - u.uncut;
+    assert!(
+        (e.removed_area() - exact).abs() < 0.005 * exact,
+        "{e:?} vs {exact}"
+    );
+}
+
 #[test]
 fn loose_hull_encloses_the_part_with_no_more_legs() {
     let part = mountain();
