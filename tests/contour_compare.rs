@@ -155,6 +155,39 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
     for m in [w, p] {
         assert!(m["cutting_length_mm"].as_f64().expect("length") >= 0.95 * bound);
     }
+    // --direction climb: the same passes (same length), none reversed, so more retracts.
+    let climb = dir.join("climb");
+    let o = wavemill(&[
+        "contour",
+        sample.to_str().expect("utf-8 path"),
+        "--tool",
+        "flat:6",
+        "--stock",
+        "margin:10",
+        "--compare",
+        "--no-timings",
+        "--direction",
+        "climb",
+        "--out",
+        climb.to_str().expect("utf-8 path"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let climbing = compare_json(&climb);
+    assert_eq!(report["cut_direction"], "mixed");
+    assert_eq!(climbing["cut_direction"], "climb");
+    assert_verified_json(&climbing);
+    for m in ["wavelet", "contour_parallel"] {
+        let length = |r: &serde_json::Value| r[m]["cutting_length_mm"].as_f64().expect("length");
+        let rapids = |r: &serde_json::Value| r[m]["rapid_links"].as_u64().expect("rapids");
+        assert!((length(&climbing) - length(&report)).abs() < 1e-6 * length(&report));
+        assert!(
+            rapids(&climbing) > rapids(&report),
+            "{m}: climb needs more retracts"
+        );
+    }
+    let o = wavemill(&["contour", "--direction", "sideways", "x.svg"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("sideways"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
