@@ -66,7 +66,7 @@ pub enum Command {
 pub struct ToolsArgs {
     /// Part mesh (.stl, .obj, .gltf, .glb), closed.
     pub part: PathBuf,
-    /// Tool library (TOML, one [[tool]] table per tool; see data/tools.toml).
+    /// Tool library (TOML, one `[[tool]]` table per tool; see data/tools.toml).
     #[arg(long)]
     pub library: PathBuf,
     /// Units of the part file: mm, m or in.

@@ -11,14 +11,15 @@
 //! cell width along its moves; a stamp clears the material cells whose centres lie within r
 //! of it. The area a stamp clears (cells × cell²) divided by the advance since the previous
 //! stamp is the engagement averaged over that step; because one stamp's count is quantised to
-//! whole cells, engagement is averaged over a window of travel (the tool radius by default).
-//! Plunges (the first stamp after a retract) are booked as entry area, not as engagement.
+//! whole cells, engagement is averaged over a window of travel (`compare.json` uses the tool
+//! radius). Plunges (the first stamp after a retract) are booked as entry area, not as
+//! engagement.
 //!
 //! # Why the mean engagement bounds the path length
 //!
 //! A path whose engagement never exceeds e removes at most e·L along its length L, plus what
 //! its plunges remove, so L ≥ (area removed − entry area)/e. Any path that holds its radial
-//! engagement to the stepover s is at least (area − entries)/s long; [`Engagement::mean`]
+//! engagement to the stepover s is at least (area − entries)/s long; [`Engagement::pass_mean`]
 //! shows how close a method comes to that bound.
 
 use crate::contour::cavc::validate_shape;

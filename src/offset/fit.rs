@@ -18,7 +18,7 @@ const MAX_SAMPLES: f64 = 4.0e6;
 
 /// Per vertex of `level`: the largest distance from a part sample to the level triangle it is
 /// closest to, over the triangles around the vertex (0 where no sample is closest). The part
-/// is sampled at about `spacing` (coarser when that would take more than [`MAX_SAMPLES`]).
+/// is sampled at about `spacing` (coarser when that would take more than `MAX_SAMPLES`).
 pub fn local_fit(part: &Mesh, level: &Mesh, spacing: f64) -> Vec<f64> {
     let area = part.surface_area();
     let spacing = spacing.max((area / (0.43 * MAX_SAMPLES)).sqrt());
