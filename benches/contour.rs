@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use wavemill::contour::geometry::{Contour, Shape, Vertex};
-use wavemill::contour::material::engagement;
+use wavemill::contour::material::{engagement, report_cell};
 use wavemill::contour::{
     MultiresOptions, OutlineOptions, ParallelOptions, contour_parallel, multires_paths,
     read_outline,
@@ -53,7 +53,7 @@ fn planners(c: &mut Criterion) {
     });
     let path = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).unwrap();
     group.bench_function("engagement_replay", |b| {
-        b.iter(|| engagement(&path, &part, &stock, r.min(s) / 16.0, r).unwrap())
+        b.iter(|| engagement(&path, &part, &stock, report_cell(r, s), r).unwrap())
     });
     group.finish();
 }

@@ -40,6 +40,12 @@ const CLEARED: u8 = 2;
 /// Largest number of cells of a map (one byte each); a finer cell is coarsened to fit.
 pub const MAX_CELLS: usize = 1 << 26;
 
+/// The cell the reports use for tool radius `r` and stepover `s`: min(r, s)/16, fine enough
+/// that a pass one stepover from the last measures s within a few hundredths of a mm.
+pub fn report_cell(r: f64, s: f64) -> f64 {
+    r.min(s) / 16.0
+}
+
 /// The material state of the stock on a grid of square cells (see the module docs).
 #[derive(Clone, Debug)]
 pub struct MaterialMap {

@@ -350,7 +350,7 @@ pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64, direction: CutDirection) 
     let mut order = Vec::with_capacity(n);
     let mut current: Option<Point2> = None;
     for _ in 0..n {
-        // (key, piece, entry of a closed pass)
+        // (key, piece, where to enter it)
         type Choice = (f64, usize, Entry);
         let mut best: Option<Choice> = None;
         for i in (0..n).filter(|&i| !done[i] && pending[i] == 0) {

@@ -22,7 +22,7 @@ use serde::Serialize;
 use super::output::write_atomically;
 use crate::contour::geometry::{Contour, Vertex};
 use crate::contour::geometry::{Point2, Shape};
-use crate::contour::material::engagement;
+use crate::contour::material::{engagement, report_cell};
 use crate::contour::region::{RegionIndex, check_inside};
 use crate::contour::{
     CenterPath, ContourError, CutDirection, MachineParams, MultiresOptions, MultiresReport,
@@ -446,7 +446,7 @@ fn method_figures(
     let u = uncut_area(path, &p.part, &p.stock, Some(p.row_step)).map_err(contour_error(file))?;
     let sp = pass_spacing(path, &p.part, 0.5 * p.s, 0.25 * p.s).map_err(contour_error(file))?;
     let ps = path_stats(path);
-    let e = engagement(path, &p.part, &p.stock, p.r.min(p.s) / 16.0, p.r)
+    let e = engagement(path, &p.part, &p.stock, report_cell(p.r, p.s), p.r)
         .map_err(contour_error(file))?;
     Ok((
         MethodFigures {
