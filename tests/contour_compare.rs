@@ -58,6 +58,13 @@ fn assert_verified(r: &CompareReport, what: &str) {
         (&r.wavelet, "wavelet"),
         (&r.contour_parallel, "contour-parallel"),
     ] {
+        // Traverses at depth run through air: the replay finds (almost) nothing under them —
+        // at most a few cells whose centres sit on the stock's edge.
+        assert!(
+            m.traverse_area_mm2 <= 0.05,
+            "{what}, {name}: traverses removed {} mm²",
+            m.traverse_area_mm2
+        );
         let replayed = m.pass_area_mm2 + m.entry_area_mm2 + m.link_area_mm2;
         let exact = r.region_area_mm2 - m.uncut_area_mm2;
         assert!(

@@ -16,7 +16,7 @@
 //! "less dwell time in practical machining"). The model here is
 //!
 //! `time = (cut + feed-link length) / feed + plunge length / plunge_feed
-//!        + rapid length / rapid + blocks × dwell_per_block`,
+//!        + (rapid + traverse-at-depth length) / rapid + blocks × dwell_per_block`,
 //!
 //! counting every motion block. Defaults: `feed` = 762 mm/min — the 30 ipm XY feed of seed 004
 //! Table 3.1's caption (tool radius 0.25 in, 3500 rpm, 4 Z steps); spindle 3500 rpm from the
@@ -132,6 +132,8 @@ pub enum MoveKind {
     Cut,
     /// A feed link at cutting depth.
     Link,
+    /// A traverse at cutting depth through air beside the stock, at the rapid rate (G1).
+    StayDown,
     /// Down to cutting depth at the plunge feed.
     Plunge,
     /// Up to the safe height (rapid).
@@ -191,6 +193,8 @@ pub struct ProgramStats {
     pub cut_length: f64,
     /// XY length of feed links, mm.
     pub feed_link_length: f64,
+    /// XY length of traverses at cutting depth (at the rapid rate), mm.
+    pub stay_down_length: f64,
     /// Z length of plunges, mm.
     pub plunge_length: f64,
     /// Length of rapid moves (retracts and traverses), mm.
@@ -292,7 +296,11 @@ impl Emitter {
 
     fn line_to(&mut self, kind: MoveKind, e: (i64, i64)) {
         if e != self.pos {
-            let f = self.params.feed;
+            let f = if kind == MoveKind::StayDown {
+                self.params.rapid
+            } else {
+                self.params.feed
+            };
             self.push(
                 kind,
                 Motion::Line {
@@ -393,6 +401,7 @@ impl Program {
             } else {
                 match path.links()[k - 1] {
                     Link::Feed { .. } => em.line_to(MoveKind::Link, start),
+                    Link::Traverse { .. } => em.line_to(MoveKind::StayDown, start),
                     Link::Rapid { .. } => em.retract_traverse_plunge(start)?,
                 }
             }
@@ -495,6 +504,7 @@ impl Program {
             match b.kind {
                 MoveKind::Cut => st.cut_length += len,
                 MoveKind::Link => st.feed_link_length += len,
+                MoveKind::StayDown => st.stay_down_length += len,
                 MoveKind::Plunge => st.plunge_length += len,
                 MoveKind::Retract | MoveKind::Traverse => st.rapid_length += len,
             }
@@ -502,7 +512,7 @@ impl Program {
         }
         st.feed_minutes =
             (st.cut_length + st.feed_link_length) / p.feed + st.plunge_length / p.plunge_feed;
-        st.rapid_minutes = st.rapid_length / p.rapid;
+        st.rapid_minutes = (st.rapid_length + st.stay_down_length) / p.rapid;
         st.dwell_minutes = st.blocks as f64 * p.dwell_per_block / 60.0;
         st.total_minutes = st.feed_minutes + st.rapid_minutes + st.dwell_minutes;
         st
@@ -772,7 +782,7 @@ mod tests {
         let text = prog.to_gcode();
         let moves = parse(&text);
         assert_eq!(moves.len(), prog.stats().blocks);
-        let bvh = SegmentBvh::new(path.cutting_segments());
+        let bvh = SegmentBvh::new(path.depth_segments());
         let near = |x: f64, y: f64| bvh.nearest_point(Point2::new(x, y)).expect("path").distance;
         let (mut arcs, mut cut_len) = (0, 0.0);
         for m in &moves {
@@ -818,17 +828,27 @@ mod tests {
         }
         assert!(arcs > 20, "the test path should exercise arcs: {arcs}");
         let st = crate::contour::verify::path_stats(&path);
-        let want = st.cut_length + st.feed_link_length;
+        let want = st.cut_length + st.feed_link_length + st.traverse_length;
         // Each block's ends move by ≤ 0.7e-4 mm in rounding.
         let tol = 1e-4 * moves.len() as f64;
         assert!((cut_len - want).abs() < tol, "{cut_len} vs {want}");
         let ps = prog.stats();
-        assert!((ps.cut_length + ps.feed_link_length - cut_len).abs() < 1e-9 * want);
-        // One block per pass segment and feed link; a G0 up, a G0 across and a G1 down per rapid
-        // link and at the start; a final retract.
+        assert!(
+            (ps.cut_length + ps.feed_link_length + ps.stay_down_length - cut_len).abs()
+                < 1e-9 * want
+        );
+        // Traverses at depth are posted at the rapid rate.
+        if st.traverse_links > 0 {
+            assert!(
+                text.contains(&format!("F{:.4}", params.rapid)),
+                "no rapid-rate G1"
+            );
+        }
+        // One block per pass segment, feed link and traverse; a G0 up, a G0 across and a G1
+        // down per rapid link and at the start; a final retract.
         assert_eq!(
             ps.blocks,
-            st.segments + st.feed_links + 3 * st.rapid_links + 3 + 1
+            st.segments + st.feed_links + st.traverse_links + 3 * st.rapid_links + 3 + 1
         );
         assert!(text.starts_with("%\n(wavemill") && text.ends_with("M5\nM2\n%\n"));
         assert!(!text.contains("-0.0000"));

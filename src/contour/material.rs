@@ -353,6 +353,8 @@ pub struct Engagement {
     pub pass_area: f64,
     pub entry_area: f64,
     pub link_area: f64,
+    /// Area the traverses at depth removed, mm²: nothing, if they run through air as planned.
+    pub traverse_area: f64,
     /// Most material one plunge went into, mm² (πr² = straight down into uncut stock), and
     /// where.
     pub entry_max: f64,
@@ -362,7 +364,7 @@ pub struct Engagement {
 impl Engagement {
     /// Everything the path removed, mm².
     pub fn removed_area(&self) -> f64 {
-        self.pass_area + self.entry_area + self.link_area
+        self.pass_area + self.entry_area + self.link_area + self.traverse_area
     }
 }
 
@@ -396,6 +398,7 @@ pub fn engagement(
         pass_area: 0.0,
         entry_area: 0.0,
         link_area: 0.0,
+        traverse_area: 0.0,
         entry_max: 0.0,
         entry_max_at: Point2::origin(),
     };
@@ -421,7 +424,9 @@ pub fn engagement(
         values.append(&mut run.values);
         e.pass_area += run.area_total;
         pass_length += run.length_total;
-        if let Some(Link::Feed { from, to }) = path.links().get(i) {
+        if let Some(link @ (Link::Feed { from, to } | Link::Traverse { from, to })) =
+            path.links().get(i)
+        {
             let mut run = Window::without_values(window);
             map.cut(
                 &Segment::Line {
@@ -431,8 +436,12 @@ pub fn engagement(
                 &mut run,
             );
             run.finish();
-            e.link_max = e.link_max.max(run.max);
-            e.link_area += run.area_total;
+            if matches!(link, Link::Traverse { .. }) {
+                e.traverse_area += run.area_total;
+            } else {
+                e.link_max = e.link_max.max(run.max);
+                e.link_area += run.area_total;
+            }
         }
     }
     values.sort_by(f64::total_cmp);

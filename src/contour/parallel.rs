@@ -47,10 +47,12 @@
 //!
 //! # Linking
 //!
-//! A link is a straight move at cutting depth ([`Link::Feed`]) when it is at most
-//! `max_feed_link` long (default: the tool diameter, so it engages at most a full-width slot)
-//! and stays at least r from the part (checked exactly); otherwise the tool retracts, rapids
-//! and plunges ([`Link::Rapid`]).
+//! A link that stays at least r from the part (checked exactly) is made at cutting depth
+//! when it is at most `max_feed_link` long ([`Link::Feed`]; default: the tool diameter, so it
+//! engages at most a full-width slot), or when it runs through the air beside the stock —
+//! r from the stock and within the band the passes already reach into ([`Link::Traverse`] at
+//! the rapid rate; typically between fragments cut off at the same stock edge). Otherwise the
+//! tool retracts, rapids and plunges ([`Link::Rapid`]).
 
 use crate::contour::bvh::SegmentBvh;
 use crate::contour::cavc::{offset_region, validate_shape};
@@ -110,8 +112,15 @@ pub(crate) struct Piece {
 /// clip region (the stock grown by r − [`CLIP_EPS`]).
 pub(crate) struct Setup {
     pub(crate) max_feed_link: f64,
+    pub(crate) stock_index: RegionIndex,
     pub(crate) part_index: RegionIndex,
     pub(crate) clip_index: RegionIndex,
+}
+
+/// How far beyond the stock the passes are kept: r − [`CLIP_EPS`] (a centre farther than r from
+/// the stock cuts nothing).
+pub(crate) fn clip_distance(r: f64) -> f64 {
+    (r - CLIP_EPS).max(0.5 * r)
 }
 
 pub(crate) fn setup(
@@ -148,12 +157,13 @@ pub(crate) fn setup(
 
     let part_index = RegionIndex::new(part);
     let clip = Shape {
-        contours: offset_region(stock, (r - CLIP_EPS).max(0.5 * r), "stock")?,
+        contours: offset_region(stock, clip_distance(r), "stock")?,
     };
     let clip_index = RegionIndex::new(&clip);
 
     Ok(Setup {
         max_feed_link,
+        stock_index: RegionIndex::new(stock),
         part_index,
         clip_index,
     })
@@ -166,6 +176,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
     let s = opts.stepover;
     let Setup {
         max_feed_link,
+        stock_index,
         part_index,
         clip_index,
     } = setup(part, stock, r, s, opts.max_feed_link)?;
@@ -211,7 +222,11 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
         }
     }
     let ordered = order_pieces(pieces, s, opts.direction);
-    link(ordered, &part_index, r, max_feed_link)
+    let air = Air {
+        stock: &stock_index,
+        reach: clip_distance(r),
+    };
+    link(ordered, &part_index, &air, r, max_feed_link)
 }
 
 /// Splits a closed offset loop where it crosses the clip region's boundary and keeps the runs
@@ -454,10 +469,50 @@ fn restart_closed(pass: &Pass, seg: usize, t: f64) -> Pass {
     Pass::closed(out, pass.offset()).unwrap_or_else(|_| pass.clone())
 }
 
-/// Joins ordered passes: a feed link when short and clear of the part, else retract/rapid.
+/// The air beside the stock the passes already reach into: they are kept within `reach`
+/// (= [`clip_distance`]) of the stock.
+pub(crate) struct Air<'a> {
+    pub(crate) stock: &'a RegionIndex,
+    pub(crate) reach: f64,
+}
+
+impl Air<'_> {
+    /// Whether the straight move `seg` cuts nothing and goes nowhere the passes do not. It
+    /// keeps `reach` − [`CLIP_EPS`] from the stock with its midpoint outside (exact: the tool
+    /// reaches at most 20 nm into the stock), and no sample of it every `reach`/8 is farther
+    /// than `reach` + `reach`/16 from the stock (the distance is 1-Lipschitz, so the move stays
+    /// within `reach`/8 of the passes' envelope), so fixtures clear of the passes are clear of
+    /// it too.
+    fn holds(&self, seg: &Segment) -> bool {
+        let off_stock = !self.stock.contains(point_at(seg, 0.5))
+            && self
+                .stock
+                .boundary()
+                .nearest(seg)
+                .is_none_or(|n| n.distance >= self.reach - CLIP_EPS);
+        if !off_stock {
+            return false;
+        }
+        let step = self.reach / 8.0;
+        let n = ((seg.length() / step).ceil() as usize).max(1);
+        (0..=n).all(|k| {
+            self.stock
+                .boundary_distance(point_at(seg, k as f64 / n as f64))
+                <= self.reach + 0.5 * step
+        })
+    }
+}
+
+/// Joins ordered passes. A link that keeps r from the part (exact) stays at cutting depth when
+/// it is at most `max_feed_link` long (a [`Link::Feed`]: a step-over move, engaging at most a
+/// full-width slot for that short distance), or when it runs through the air beside the stock
+/// within the passes' envelope ([`Air::holds`]): a [`Link::Traverse`] at the rapid rate, of any
+/// length — one NC block instead of a retract, a rapid and a plunge. Otherwise the tool
+/// retracts, rapids and plunges.
 pub(crate) fn link(
     passes: Vec<Pass>,
     part: &RegionIndex,
+    air: &Air,
     r: f64,
     max_feed_link: f64,
 ) -> Result<CenterPath> {
@@ -474,8 +529,12 @@ pub(crate) fn link(
                     .boundary()
                     .nearest(&seg)
                     .is_none_or(|n| n.distance >= r - LINK_TOL);
-            if (to - from).norm() <= max_feed_link && clear {
+            if !clear {
+                Link::Rapid { from, to }
+            } else if (to - from).norm() <= max_feed_link {
                 Link::Feed { from, to }
+            } else if air.holds(&seg) {
+                Link::Traverse { from, to }
             } else {
                 Link::Rapid { from, to }
             }
@@ -568,12 +627,30 @@ pub(crate) mod tests {
         }
         assert_far_side_first(&path, 4.0);
         // Corner by corner (23, 19, 15 — clipped, each ending on the stock + r boundary, so
-        // rapids in between), then the three full circles joined by 4 mm feed links.
+        // traverses through the air beside the stock in between), then the three full circles
+        // joined by 4 mm feed links.
         let offs: Vec<f64> = path.passes().iter().map(|p| p.offset()).collect();
         assert_eq!(&offs[..3], &[23.0, 19.0, 15.0]);
         assert_eq!(&offs[12..], &[11.0, 7.0, 3.0]);
         let st = crate::contour::verify::path_stats(&path);
-        assert_eq!((st.passes, st.feed_links, st.rapid_links), (15, 3, 11));
+        assert_eq!(
+            (st.passes, st.feed_links, st.traverse_links, st.rapid_links),
+            (15, 3, 11, 0)
+        );
+        // Each traverse keeps r from the stock (less 2e-5 mm) and stays within r + r/8 of it,
+        // checked densely and independently of the planner's own test.
+        let stock_index = RegionIndex::new(&stock);
+        for l in path.links() {
+            let Link::Traverse { from, to } = *l else {
+                continue;
+            };
+            for k in 0..=1000 {
+                let p = from + (to - from) * (k as f64 / 1000.0);
+                assert!(!stock_index.contains(p));
+                let d = stock_index.boundary_distance(p);
+                assert!((3.0 - 2e-5..=3.0 + 3.0 / 8.0).contains(&d), "{d} at {p:?}");
+            }
+        }
         // The last pass is the full finishing circle at r.
         let last = path.passes().last().expect("passes");
         assert!(last.is_closed() && last.offset() == 3.0);

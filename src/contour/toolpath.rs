@@ -174,6 +174,11 @@ pub enum CutDirection {
 pub enum Link {
     /// A straight move at cutting depth and feed rate (it cuts, so it is verified like a pass).
     Feed { from: Point2, to: Point2 },
+    /// A straight move at cutting depth through air beside the stock, at the rapid rate
+    /// (posted as G1 at the rapid feed: a G0 need not move in a straight line). The planners
+    /// make one only where the move stays within the envelope the passes already use (the
+    /// stock grown by r) and at least r from the stock, so it cuts nothing.
+    Traverse { from: Point2, to: Point2 },
     /// Retract to the safe height, rapid (G0) above `to`, plunge back to cutting depth.
     Rapid { from: Point2, to: Point2 },
 }
@@ -182,14 +187,16 @@ impl Link {
     /// Start point (end of the previous pass).
     pub fn from(&self) -> Point2 {
         match *self {
-            Link::Feed { from, .. } | Link::Rapid { from, .. } => from,
+            Link::Feed { from, .. } | Link::Traverse { from, .. } | Link::Rapid { from, .. } => {
+                from
+            }
         }
     }
 
     /// End point (start of the next pass).
     pub fn to(&self) -> Point2 {
         match *self {
-            Link::Feed { to, .. } | Link::Rapid { to, .. } => to,
+            Link::Feed { to, .. } | Link::Traverse { to, .. } | Link::Rapid { to, .. } => to,
         }
     }
 
@@ -198,10 +205,10 @@ impl Link {
         (self.to() - self.from()).norm()
     }
 
-    /// The link as a segment, when it is a cutting move.
-    pub fn cutting_segment(&self) -> Option<Segment> {
+    /// The link as a segment, when the tool makes it at cutting depth.
+    pub fn depth_segment(&self) -> Option<Segment> {
         match *self {
-            Link::Feed { from, to } => Some(Segment::Line {
+            Link::Feed { from, to } | Link::Traverse { from, to } => Some(Segment::Line {
                 start: from,
                 end: to,
             }),
@@ -290,12 +297,12 @@ impl CenterPath {
         &self.links
     }
 
-    /// Every move made at cutting depth, in order: pass segments and feed links.
-    pub fn cutting_segments(&self) -> Vec<Segment> {
+    /// Every move made at cutting depth, in order: pass segments, feed links and traverses.
+    pub fn depth_segments(&self) -> Vec<Segment> {
         let mut out = Vec::new();
         for (i, p) in self.passes.iter().enumerate() {
             out.extend(p.segments());
-            if let Some(s) = self.links.get(i).and_then(Link::cutting_segment) {
+            if let Some(s) = self.links.get(i).and_then(Link::depth_segment) {
                 out.push(s);
             }
         }

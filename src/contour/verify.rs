@@ -61,7 +61,7 @@ pub fn clearance(path: &CenterPath, part: &Shape) -> Result<Clearance> {
     };
     let mut min_d = f64::INFINITY;
     let mut deepest: Option<(f64, Point2, Point2)> = None;
-    for seg in path.cutting_segments() {
+    for seg in path.depth_segments() {
         if let Some(n) = idx.boundary().nearest(&seg)
             && n.distance < min_d
         {
@@ -195,7 +195,7 @@ pub fn uncut_area(
 
     // Cutting moves, split, sorted by the bottom of their swept box.
     let mut sweeps: Vec<(f64, f64, Sweep)> = Vec::new();
-    for seg in path.cutting_segments() {
+    for seg in path.depth_segments() {
         for piece in split_arc(&seg, FRAC_PI_2) {
             let b = bbox(&piece).expanded(r);
             let sw = Sweep::of(piece);
@@ -407,6 +407,9 @@ pub struct PathStats {
     /// Number and total length of links made at cutting depth.
     pub feed_links: usize,
     pub feed_link_length: f64,
+    /// Number and total length of traverses at cutting depth through air.
+    pub traverse_links: usize,
+    pub traverse_length: f64,
     /// Number and total XY length of retract/rapid/plunge links.
     pub rapid_links: usize,
     pub rapid_link_length: f64,
@@ -427,6 +430,10 @@ pub fn path_stats(path: &CenterPath) -> PathStats {
             Link::Feed { .. } => {
                 st.feed_links += 1;
                 st.feed_link_length += l.length();
+            }
+            Link::Traverse { .. } => {
+                st.traverse_links += 1;
+                st.traverse_length += l.length();
             }
             Link::Rapid { .. } => {
                 st.rapid_links += 1;

@@ -161,6 +161,10 @@ pub struct MethodFigures {
     pub pass_spacing_p95_mm: f64,
     /// Links made by retract, rapid and plunge (each 3 blocks and a plunge at feed).
     pub rapid_links: usize,
+    /// Traverses at cutting depth through the air beside the stock (one block each, at the
+    /// rapid rate), and the area they removed on the material map (nothing, as planned).
+    pub traverse_links: usize,
+    pub traverse_area_mm2: f64,
     /// Radial engagement replayed on a material map (`contour::material`, cells of
     /// min(r, s)/16, averaged over r of travel): the passes' largest, 99th-percentile and mean
     /// engagement (mean = area removed by the passes / pass length), mm, and the feed links'
@@ -461,6 +465,8 @@ fn method_figures(
             pass_spacing_max_at: [sp.max_at.x, sp.max_at.y],
             pass_spacing_p95_mm: sp.p95,
             rapid_links: ps.rapid_links,
+            traverse_links: ps.traverse_links,
+            traverse_area_mm2: e.traverse_area,
             engagement_max_mm: e.pass_max,
             engagement_max_at: [e.pass_max_at.x, e.pass_max_at.y],
             engagement_p99_mm: e.pass_p99,

@@ -134,6 +134,10 @@ impl<'a> Picture<'a> {
                 let (a, b) = (map(l.from()), map(l.to()));
                 let style = match l {
                     Link::Feed { .. } => "stroke=\"rgb(20,150,60)\"".to_string(),
+                    Link::Traverse { .. } => format!(
+                        "stroke=\"rgb(20,150,60)\" stroke-dasharray=\"{:.4}\"",
+                        4.0 * stroke
+                    ),
                     Link::Rapid { .. } => format!(
                         "stroke=\"rgb(210,40,40)\" stroke-dasharray=\"{:.4}\"",
                         4.0 * stroke
@@ -205,7 +209,7 @@ impl<'a> Picture<'a> {
                 img.segment(
                     &seg,
                     &to_px,
-                    if matches!(l, Link::Feed { .. }) {
+                    if matches!(l, Link::Feed { .. } | Link::Traverse { .. }) {
                         FEED
                     } else {
                         RAPID

@@ -81,7 +81,9 @@ use crate::contour::bvh::SegmentBvh;
 use crate::contour::cavc::offset_region;
 use crate::contour::error::{ContourError, Result};
 use crate::contour::geometry::{Contour, Point2, Shape};
-use crate::contour::parallel::{CLIP_EPS, Piece, Setup, clip_loop, link, order_pieces, setup};
+use crate::contour::parallel::{
+    Air, CLIP_EPS, Piece, Setup, clip_distance, clip_loop, link, order_pieces, setup,
+};
 use crate::contour::region::RegionIndex;
 use crate::contour::toolpath::{CenterPath, CutDirection, Pass};
 use corners::CornerOptions;
@@ -181,6 +183,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     let (r, s) = (opts.tool_radius, opts.stepover);
     let Setup {
         max_feed_link,
+        stock_index,
         part_index,
         clip_index,
     } = setup(part, stock, r, s, opts.max_feed_link)?;
@@ -338,7 +341,11 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     // Neighbouring part levels are up to s + 2τ apart; a part level cut off at H is r from
     // the first hull pass.
     let ordered = order_pieces(pieces, (s + 2.0 * tol).max(r), opts.direction);
-    let path = link(ordered, &part_index, r, max_feed_link)?;
+    let air = Air {
+        stock: &stock_index,
+        reach: clip_distance(r),
+    };
+    let path = link(ordered, &part_index, &air, r, max_feed_link)?;
     Ok(MultiresPlan {
         path,
         report,
