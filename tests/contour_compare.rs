@@ -17,6 +17,27 @@ fn wavemill(args: &[&str]) -> std::process::Output {
         .expect("run wavemill")
 }
 
+/// `wavemill contour OUTLINE --tool flat:6 --stock margin:10 EXTRA… --out OUT`, which must
+/// succeed.
+fn contour_flat6_margin10(outline: &std::path::Path, out: &std::path::Path, extra: &[&str]) {
+    let (outline, out) = (
+        outline.to_str().expect("utf-8 path"),
+        out.to_str().expect("utf-8 path"),
+    );
+    let mut args = vec![
+        "contour",
+        outline,
+        "--tool",
+        "flat:6",
+        "--stock",
+        "margin:10",
+    ];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--out", out]);
+    let o = wavemill(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// One scanline row of the uncut-area measure is `row` mm high: two results may differ by
 /// about a row times the stock width where a boundary falls between rows.
 fn uncut_slack(report: &serde_json::Value) -> f64 {
@@ -96,19 +117,7 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
     let dir = std::env::temp_dir().join(format!("wavemill-contour-{}", std::process::id()));
     let (a, b) = (dir.join("a"), dir.join("b"));
     for out in [&a, &b] {
-        let o = wavemill(&[
-            "contour",
-            sample.to_str().expect("utf-8 path"),
-            "--tool",
-            "flat:6",
-            "--stock",
-            "margin:10",
-            "--compare",
-            "--no-timings",
-            "--out",
-            out.to_str().expect("utf-8 path"),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        contour_flat6_margin10(&sample, out, &["--compare", "--no-timings"]);
     }
     for f in [
         "wavelet.nc",
@@ -126,17 +135,7 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
     }
     // Without --compare: the same wavelet.nc and nothing else.
     let c = dir.join("c");
-    let o = wavemill(&[
-        "contour",
-        sample.to_str().expect("utf-8 path"),
-        "--tool",
-        "flat:6",
-        "--stock",
-        "margin:10",
-        "--out",
-        c.to_str().expect("utf-8 path"),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    contour_flat6_margin10(&sample, &c, &[]);
     assert!(
         std::fs::read(c.join("wavelet.nc")).expect("nc")
             == std::fs::read(a.join("wavelet.nc")).expect("nc")
@@ -164,21 +163,11 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
     }
     // --direction climb: the same passes (same length), none reversed, so more retracts.
     let climb = dir.join("climb");
-    let o = wavemill(&[
-        "contour",
-        sample.to_str().expect("utf-8 path"),
-        "--tool",
-        "flat:6",
-        "--stock",
-        "margin:10",
-        "--compare",
-        "--no-timings",
-        "--direction",
-        "climb",
-        "--out",
-        climb.to_str().expect("utf-8 path"),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    contour_flat6_margin10(
+        &sample,
+        &climb,
+        &["--compare", "--no-timings", "--direction", "climb"],
+    );
     let climbing = compare_json(&climb);
     assert_eq!(report["cut_direction"], "mixed");
     assert_eq!(climbing["cut_direction"], "climb");

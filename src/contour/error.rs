@@ -39,3 +39,17 @@ pub enum ContourError {
 
 /// Result alias of this piece.
 pub type Result<T> = std::result::Result<T, ContourError>;
+
+/// `Ok` when `value` is a positive finite number, else the [`ContourError::InvalidOption`]
+/// naming option `name` with `reason`.
+pub(crate) fn require_positive(name: &'static str, value: f64, reason: &'static str) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(ContourError::InvalidOption {
+            name,
+            value,
+            reason,
+        })
+    }
+}

@@ -23,7 +23,7 @@
 //! shows how close a method comes to that bound.
 
 use crate::contour::cavc::validate_shape;
-use crate::contour::error::{ContourError, Result};
+use crate::contour::error::{ContourError, Result, require_positive};
 use crate::contour::geometry::{Point2, Segment, Shape};
 use crate::contour::region::RegionIndex;
 use crate::contour::segops::point_at;
@@ -62,20 +62,16 @@ impl MaterialMap {
     /// The stock minus the part on cells of `cell` mm (coarsened if the grid would exceed
     /// [`MAX_CELLS`]) for a flat end mill of radius `tool_radius`.
     pub fn new(part: &Shape, stock: &Shape, tool_radius: f64, cell: f64) -> Result<Self> {
-        if !(tool_radius.is_finite() && tool_radius > 0.0) {
-            return Err(ContourError::InvalidOption {
-                name: "tool_radius",
-                value: tool_radius,
-                reason: "must be a positive finite number of mm",
-            });
-        }
-        if !(cell.is_finite() && cell > 0.0) {
-            return Err(ContourError::InvalidOption {
-                name: "cell",
-                value: cell,
-                reason: "the material map's cell must be a positive finite number of mm",
-            });
-        }
+        require_positive(
+            "tool_radius",
+            tool_radius,
+            "must be a positive finite number of mm",
+        )?;
+        require_positive(
+            "cell",
+            cell,
+            "the material map's cell must be a positive finite number of mm",
+        )?;
         validate_shape(part, "part")?;
         validate_shape(stock, "stock")?;
         let stock_index = RegionIndex::new(stock);
@@ -136,27 +132,29 @@ impl MaterialMap {
         (lo <= hi).then_some((lo as usize, hi as usize))
     }
 
-    /// Rows, and per row the columns, of the cells whose centres lie within `radius` of `p`.
-    fn disc_rows(&self, p: Point2, radius: f64) -> impl Iterator<Item = (usize, usize, usize)> {
+    /// Rows with cell centres within `radius` of `p`'s height.
+    fn rows_near(&self, p: Point2, radius: f64) -> std::ops::Range<usize> {
         let h = self.cell;
-        let j_lo = ((p.y - radius - self.origin.y) / h - 0.5).ceil().max(0.0);
-        let j_hi = ((p.y + radius - self.origin.y) / h - 0.5)
+        let lo = ((p.y - radius - self.origin.y) / h - 0.5).ceil().max(0.0);
+        let hi = ((p.y + radius - self.origin.y) / h - 0.5)
             .floor()
             .min(self.height as f64 - 1.0);
-        let rows = if j_lo <= j_hi {
-            j_lo as usize..j_hi as usize + 1
+        if lo <= hi {
+            lo as usize..hi as usize + 1
         } else {
             0..0
-        };
-        rows.filter_map(move |j| {
-            let dy = self.origin.y + (j as f64 + 0.5) * h - p.y;
-            let w2 = radius * radius - dy * dy;
-            if w2 < 0.0 {
-                return None;
-            }
-            let w = w2.sqrt();
-            self.columns(p.x - w, p.x + w).map(|(lo, hi)| (j, lo, hi))
-        })
+        }
+    }
+
+    /// Columns of row `j` whose cell centres lie within `radius` of `p`.
+    fn row_span(&self, j: usize, p: Point2, radius: f64) -> Option<(usize, usize)> {
+        let dy = self.origin.y + (j as f64 + 0.5) * self.cell - p.y;
+        let w2 = radius * radius - dy * dy;
+        if w2 < 0.0 {
+            return None;
+        }
+        let w = w2.sqrt();
+        self.columns(p.x - w, p.x + w)
     }
 
     /// Clears the material cells whose centres lie within r of `p`; returns how many. When the
@@ -165,16 +163,12 @@ impl MaterialMap {
     /// instead of the whole disc.
     fn stamp(&mut self, p: Point2, previous: Option<Point2>) -> usize {
         let r = self.radius;
-        let rows: Vec<(usize, usize, usize)> = self.disc_rows(p, r).collect();
         let mut count = 0;
-        for (j, lo, hi) in rows {
-            let old = previous.and_then(|q| {
-                let dy = self.origin.y + (j as f64 + 0.5) * self.cell - q.y;
-                let w2 = r * r - dy * dy;
-                (w2 >= 0.0)
-                    .then(|| self.columns(q.x - w2.sqrt(), q.x + w2.sqrt()))
-                    .flatten()
-            });
+        for j in self.rows_near(p, r) {
+            let Some((lo, hi)) = self.row_span(j, p, r) else {
+                continue;
+            };
+            let old = previous.and_then(|q| self.row_span(j, q, r));
             let row = j * self.width;
             let mut clear = |a: usize, b: usize| {
                 for c in &mut self.state[row + a..=row + b] {
@@ -378,13 +372,11 @@ pub fn engagement(
     cell: f64,
     window: f64,
 ) -> Result<Engagement> {
-    if !(window.is_finite() && window > 0.0) {
-        return Err(ContourError::InvalidOption {
-            name: "window",
-            value: window,
-            reason: "the engagement window must be a positive finite number of mm",
-        });
-    }
+    require_positive(
+        "window",
+        window,
+        "the engagement window must be a positive finite number of mm",
+    )?;
     let mut map = MaterialMap::new(part, stock, path.tool_radius(), cell)?;
     let mut values: Vec<f64> = Vec::new();
     let mut e = Engagement {
@@ -458,25 +450,14 @@ pub fn engagement(
 mod tests {
     use super::*;
     use crate::contour::geometry::Vertex;
-    use crate::contour::parallel::tests::{circle, rect};
+    use crate::contour::parallel::tests::{circle, disc_in_square, rect};
     use crate::contour::parallel::{ParallelOptions, contour_parallel};
     use crate::contour::toolpath::Pass;
     use std::f64::consts::PI;
 
-    fn square_with_hole() -> (Shape, Shape) {
-        (
-            Shape {
-                contours: vec![circle(0.0, 0.0, 10.0, true)],
-            },
-            Shape {
-                contours: vec![rect(-30.0, -30.0, 30.0, 30.0, true)],
-            },
-        )
-    }
-
     #[test]
     fn the_map_holds_the_stock_minus_the_part() {
-        let (part, stock) = square_with_hole();
+        let (part, stock) = disc_in_square(10.0, 30.0);
         let map = MaterialMap::new(&part, &stock, 3.0, 0.05).expect("map");
         let exact = 3600.0 - PI * 100.0;
         assert!(
@@ -516,7 +497,7 @@ mod tests {
     /// over the pass length, less what plunges and links took.
     #[test]
     fn contour_parallel_holds_the_stepover() {
-        let (part, stock) = square_with_hole();
+        let (part, stock) = disc_in_square(10.0, 30.0);
         let (r, s) = (3.0, 2.4);
         let path = contour_parallel(&part, &stock, &ParallelOptions::new(r, s)).expect("plan");
         let e = engagement(&path, &part, &stock, 0.05, r).expect("engagement");

@@ -56,7 +56,7 @@
 
 use crate::contour::bvh::SegmentBvh;
 use crate::contour::cavc::{offset_region, validate_shape};
-use crate::contour::error::{ContourError, Result};
+use crate::contour::error::{ContourError, Result, require_positive};
 use crate::contour::geometry::{Contour, Point2, Segment, Shape, Vertex};
 use crate::contour::region::RegionIndex;
 use crate::contour::segops::{
@@ -111,6 +111,7 @@ pub(crate) struct Piece {
 /// What both planners need first: validated options and shapes, the part index and the stock
 /// clip region (the stock grown by r − [`CLIP_EPS`]).
 pub(crate) struct Setup {
+    pub(crate) r: f64,
     pub(crate) max_feed_link: f64,
     pub(crate) stock_index: RegionIndex,
     pub(crate) part_index: RegionIndex,
@@ -119,7 +120,7 @@ pub(crate) struct Setup {
 
 /// How far beyond the stock the passes are kept: r − [`CLIP_EPS`] (a centre farther than r from
 /// the stock cuts nothing).
-pub(crate) fn clip_distance(r: f64) -> f64 {
+fn clip_distance(r: f64) -> f64 {
     (r - CLIP_EPS).max(0.5 * r)
 }
 
@@ -130,13 +131,7 @@ pub(crate) fn setup(
     s: f64,
     max_feed_link: Option<f64>,
 ) -> Result<Setup> {
-    if !(r.is_finite() && r > 0.0) {
-        return Err(ContourError::InvalidOption {
-            name: "tool_radius",
-            value: r,
-            reason: "must be a positive finite number of mm",
-        });
-    }
+    require_positive("tool_radius", r, "must be a positive finite number of mm")?;
     if !(s.is_finite() && s > 0.0 && s <= 2.0 * r) {
         return Err(ContourError::InvalidOption {
             name: "stepover",
@@ -162,6 +157,7 @@ pub(crate) fn setup(
     let clip_index = RegionIndex::new(&clip);
 
     Ok(Setup {
+        r,
         max_feed_link,
         stock_index: RegionIndex::new(stock),
         part_index,
@@ -174,12 +170,8 @@ pub(crate) fn setup(
 pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> Result<CenterPath> {
     let r = opts.tool_radius;
     let s = opts.stepover;
-    let Setup {
-        max_feed_link,
-        stock_index,
-        part_index,
-        clip_index,
-    } = setup(part, stock, r, s, opts.max_feed_link)?;
+    let setup = setup(part, stock, r, s, opts.max_feed_link)?;
+    let (part_index, clip_index) = (&setup.part_index, &setup.clip_index);
 
     // Far bound of the stock from the part: every stock point is within `reach` of the part's
     // first vertex, hence of the part.
@@ -208,7 +200,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
         let loops = offset_region(part, level, "part")?;
         let mut found = false;
         for l in &loops {
-            for pass in clip_loop(l, &[(&clip_index, true)], level)? {
+            for pass in clip_loop(l, &[(clip_index, true)], level)? {
                 found = true;
                 pieces.push(Piece { level: k, pass });
             }
@@ -222,11 +214,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
         }
     }
     let ordered = order_pieces(pieces, s, opts.direction);
-    let air = Air {
-        stock: &stock_index,
-        reach: clip_distance(r),
-    };
-    link(ordered, &part_index, &air, r, max_feed_link)
+    setup.link(ordered)
 }
 
 /// Splits a closed offset loop where it crosses the clip region's boundary and keeps the runs
@@ -469,78 +457,68 @@ fn restart_closed(pass: &Pass, seg: usize, t: f64) -> Pass {
     Pass::closed(out, pass.offset()).unwrap_or_else(|_| pass.clone())
 }
 
-/// The air beside the stock the passes already reach into: they are kept within `reach`
-/// (= [`clip_distance`]) of the stock.
-pub(crate) struct Air<'a> {
-    pub(crate) stock: &'a RegionIndex,
-    pub(crate) reach: f64,
-}
-
-impl Air<'_> {
+impl Setup {
     /// Whether the straight move `seg` cuts nothing and goes nowhere the passes do not. It
-    /// keeps `reach` − [`CLIP_EPS`] from the stock with its midpoint outside (exact: the tool
-    /// reaches at most 20 nm into the stock), and no sample of it every `reach`/8 is farther
-    /// than `reach` + `reach`/16 from the stock (the distance is 1-Lipschitz, so the move stays
-    /// within `reach`/8 of the passes' envelope), so fixtures clear of the passes are clear of
-    /// it too.
-    fn holds(&self, seg: &Segment) -> bool {
-        let off_stock = !self.stock.contains(point_at(seg, 0.5))
+    /// keeps [`clip_distance`] − [`CLIP_EPS`] from the stock with its midpoint outside (exact:
+    /// the tool reaches at most 20 nm into the stock), and no sample of it every
+    /// `clip_distance`/8 is farther than `clip_distance` + `clip_distance`/16 from the stock
+    /// (the distance is 1-Lipschitz, so the move stays within `clip_distance`/8 of the band the
+    /// passes use), so fixtures clear of the passes are clear of it too.
+    fn in_air_beside_the_stock(&self, seg: &Segment) -> bool {
+        let reach = clip_distance(self.r);
+        let off_stock = !self.stock_index.contains(point_at(seg, 0.5))
             && self
-                .stock
+                .stock_index
                 .boundary()
                 .nearest(seg)
-                .is_none_or(|n| n.distance >= self.reach - CLIP_EPS);
+                .is_none_or(|n| n.distance >= reach - CLIP_EPS);
         if !off_stock {
             return false;
         }
-        let step = self.reach / 8.0;
+        let step = reach / 8.0;
         let n = ((seg.length() / step).ceil() as usize).max(1);
         (0..=n).all(|k| {
-            self.stock
+            self.stock_index
                 .boundary_distance(point_at(seg, k as f64 / n as f64))
-                <= self.reach + 0.5 * step
+                <= reach + 0.5 * step
         })
     }
-}
 
-/// Joins ordered passes. A link that keeps r from the part (exact) stays at cutting depth when
-/// it is at most `max_feed_link` long (a [`Link::Feed`]: a step-over move, engaging at most a
-/// full-width slot for that short distance), or when it runs through the air beside the stock
-/// within the passes' envelope ([`Air::holds`]): a [`Link::Traverse`] at the rapid rate, of any
-/// length — one NC block instead of a retract, a rapid and a plunge. Otherwise the tool
-/// retracts, rapids and plunges.
-pub(crate) fn link(
-    passes: Vec<Pass>,
-    part: &RegionIndex,
-    air: &Air,
-    r: f64,
-    max_feed_link: f64,
-) -> Result<CenterPath> {
-    let links = passes
-        .windows(2)
-        .map(|w| {
-            let (from, to) = (w[0].end(), w[1].start());
-            let seg = Segment::Line {
-                start: from,
-                end: to,
-            };
-            let clear = !part.contains(from)
-                && part
-                    .boundary()
-                    .nearest(&seg)
-                    .is_none_or(|n| n.distance >= r - LINK_TOL);
-            if !clear {
-                Link::Rapid { from, to }
-            } else if (to - from).norm() <= max_feed_link {
-                Link::Feed { from, to }
-            } else if air.holds(&seg) {
-                Link::Traverse { from, to }
-            } else {
-                Link::Rapid { from, to }
-            }
-        })
-        .collect();
-    CenterPath::new(r, passes, links)
+    /// Joins ordered passes. A link that keeps r from the part (exact) stays at cutting depth
+    /// when it is at most `max_feed_link` long (a [`Link::Feed`]: a step-over move, engaging at
+    /// most a full-width slot for that short distance), or when it runs through the air beside
+    /// the stock within the passes' band ([`Self::in_air_beside_the_stock`]): a
+    /// [`Link::Traverse`] at the rapid rate, of any length — one NC block instead of a retract,
+    /// a rapid and a plunge. Otherwise the tool retracts, rapids and plunges.
+    pub(crate) fn link(&self, passes: Vec<Pass>) -> Result<CenterPath> {
+        let r = self.r;
+        let links = passes
+            .windows(2)
+            .map(|w| {
+                let (from, to) = (w[0].end(), w[1].start());
+                let seg = Segment::Line {
+                    start: from,
+                    end: to,
+                };
+                let clear = !self.part_index.contains(from)
+                    && self
+                        .part_index
+                        .boundary()
+                        .nearest(&seg)
+                        .is_none_or(|n| n.distance >= r - LINK_TOL);
+                if !clear {
+                    Link::Rapid { from, to }
+                } else if (to - from).norm() <= self.max_feed_link {
+                    Link::Feed { from, to }
+                } else if self.in_air_beside_the_stock(&seg) {
+                    Link::Traverse { from, to }
+                } else {
+                    Link::Rapid { from, to }
+                }
+            })
+            .collect();
+        CenterPath::new(r, passes, links)
+    }
 }
 
 #[cfg(test)]
@@ -578,6 +556,19 @@ pub(crate) mod tests {
         Contour { vertices: v }
     }
 
+    /// A disc of `radius` round the origin (the part) in the square stock of half-side
+    /// `half_side`.
+    pub(crate) fn disc_in_square(radius: f64, half_side: f64) -> (Shape, Shape) {
+        (
+            Shape {
+                contours: vec![circle(0.0, 0.0, radius, true)],
+            },
+            Shape {
+                contours: vec![rect(-half_side, -half_side, half_side, half_side, true)],
+            },
+        )
+    }
+
     /// Ordering invariant: a pass is never cut before a pass one level farther out lying within
     /// s of it (the material between them must be cleared from the far side).
     pub(crate) fn assert_far_side_first(path: &CenterPath, s: f64) {
@@ -602,12 +593,7 @@ pub(crate) mod tests {
 
     #[test]
     fn circle_in_square_levels_are_concentric_circles() {
-        let part = Shape {
-            contours: vec![circle(0.0, 0.0, 20.0, true)],
-        };
-        let stock = Shape {
-            contours: vec![rect(-30.0, -30.0, 30.0, 30.0, true)],
-        };
+        let (part, stock) = disc_in_square(20.0, 30.0);
         let path = contour_parallel(&part, &stock, &ParallelOptions::new(3.0, 4.0)).expect("plan");
         let mut offsets: Vec<f64> = path.passes().iter().map(|p| p.offset()).collect();
         offsets.dedup();
@@ -662,12 +648,7 @@ pub(crate) mod tests {
     /// joined at depth where climb-only retracts between them.
     #[test]
     fn mixed_direction_reverses_only_open_roughing_passes() {
-        let part = Shape {
-            contours: vec![circle(0.0, 0.0, 20.0, true)],
-        };
-        let stock = Shape {
-            contours: vec![rect(-32.0, -32.0, 32.0, 32.0, true)],
-        };
+        let (part, stock) = disc_in_square(20.0, 32.0);
         let plan = |direction| {
             let opts = ParallelOptions {
                 direction,
@@ -729,12 +710,7 @@ pub(crate) mod tests {
 
     #[test]
     fn options_are_validated() {
-        let part = Shape {
-            contours: vec![circle(0.0, 0.0, 5.0, true)],
-        };
-        let stock = Shape {
-            contours: vec![rect(-10.0, -10.0, 10.0, 10.0, true)],
-        };
+        let (part, stock) = disc_in_square(5.0, 10.0);
         let e = contour_parallel(&part, &stock, &ParallelOptions::new(1.0, 2.5)).unwrap_err();
         assert!(e.to_string().contains("stepover"), "{e}");
         let e = contour_parallel(&part, &stock, &ParallelOptions::new(-1.0, 0.5)).unwrap_err();

@@ -5,7 +5,7 @@
 //! multiresolution paths of seed 004 (chapters 3–4) both produce a [`CenterPath`], which is then
 //! verified ([`crate::contour::verify`]) and posted as G-code ([`crate::contour::gcode`]).
 
-use crate::contour::error::{ContourError, Result};
+use crate::contour::error::{ContourError, Result, require_positive};
 use crate::contour::geometry::{Point2, Segment, Vertex};
 
 /// Tolerance for "the link starts where the pass ends", mm.
@@ -230,13 +230,11 @@ impl CenterPath {
     /// Checks the invariants: positive finite tool radius, one link between each pair of
     /// consecutive passes, starting where the pass ends and ending where the next one starts.
     pub fn new(tool_radius: f64, passes: Vec<Pass>, links: Vec<Link>) -> Result<Self> {
-        if !(tool_radius.is_finite() && tool_radius > 0.0) {
-            return Err(ContourError::InvalidOption {
-                name: "tool_radius",
-                value: tool_radius,
-                reason: "must be a positive finite number of mm",
-            });
-        }
+        require_positive(
+            "tool_radius",
+            tool_radius,
+            "must be a positive finite number of mm",
+        )?;
         if links.len() != passes.len().saturating_sub(1) {
             return Err(ContourError::BadPath(format!(
                 "{} passes need {} links, got {}",

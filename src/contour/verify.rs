@@ -27,7 +27,7 @@
 //! it lies on the level-ℓ pass. Hence level ℓ sweeps x whenever t − r ≤ ℓ ≤ t.
 
 use crate::contour::cavc::validate_shape;
-use crate::contour::error::{ContourError, Result};
+use crate::contour::error::{ContourError, Result, require_positive};
 use crate::contour::geometry::{Point2, Segment, Shape, Vector2};
 use crate::contour::region::RegionIndex;
 use crate::contour::segops::{bbox, seg_end, seg_start, split_arc};
@@ -175,13 +175,7 @@ pub fn uncut_area(
     };
     let (w, hgt) = (sb.max.x - sb.min.x, sb.max.y - sb.min.y);
     let h = row_step.unwrap_or(w.max(hgt) / 10_000.0);
-    if !(h.is_finite() && h > 0.0) {
-        return Err(ContourError::InvalidOption {
-            name: "row_step",
-            value: h,
-            reason: "must be a positive finite number of mm",
-        });
-    }
+    require_positive("row_step", h, "must be a positive finite number of mm")?;
     let rows_f = (hgt / h).ceil();
     if rows_f > MAX_ROWS as f64 {
         return Err(ContourError::InvalidOption {
@@ -537,22 +531,11 @@ pub fn pass_spacing(
 mod tests {
     use super::*;
     use crate::contour::geometry::{Contour, Vertex};
-    use crate::contour::parallel::tests::{assert_far_side_first, circle, rect};
+    use crate::contour::parallel::tests::{assert_far_side_first, circle, disc_in_square, rect};
     use crate::contour::parallel::{ParallelOptions, contour_parallel};
     use crate::contour::segops::point_distance;
     use crate::contour::toolpath::Pass;
     use std::f64::consts::PI;
-
-    fn circle_in_square() -> (Shape, Shape) {
-        (
-            Shape {
-                contours: vec![circle(0.0, 0.0, 20.0, true)],
-            },
-            Shape {
-                contours: vec![rect(-30.0, -30.0, 30.0, 30.0, true)],
-            },
-        )
-    }
 
     /// L-shaped part (one reflex corner at (8, 8)) in a stock with a 10 mm margin.
     fn l_part() -> (Shape, Shape) {
@@ -576,7 +559,7 @@ mod tests {
 
     #[test]
     fn correct_path_has_zero_overcut_and_no_uncut_area() {
-        let (part, stock) = circle_in_square();
+        let (part, stock) = disc_in_square(20.0, 30.0);
         let path = contour_parallel(&part, &stock, &ParallelOptions::new(3.0, 4.0)).expect("plan");
         let c = clearance(&path, &part).expect("clearance");
         assert!(c.clearance >= -1e-6 && c.clearance < 1e-6, "{c:?}");
@@ -836,14 +819,8 @@ mod tests {
     /// The baseline's concentric circles are exactly one stepover apart.
     #[test]
     fn pass_spacing_of_concentric_offsets_is_the_stepover() {
-        use crate::contour::parallel::tests::{circle, rect};
         use crate::contour::parallel::{ParallelOptions, contour_parallel};
-        let part = Shape {
-            contours: vec![circle(0.0, 0.0, 10.0, true)],
-        };
-        let stock = Shape {
-            contours: vec![rect(-16.0, -16.0, 16.0, 16.0, true)],
-        };
+        let (part, stock) = disc_in_square(10.0, 16.0);
         let path = contour_parallel(&part, &stock, &ParallelOptions::new(2.0, 1.5)).expect("plan");
         let sp = pass_spacing(&path, &part, 0.5, 0.4).expect("spacing");
         assert!(sp.samples > 100);

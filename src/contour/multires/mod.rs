@@ -81,9 +81,7 @@ use crate::contour::bvh::SegmentBvh;
 use crate::contour::cavc::offset_region;
 use crate::contour::error::{ContourError, Result};
 use crate::contour::geometry::{Contour, Point2, Shape};
-use crate::contour::parallel::{
-    Air, CLIP_EPS, Piece, Setup, clip_distance, clip_loop, link, order_pieces, setup,
-};
+use crate::contour::parallel::{CLIP_EPS, Piece, clip_loop, order_pieces, setup};
 use crate::contour::region::RegionIndex;
 use crate::contour::toolpath::{CenterPath, CutDirection, Pass};
 use corners::CornerOptions;
@@ -181,12 +179,8 @@ pub struct MultiresPlan {
 /// Plans the multiresolution path that removes `stock − part` (see the module docs).
 pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Result<MultiresPlan> {
     let (r, s) = (opts.tool_radius, opts.stepover);
-    let Setup {
-        max_feed_link,
-        stock_index,
-        part_index,
-        clip_index,
-    } = setup(part, stock, r, s, opts.max_feed_link)?;
+    let setup = setup(part, stock, r, s, opts.max_feed_link)?;
+    let (part_index, clip_index) = (&setup.part_index, &setup.clip_index);
     let tol = opts.tolerance.unwrap_or((0.5 * (r - s)).max(0.0));
     if !(tol.is_finite() && tol >= 0.0) {
         return Err(ContourError::InvalidOption {
@@ -246,8 +240,8 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         r,
         s,
         opts,
-        part_index: &part_index,
-        clip_index: &clip_index,
+        part_index,
+        clip_index,
         hull_clip: &hull_clip,
     };
     // Part levels, clipped to the stock and to the loose hull; `ring` numbers the passes
@@ -317,9 +311,9 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         // its points within r + η of the part are within η of the finishing pass (they are
         // outside the part grown by r), so they are left out.
         let clips: &[(&RegionIndex, bool)] = if m == 0 {
-            &[(&clip_index, true), (&finish_zone, false)]
+            &[(clip_index, true), (&finish_zone, false)]
         } else {
-            &[(&clip_index, true)]
+            &[(clip_index, true)]
         };
         for pass in clip_loop(&ring, clips, delta)? {
             found = true;
@@ -341,11 +335,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     // Neighbouring part levels are up to s + 2τ apart; a part level cut off at H is r from
     // the first hull pass.
     let ordered = order_pieces(pieces, (s + 2.0 * tol).max(r), opts.direction);
-    let air = Air {
-        stock: &stock_index,
-        reach: clip_distance(r),
-    };
-    let path = link(ordered, &part_index, &air, r, max_feed_link)?;
+    let path = setup.link(ordered)?;
     Ok(MultiresPlan {
         path,
         report,
