@@ -5,7 +5,10 @@
 //! guarantees wavemill gives (no gouge to 1e-6 mm) need f64 and a real inside test, so the
 //! queries that decide them are done here.
 
-use crate::geom::{Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle};
+use crate::geom::{
+    Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle,
+    segment_triangle_distance_squared,
+};
 use crate::mesh::Mesh;
 use crate::mesh::topology::edges;
 
@@ -276,6 +279,36 @@ impl SurfaceDistance {
                 }
             } else {
                 self.push_children(node, p, &mut stack);
+            }
+        }
+        false
+    }
+
+    /// Whether some triangle comes strictly closer than `radius` to the segment `a b`: the
+    /// straight move of a ball centre, checked along its whole length (a chord can cut deepest
+    /// anywhere, not only at its midpoint).
+    pub fn segment_within(&self, a: &Point3, b: &Point3, radius: f64) -> bool {
+        if self.nodes.is_empty() || radius.is_nan() || radius <= 0.0 {
+            return false;
+        }
+        let r2 = radius * radius;
+        let segment_box = Aabb::from_points([a, b]);
+        let mut stack = vec![0u32];
+        while let Some(ni) = stack.pop() {
+            let node = &self.nodes[ni as usize];
+            if node.aabb.distance_squared_to_box(&segment_box) >= r2 {
+                continue;
+            }
+            if node.count == 0 {
+                stack.push(node.right);
+                stack.push(node.left);
+                continue;
+            }
+            for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                let [p, q, r] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+                if segment_triangle_distance_squared(a, b, &p, &q, &r) < r2 {
+                    return true;
+                }
             }
         }
         false

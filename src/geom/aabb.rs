@@ -57,6 +57,18 @@ impl Aabb {
         nalgebra::center(&self.min, &self.max)
     }
 
+    /// Squared distance between this box and `other` (0 where they overlap).
+    pub fn distance_squared_to_box(&self, other: &Aabb) -> f64 {
+        (0..3)
+            .map(|i| {
+                let gap = (other.min[i] - self.max[i])
+                    .max(self.min[i] - other.max[i])
+                    .max(0.0);
+                gap * gap
+            })
+            .sum()
+    }
+
     /// Squared distance from `p` to the box (0 inside).
     pub fn distance_squared(&self, p: &Point3) -> f64 {
         let mut d = 0.0;

@@ -9,8 +9,8 @@ mod triangle;
 
 pub use aabb::Aabb;
 pub use triangle::{
-    ClosestFeature, closest_point_on_segment, closest_point_on_triangle, triangle_area,
-    triangle_normal,
+    ClosestFeature, closest_point_on_segment, closest_point_on_triangle,
+    closest_points_of_segments, segment_triangle_distance_squared, triangle_area, triangle_normal,
 };
 
 /// A point in millimetres.

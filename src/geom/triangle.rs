@@ -71,6 +71,85 @@ pub fn closest_point_on_triangle(
     (a + ab * v + ac * w, ClosestFeature::Face)
 }
 
+/// The closest points `(on pq, on ab)` of two segments. Ericson, *Real-Time Collision
+/// Detection* §5.1.9 (clamped parameters), in f64; degenerate segments are points.
+pub fn closest_points_of_segments(
+    p: &Point3,
+    q: &Point3,
+    a: &Point3,
+    b: &Point3,
+) -> (Point3, Point3) {
+    let d1 = q - p;
+    let d2 = b - a;
+    let r = p - a;
+    let (len1, len2) = (d1.norm_squared(), d2.norm_squared());
+    let f = d2.dot(&r);
+    let (s, t) = if len1 == 0.0 && len2 == 0.0 {
+        (0.0, 0.0)
+    } else if len1 == 0.0 {
+        (0.0, (f / len2).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(&r);
+        if len2 == 0.0 {
+            ((-c / len1).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b_ = d1.dot(&d2);
+            let denom = len1 * len2 - b_ * b_;
+            let mut s = if denom > 0.0 {
+                ((b_ * f - c * len2) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b_ * s + f) / len2;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / len1).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b_ - c) / len1).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    (p + d1 * s, a + d2 * t)
+}
+
+/// Squared distance from segment `pq` to triangle `abc`: 0 where the segment crosses the
+/// triangle, else the least over the segment's ends against the triangle and the triangle's
+/// edges against the segment (the closest pair of two disjoint convex sets has a point on the
+/// boundary of one of them).
+pub fn segment_triangle_distance_squared(
+    p: &Point3,
+    q: &Point3,
+    a: &Point3,
+    b: &Point3,
+    c: &Point3,
+) -> f64 {
+    // Crossing: Möller–Trumbore with the segment as a ray of parameter range [0, 1].
+    let (e1, e2) = (b - a, c - a);
+    let direction = q - p;
+    let h = direction.cross(&e2);
+    let det = e1.dot(&h);
+    if det != 0.0 {
+        let s = p - a;
+        let u = s.dot(&h) / det;
+        let k = s.cross(&e1);
+        let v = direction.dot(&k) / det;
+        let t = e2.dot(&k) / det;
+        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&t) {
+            return 0.0;
+        }
+    }
+    let mut best = (closest_point_on_triangle(p, a, b, c).0 - p)
+        .norm_squared()
+        .min((closest_point_on_triangle(q, a, b, c).0 - q).norm_squared());
+    for (u, v) in [(a, b), (b, c), (c, a)] {
+        let (x, y) = closest_points_of_segments(p, q, u, v);
+        best = best.min((x - y).norm_squared());
+    }
+    best
+}
+
 /// Unnormalised normal (twice the area, right-hand rule).
 pub fn triangle_normal(a: &Point3, b: &Point3, c: &Point3) -> Vector3 {
     (b - a).cross(&(c - a))

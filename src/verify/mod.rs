@@ -5,6 +5,19 @@
 //! `closest_points` with a search radius; full `distance` is milliseconds per query on big
 //! meshes, CRATES.md §2). Straight moves between consecutive cut poses are checked at their
 //! midpoints too, which is where a chord cuts deepest into a convex surface.
+//!
+//! [`check_posted`] goes further and checks what a machine would run: it reads the posted
+//! G-code back, interpolates every block in machine axes as the control does and measures the
+//! ball centre along it against the part (its own G-code reader, forward kinematics and
+//! segment–mesh distance; nothing shared with the post or the planner's queries).
+
+mod posted;
+mod program;
+mod segment_distance;
+
+pub use posted::{MachineModel, PostedClearance, PostedOptions, check_posted};
+pub use program::{MotionBlock, ProgramError, read_program};
+pub use segment_distance::SegmentDistance;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -40,6 +53,7 @@ impl Verification {
         tolerance: f64,
         shank_margin: f64,
         holder_margin: f64,
+        table_margin: f64,
     ) -> Result<(), String> {
         let mut problems = Vec::new();
         if self.min_cutter_clearance < -1e-6 {
@@ -67,6 +81,12 @@ impl Verification {
             problems.push(format!(
                 "holder clearance {:.4} mm is below its margin {holder_margin}",
                 self.min_holder_clearance
+            ));
+        }
+        if self.min_table_clearance < table_margin - 1e-9 {
+            problems.push(format!(
+                "the tool comes {:.4} mm from the table, below its margin {table_margin}",
+                self.min_table_clearance
             ));
         }
         if problems.is_empty() {
