@@ -11,8 +11,9 @@
 //! Tn M6                                               — tool change
 //! S… M3                                               — spindle on
 //! M8                                                  — coolant, if requested
-//! G0 X… Y… A… C…                                      — first move: position X, Y, rotaries
-//! G43 Hn Z…                                           — tool length compensation, then Z
+//! G0 G43 Hn Z…                                        — length compensation on, Z to the
+//!                                                       first (safe) height, nothing else
+//! G0 X… Y… A… C…                                      — then X, Y and the rotaries
 //! G1 X… Y… Z… A… C… F…                                — motion; modal words omitted
 //! …
 //! M5  (M9)  M30
@@ -20,10 +21,15 @@
 //! ```
 //!
 //! Rapids are posted as `G0`, feed moves as `G1`; `G0`/`G1` and `F` are written only when they
-//! change (F only on `G1` blocks). An axis word is written when its value differs from the
-//! last written value by more than the output resolution (default 0.001 mm / 0.001°), so the
-//! controller position is always within the resolution of the commanded joints. Numbers have
-//! fixed decimals and never a negative zero. Output is deterministic (no dates).
+//! change (F only on `G1` blocks). An axis word is written whenever its printed value differs
+//! from the last one printed, so the control is always within half a unit of the last decimal
+//! of the commanded joints (the rounding the tolerance budget counts) and nothing is merged
+//! away. Numbers have fixed decimals and never a negative zero. Output is deterministic (no
+//! dates).
+//!
+//! The first motion switches length compensation on and moves Z alone: the first pose of a
+//! program is on its safe plane, above everything the part can reach from the pivot whatever X,
+//! Y and the rotaries are, so the tool is lifted there before the table turns.
 
 use serde::{Deserialize, Serialize};
 
@@ -41,11 +47,6 @@ pub struct GcodeOptions {
     pub angular_decimals: usize,
     /// Decimals of F (mm/min). Default 1.
     pub feed_decimals: usize,
-    /// A linear axis word is written when it changes by more than this (mm). Default 0.001.
-    pub linear_resolution_mm: f64,
-    /// A rotary axis word is written when it changes by more than this (degrees). Default
-    /// 0.001.
-    pub angular_resolution_deg: f64,
 }
 
 impl Default for GcodeOptions {
@@ -54,9 +55,19 @@ impl Default for GcodeOptions {
             linear_decimals: 4,
             angular_decimals: 4,
             feed_decimals: 1,
-            linear_resolution_mm: 0.001,
-            angular_resolution_deg: 0.001,
         }
+    }
+}
+
+impl GcodeOptions {
+    /// How far the control can be from the commanded joints after rounding: half a unit of
+    /// the last printed decimal, (mm, degrees).
+    pub fn rounding(&self) -> (f64, f64) {
+        let half_unit = |decimals: usize| 0.5 * 10f64.powi(-(decimals.min(15) as i32));
+        (
+            half_unit(self.linear_decimals),
+            half_unit(self.angular_decimals),
+        )
     }
 }
 
@@ -71,8 +82,8 @@ pub struct GcodeWriter {
     out: String,
     /// Current motion mode (0 or 1) once written.
     mode: Option<u8>,
-    /// Last written X, Y, Z, first rotary, second rotary.
-    last: [Option<f64>; 5],
+    /// Last written X, Y, Z, first rotary, second rotary, as printed.
+    last: [Option<String>; 5],
     /// Last written F word (formatted).
     last_f: Option<String>,
     tool_number: u32,
@@ -90,7 +101,7 @@ impl GcodeWriter {
             rotary: kin.rotary_axes(),
             out: String::new(),
             mode: None,
-            last: [None; 5],
+            last: Default::default(),
             last_f: None,
             tool_number: 0,
             coolant: false,
@@ -122,36 +133,26 @@ impl GcodeWriter {
         self.line(&format!("({body})"));
     }
 
-    /// Axis letter, value, decimals and resolution of slot `i` (X, Y, Z, rotary 1, rotary 2).
-    fn slot(&self, i: usize, j: &Joints) -> (String, f64, usize, f64) {
+    /// Axis letter and printed value of slot `i` (X, Y, Z, rotary 1, rotary 2).
+    fn slot(&self, i: usize, j: &Joints) -> (String, String) {
         let o = &self.opts;
         match i {
-            0 => ("X".into(), j.x, o.linear_decimals, o.linear_resolution_mm),
-            1 => ("Y".into(), j.y, o.linear_decimals, o.linear_resolution_mm),
-            2 => ("Z".into(), j.z, o.linear_decimals, o.linear_resolution_mm),
-            3 => (
-                self.rotary[0].to_string(),
-                j.a,
-                o.angular_decimals,
-                o.angular_resolution_deg,
-            ),
-            _ => (
-                self.rotary[1].to_string(),
-                j.c,
-                o.angular_decimals,
-                o.angular_resolution_deg,
-            ),
+            0 => ("X".into(), fixed(j.x, o.linear_decimals)),
+            1 => ("Y".into(), fixed(j.y, o.linear_decimals)),
+            2 => ("Z".into(), fixed(j.z, o.linear_decimals)),
+            3 => (self.rotary[0].to_string(), fixed(j.a, o.angular_decimals)),
+            _ => (self.rotary[1].to_string(), fixed(j.c, o.angular_decimals)),
         }
     }
 
-    /// Appends the axis words of `slots` that changed, recording them as written.
+    /// Appends the axis words of `slots` whose printed value changed, recording them as
+    /// written.
     fn axis_words(&mut self, words: &mut Vec<String>, j: &Joints, slots: &[usize]) {
         for &i in slots {
-            let (letter, v, decimals, res) = self.slot(i, j);
-            let changed = self.last[i].is_none_or(|l| (v - l).abs() > res);
-            if changed {
-                words.push(format!("{letter}{}", fixed(v, decimals)));
-                self.last[i] = Some(v);
+            let (letter, printed) = self.slot(i, j);
+            if self.last[i].as_deref() != Some(printed.as_str()) {
+                words.push(format!("{letter}{printed}"));
+                self.last[i] = Some(printed);
             }
         }
     }
@@ -206,24 +207,14 @@ impl ProgramSink for GcodeWriter {
         let g = if m.kind == MoveKind::Rapid { 0 } else { 1 };
         let mut words = Vec::new();
         if !self.length_comp_on {
-            // Position X, Y and the rotaries first, then switch length compensation on with
-            // the first Z move.
+            // Length compensation on and Z up to the first pose's (safe) height before X, Y or
+            // a rotary moves (see the module docs).
             self.mode_word(&mut words, 0);
-            self.axis_words(&mut words, j, &[0, 1, 3, 4]);
-            if words.len() > 1 {
-                self.line(&words.join(" "));
-            }
-            words.clear();
-            self.mode_word(&mut words, g);
             words.push(format!("G43 H{}", self.tool_number));
-            self.last[2] = None;
             self.axis_words(&mut words, j, &[2]);
-            if g == 1 {
-                self.feed_word(&mut words, m.feed);
-            }
             self.line(&words.join(" "));
             self.length_comp_on = true;
-            return;
+            words.clear();
         }
         let mut axes = Vec::new();
         self.axis_words(&mut axes, j, &[0, 1, 2, 3, 4]);

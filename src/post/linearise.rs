@@ -5,13 +5,17 @@
 //! axis does not follow the great-circle (slerp) interpolation.
 //!
 //! Each feed move (Approach, Cut, Retract) `p0 → p1` is walked from the previous block in
-//! adaptive steps `t → t + dt` along its planned motion (tip `lerp`, axis `slerp`). A step's
+//! adaptive steps `t → t + dt` along its planned motion: the control point (the point
+//! `control_point_mm` up the axis from the tip; the ball centre for a ball-end mill, the tip
+//! with 0) moves on the straight segment the planner checked, the axis by `slerp`. A step's
 //! joints come from [`MachineKinematics::inverse_relaxed`] relative to the current joints, and
-//! the step is accepted when the forward kinematics of the joint-space interpolation, at
-//! `s ∈ {¼, ½, ¾}` of the step, is within `tolerance_mm` of the planned tip and within
-//! `angle_tolerance_deg` of the planned axis; otherwise `dt` is halved (down to
-//! `2^−max_depth`, error beyond), and after each accepted step doubled. Every accepted interior
-//! step end becomes an inserted block, lying exactly on the planned segment.
+//! the step is accepted when the forward kinematics of the joint-space interpolation, at the
+//! seven [`CHECK_PARAMETERS`] of the step, is within `tolerance_mm` of the planned control
+//! point and within `angle_tolerance_deg` of the planned axis; otherwise `dt` is halved (down
+//! to `2^−max_depth`, error beyond), and after each accepted step doubled. Every accepted
+//! interior step end becomes an inserted block, lying exactly on the planned segment. The
+//! samples do not bound the deviation between them by themselves; the back-simulation of the
+//! posted program (`verify::check_posted`) does, and the plan fails when it finds more.
 //!
 //! Why a forward walk rather than splitting the move at its midpoint: the end joints must be on
 //! the branch and C wrap the planned motion actually reaches. Picking them by joint distance
@@ -33,13 +37,19 @@ use super::kinematics::{Joints, KinematicsError, MachineKinematics};
 use crate::path::{Move, MoveKind, ToolPose, Toolpath};
 
 /// Interpolation parameters at which joint-space and part-frame motion are compared.
-pub const CHECK_PARAMETERS: [f64; 3] = [0.25, 0.5, 0.75];
+pub const CHECK_PARAMETERS: [f64; 7] = [0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875];
 
 /// Options of [`linearise_opt`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LineariseOptions {
-    /// Largest allowed tip deviation (mm) between joint-space and planned motion. Default 0.01.
+    /// Largest allowed deviation (mm) of the control point between joint-space and planned
+    /// motion. Default 0.01.
     pub tolerance_mm: f64,
+    /// The point whose deviation is bounded, this far up the axis from the tip (mm): the ball
+    /// radius for a ball-end mill, whose cutting surface is the sphere around that point.
+    /// Default 0 (the tip).
+    #[serde(default)]
+    pub control_point_mm: f64,
     /// Largest allowed tool-axis deviation (degrees). Default 0.1.
     pub angle_tolerance_deg: f64,
     /// Largest subdivision depth per move (at most `2^max_depth` blocks per move). Default 16.
@@ -50,6 +60,7 @@ impl Default for LineariseOptions {
     fn default() -> Self {
         LineariseOptions {
             tolerance_mm: 0.01,
+            control_point_mm: 0.0,
             angle_tolerance_deg: 0.1,
             max_depth: 16,
         }
@@ -60,6 +71,11 @@ impl LineariseOptions {
     /// Sets the tip tolerance (mm).
     pub fn with_tolerance_mm(mut self, v: f64) -> Self {
         self.tolerance_mm = v;
+        self
+    }
+    /// Sets the control point's distance up the axis from the tip (mm).
+    pub fn with_control_point_mm(mut self, v: f64) -> Self {
+        self.control_point_mm = v;
         self
     }
     /// Sets the axis tolerance (degrees).
@@ -137,9 +153,22 @@ pub fn slerp(u: &Vector3<f64>, v: &Vector3<f64>, t: f64) -> Option<Vector3<f64>>
 /// The planned (part-frame) pose at parameter `t` of the segment `p0 → p1`: tip linear, axis
 /// slerp.
 pub fn interpolate_pose(p0: &ToolPose, p1: &ToolPose, t: f64) -> Option<ToolPose> {
+    interpolate_pose_about(p0, p1, t, 0.0)
+}
+
+/// The planned pose at parameter `t` of `p0 → p1` when the point `control` up the axis from
+/// the tip moves on a straight line: that point linear, axis slerp.
+pub fn interpolate_pose_about(
+    p0: &ToolPose,
+    p1: &ToolPose,
+    t: f64,
+    control: f64,
+) -> Option<ToolPose> {
     let axis = slerp(&p0.axis, &p1.axis, t)?;
+    let point = |p: &ToolPose| p.tip + p.axis.into_inner() * control;
+    let moving = point(p0) + (point(p1) - point(p0)) * t;
     Some(ToolPose {
-        tip: p0.tip + (p1.tip - p0.tip) * t,
+        tip: moving - axis * control,
         axis: nalgebra::Unit::new_unchecked(axis),
     })
 }
@@ -153,15 +182,29 @@ pub fn segment_deviation<K: MachineKinematics + ?Sized>(
     p1: &ToolPose,
     j1: &Joints,
 ) -> Option<(f64, f64)> {
-    let mut tip_dev: f64 = 0.0;
+    segment_deviation_about(kin, p0, j0, p1, j1, 0.0)
+}
+
+/// [`segment_deviation`] of the point `control` up the axis from the tip, against the planned
+/// motion that moves that point on a straight line.
+pub fn segment_deviation_about<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    p0: &ToolPose,
+    j0: &Joints,
+    p1: &ToolPose,
+    j1: &Joints,
+    control: f64,
+) -> Option<(f64, f64)> {
+    let mut point_dev: f64 = 0.0;
     let mut ang_dev: f64 = 0.0;
     for &t in &CHECK_PARAMETERS {
-        let planned = interpolate_pose(p0, p1, t)?;
+        let planned = interpolate_pose_about(p0, p1, t, control)?;
         let actual = kin.forward(&j0.lerp(j1, t));
-        tip_dev = tip_dev.max((actual.tip - planned.tip).norm());
+        let point = |p: &ToolPose| p.tip + p.axis.into_inner() * control;
+        point_dev = point_dev.max((point(&actual) - point(&planned)).norm());
         ang_dev = ang_dev.max(angle_between(&actual.axis, &planned.axis).to_degrees());
     }
-    Some((tip_dev, ang_dev))
+    Some((point_dev, ang_dev))
 }
 
 /// [`linearise_opt`] with the given tolerances and the default depth bound.
@@ -188,6 +231,11 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
     if !(opts.tolerance_mm.is_finite() && opts.tolerance_mm > 0.0) {
         return Err(LineariseError::InvalidOptions(
             "tolerance_mm must be finite and > 0".into(),
+        ));
+    }
+    if !(opts.control_point_mm.is_finite() && opts.control_point_mm >= 0.0) {
+        return Err(LineariseError::InvalidOptions(
+            "control_point_mm must be finite and >= 0".into(),
         ));
     }
     if !(opts.angle_tolerance_deg.is_finite() && opts.angle_tolerance_deg > 0.0) {
@@ -255,14 +303,16 @@ fn march<K: MachineKinematics + ?Sized>(
         let p_next = if t_next == 1.0 {
             *p1
         } else {
-            interpolate_pose(p0, p1, t_next).ok_or(antipodal.clone())?
+            interpolate_pose_about(p0, p1, t_next, opts.control_point_mm)
+                .ok_or(antipodal.clone())?
         };
         let j_next = kin
             .inverse_relaxed(&p_next, &cur_j, budget)
             .map_err(|source| LineariseError::Kinematics { move_index, source })?;
-        let (tip_dev, ang_dev) =
-            segment_deviation(kin, &cur_p, &cur_j, &p_next, &j_next).ok_or(antipodal.clone())?;
-        if tip_dev <= opts.tolerance_mm && ang_dev <= opts.angle_tolerance_deg {
+        let (point_dev, ang_dev) =
+            segment_deviation_about(kin, &cur_p, &cur_j, &p_next, &j_next, opts.control_point_mm)
+                .ok_or(antipodal.clone())?;
+        if point_dev <= opts.tolerance_mm && ang_dev <= opts.angle_tolerance_deg {
             if t_next == 1.0 {
                 return Ok(j_next);
             }

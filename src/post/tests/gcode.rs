@@ -139,13 +139,19 @@ fn parsed_blocks_reproduce_the_poses() {
     emit(&program, &header(), &mut w);
     let text = w.into_string();
     let blocks = parse(&text);
-    // The first move is posted as two blocks (X Y A C, then G43 H Z).
-    let first_z = blocks.iter().position(|b| b.line.contains("G43")).unwrap();
-    assert_eq!(first_z, 1);
-    assert!(!blocks[0].line.contains('Z'));
-    let blocks = &blocks[first_z..];
-    let res_lin = 0.001 + 0.5e-4;
-    let res_ang = 0.001 + 0.5e-4;
+    // The first move is posted as two blocks (G43 H Z alone, then X Y A C).
+    assert!(
+        blocks[0].line.starts_with("G0 G43 H7 Z"),
+        "{}",
+        blocks[0].line
+    );
+    for axis in ['X', 'Y', 'A', 'C'] {
+        assert!(!blocks[0].line.contains(axis), "{}", blocks[0].line);
+    }
+    let blocks = &blocks[1..];
+    // Every printed change is written: the control is within the rounding of the joints.
+    let res_lin = 0.5e-4 + 1e-12;
+    let res_ang = 0.5e-4 + 1e-12;
     let mut k = 0;
     for (m, j) in &program {
         let within = |b: &Block| {
@@ -158,7 +164,7 @@ fn parsed_blocks_reproduce_the_poses() {
             k += 1;
             &blocks[k - 1]
         } else {
-            // No block: nothing changed by more than the resolution.
+            // No block: no printed value changed.
             assert!(k > 0 && within(&blocks[k - 1]), "no block for {m:?}");
             &blocks[k - 1]
         };
@@ -253,12 +259,12 @@ fn feed_is_modal() {
     )
     .unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    let start = lines.iter().position(|l| l.starts_with("G0 X")).unwrap();
+    let start = lines.iter().position(|l| l.starts_with("G0 G43")).unwrap();
     assert_eq!(
         &lines[start..start + 9],
         &[
-            "G0 X0.0000 Y0.0000 A0.0000 C0.0000",
-            "G43 H7 Z10.0000",
+            "G0 G43 H7 Z10.0000",
+            "X0.0000 Y0.0000 A0.0000 C0.0000",
             "G1 X10.0000 Z0.0000 F1000.0",
             "X20.0000",
             "X30.0000 F500.0",
@@ -270,8 +276,11 @@ fn feed_is_modal() {
     );
 }
 
+/// Issue 17 item 1c: words whose value changed by less than 0.001 were left out, so poses
+/// within ~0.01 mm were merged. Now a word is written whenever its printed value changes, and
+/// only then.
 #[test]
-fn small_changes_below_resolution_are_not_written() {
+fn every_printed_change_is_written_and_nothing_else() {
     let kin = TableTableAC::default();
     let mut w = GcodeWriter::new(&kin, GcodeOptions::default());
     let m = |x: f64| Move {
@@ -284,14 +293,26 @@ fn small_changes_below_resolution_are_not_written() {
         ..Joints::default()
     };
     w.begin(&header());
-    for x in [0.0, 0.0004, 0.0008, 0.0012, 0.0016] {
+    for x in [0.0, 0.00004, 0.0004, 0.00044, 0.0008, 0.0012] {
         w.motion(&m(x), &j(x));
     }
     w.end();
     let text = w.into_string();
-    // 0.0004 and 0.0008 are within 0.001 of the written 0; 0.0012 is written; 0.0016 is not.
-    assert!(text.contains("X0.0012"));
-    assert!(!text.contains("X0.0004") && !text.contains("X0.0008") && !text.contains("X0.0016"));
+    let written: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with('X') || l.starts_with("G1 X"))
+        .collect();
+    // 0.00004 and 0.00044 print as the value before them: no block.
+    assert_eq!(
+        written,
+        [
+            "G1 X0.0000 Y0.0000 A0.0000 C0.0000 F100.0",
+            "X0.0004",
+            "X0.0008",
+            "X0.0012"
+        ],
+        "{text}"
+    );
 }
 
 #[test]
