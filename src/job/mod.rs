@@ -7,6 +7,7 @@
 //! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
 
 mod access;
+mod budget;
 mod config;
 mod contour;
 mod contour_picture;
@@ -23,6 +24,7 @@ mod tools;
 pub use access::{
     AccessOptions, AccessOutput, AccessReport, access, parse_query_csv, write_access_outputs,
 };
+pub use budget::ToleranceBudget;
 pub use config::{
     FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
 };

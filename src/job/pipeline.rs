@@ -6,6 +6,7 @@ use std::borrow::Cow;
 use std::path::Path;
 use std::time::Instant;
 
+use super::budget::ToleranceBudget;
 use super::config::{Job, SurfaceSection};
 use super::preview::preview;
 use super::report::*;
@@ -24,7 +25,7 @@ use crate::path::{
 use crate::post::{
     self, GcodeOptions, LineariseOptions, MachineKinematics, ProgramHeader, TableTableAC,
 };
-use crate::verify::verify;
+use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
 /// Hears about progress; the CLI shows it as progress bars, libraries can ignore it.
 pub trait Observer: Sync {
@@ -202,6 +203,14 @@ pub fn plan(
             "machine.safe_distance {safe_distance} mm is inside the part's reach from the pivot ({reach:.3} mm)"
         )));
     }
+    // Rounding is charged where the ball centre is farthest from the pivot: on the safe plane.
+    let gcode_options = GcodeOptions::default();
+    let budget = ToleranceBudget::split(
+        job.strategy.tolerance,
+        &gcode_options,
+        safe_distance + prepared.ball_radius,
+    )
+    .map_err(Error::Job)?;
 
     let t = Instant::now();
     let chooser = AxisChooser::new(AxisOptions {
@@ -227,7 +236,7 @@ pub fn plan(
     let options = FinishingOptions {
         drive_normal: Vector3::from(job.strategy.drive_normal),
         scallop_height: job.strategy.scallop_height,
-        tolerance: job.strategy.tolerance,
+        tolerance: budget.chord_mm,
         max_step: job.strategy.max_step,
         max_axis_turn_deg: job.strategy.max_axis_turn_deg,
         axis_smoothing: (job.strategy.max_axis_change_deg_per_mm > 0.0).then_some(
@@ -245,6 +254,7 @@ pub fn plan(
         approach_feed: job.feeds.approach,
         retract_feed: job.feeds.retract,
         rapid_feed: job.machine.rapid_feed,
+        rapid_margin: job.safety.shank_margin,
     };
     let search = job.safety.holder_margin.max(job.safety.shank_margin) + 5.0;
     timings.finishing_passes = ms(t);
@@ -338,14 +348,14 @@ pub fn plan(
     observer.stage("verification", 0);
     let verification = verify(&toolpath, &collider, &prepared, search);
     timings.verification = ms(t);
-    let verification_failure = verification
+    let pose_failure = verification
         .passes(
-            job.strategy.tolerance,
+            budget.chord_mm,
             job.safety.shank_margin,
             job.safety.holder_margin,
+            job.safety.table_margin,
         )
-        .err()
-        .or_else(|| semi.as_ref().and_then(|s| s.failure.clone()));
+        .err();
 
     let t = Instant::now();
     observer.stage("post-processing", 0);
@@ -378,14 +388,46 @@ pub fn plan(
             ),
         );
     }
-    let linearise = LineariseOptions::default().with_tolerance_mm(job.strategy.tolerance);
+    header.comments.push(format!(
+        "tolerance {} mm = chord {:.4} + linearisation {:.4} + rounding {:.4} + verification 2 x {:.4}",
+        budget.total_mm,
+        budget.chord_mm,
+        budget.linearisation_mm,
+        budget.rounding_mm,
+        budget.verification_mm
+    ));
+    let linearise = LineariseOptions::default()
+        .with_tolerance_mm(budget.linearisation_mm)
+        .with_control_point_mm(prepared.ball_radius);
     let program = post::linearise_opt(&kinematics, &toolpath, &linearise)?;
-    let mut writer = post::GcodeWriter::new(&kinematics, GcodeOptions::default());
+    let mut writer = post::GcodeWriter::new(&kinematics, gcode_options);
     post::emit(&program, &header, &mut writer);
     let gcode = writer.into_string();
     let cl_csv = post::write_cl_csv(&toolpath);
     let time = post::estimate_time(&program, job.machine.max_rotary_speed);
     timings.post = ms(t);
+
+    let t = Instant::now();
+    observer.stage("back-simulation of the program", 0);
+    let rapid_margin = job.safety.shank_margin;
+    let posted = check_posted(
+        &gcode,
+        &MachineModel::TableTableAc {
+            part_origin_in_table,
+        },
+        &part,
+        &PostedOptions {
+            ball_radius: prepared.ball_radius,
+            feed_error_mm: budget.verification_mm,
+            rapid_error_mm: (0.1 * rapid_margin).max(budget.verification_mm),
+            search_mm: search,
+        },
+    );
+    timings.back_simulation = ms(t);
+    let verification_failure = pose_failure
+        .or_else(|| posted_failure(&posted, &budget, rapid_margin))
+        .or_else(|| semi.as_ref().and_then(|s| s.failure.clone()));
+    let posted = posted.ok();
 
     let t = Instant::now();
     observer.stage("preview", 0);
@@ -438,6 +480,7 @@ pub fn plan(
             refinement_poses: finishing.inserted_poses,
             splits_at_unreachable: finishing.splits_at_unreachable,
             splits_at_refinement: finishing.splits_at_refinement,
+            backward_poses_dropped: finishing.backward_poses_dropped,
             lead_deg: job.strategy.lead_deg,
             tilt_deg: job.strategy.tilt_deg,
             axis_smoothing: AxisSmoothingSummary {
@@ -459,6 +502,8 @@ pub fn plan(
             by_kind: time,
         },
         clearance: verification,
+        tolerance_budget: budget,
+        posted,
         unreachable: UnreachableSummary {
             count: finishing.unreachable.len(),
             by_reason,
@@ -483,6 +528,35 @@ pub fn plan(
         preview_glb,
         verification_failure,
     })
+}
+
+/// What the back-simulation of the posted program found wrong, if anything: a feed move
+/// deeper into the part than the tolerance, a rapid closer than `rapid_margin`, a program
+/// structure problem, or a program the reader could not take.
+fn posted_failure(
+    posted: &std::result::Result<PostedClearance, crate::verify::ProgramError>,
+    budget: &ToleranceBudget,
+    rapid_margin: f64,
+) -> Option<String> {
+    let posted = match posted {
+        Ok(p) => p,
+        Err(e) => return Some(format!("the posted program cannot be read back: {e}")),
+    };
+    let mut problems = posted.problems.clone();
+    if posted.min_feed_clearance_mm < -budget.total_mm {
+        problems.push(format!(
+            "a posted move cuts {:.6} mm into the part at line {} of job.nc (tolerance {})",
+            -posted.min_feed_clearance_mm, posted.min_feed_line, budget.total_mm
+        ));
+    }
+    if posted.min_rapid_clearance_mm < rapid_margin {
+        problems.push(format!(
+            "a rapid passes {:.6} mm from the part at line {} of job.nc (it must keep the shank \
+             margin {rapid_margin} mm)",
+            posted.min_rapid_clearance_mm, posted.min_rapid_line
+        ));
+    }
+    (!problems.is_empty()).then(|| problems.join("; "))
 }
 
 /// `mesh` turned so that `up` points along +Z (the shortest rotation; 180° about X when `up`

@@ -29,6 +29,12 @@ pub struct PlanReport {
     pub rapid_length_mm: f64,
     pub estimated_time: TimeSummary,
     pub clearance: Verification,
+    /// How the tolerance is split between planner, post, rounding and the check.
+    pub tolerance_budget: super::budget::ToleranceBudget,
+    /// The back-simulation of `job.nc` as written: least ball clearance along feed moves and
+    /// along rapids, interpolated as the control does (absent when the program could not be
+    /// read back, which fails the plan).
+    pub posted: Option<crate::verify::PostedClearance>,
     pub unreachable: UnreachableSummary,
     pub linking: LinkReport,
     /// Blocks in `job.nc` after linearisation.
@@ -99,6 +105,9 @@ pub struct StrategySummary {
     pub refinement_poses: usize,
     pub splits_at_unreachable: usize,
     pub splits_at_refinement: usize,
+    /// Poses dropped because they stepped back along their pass (swallowtails of the ball
+    /// centre's path in concave corners).
+    pub backward_poses_dropped: usize,
     pub lead_deg: f64,
     pub tilt_deg: f64,
     pub axis_smoothing: AxisSmoothingSummary,
@@ -154,6 +163,7 @@ pub struct StageTimings {
     pub linking: f64,
     pub verification: f64,
     pub post: f64,
+    pub back_simulation: f64,
     pub preview: f64,
     pub total: f64,
 }

@@ -126,7 +126,12 @@ pub(crate) fn semi_finishing(
         let (toolpath, linking) =
             path::link(&passes.segments, &collider, ctx.tool, ctx.tool_id, ctx.link);
         let on_shape = verify(&toolpath, &collider, ctx.tool, ctx.search);
-        if let Err(e) = on_shape.passes(tolerance, ctx.shank_margin, ctx.holder_margin) {
+        if let Err(e) = on_shape.passes(
+            tolerance,
+            ctx.shank_margin,
+            ctx.holder_margin,
+            ctx.table.margin,
+        ) {
             result.failure.get_or_insert(format!(
                 "semi-finishing to {} mm: {e}",
                 figures.allowance_mm

@@ -9,6 +9,11 @@
 //! interpolates them. The moves along the axis (retract and plunge) are checked exactly: the
 //! tool's bodies extended along the axis up to the safe plane must clear the part; segment ends
 //! that fail are trimmed.
+//!
+//! Rapids keep `rapid_margin` between the ball and the part. Along the axis the ball leaves
+//! the surface slowly where the axis is tilted far from the normal (a blade wall cut with a
+//! steep lead), so the feed part of the retract and of the approach is lengthened beyond
+//! `clearance` until the rest of the way to the safe plane keeps that margin.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -31,6 +36,8 @@ pub struct LinkOptions {
     pub approach_feed: f64,
     pub retract_feed: f64,
     pub rapid_feed: f64,
+    /// Least distance between the ball and the part along rapids, mm.
+    pub rapid_margin: f64,
 }
 
 /// What linking changed.
@@ -68,6 +75,17 @@ pub fn link(
         part.check_ball_sweep(tool, pose, sweep).is_ok()
             && part.check_bodies_swept(tool, pose, sweep).is_ok()
     };
+    let feed_length = |pose: &ToolPose| {
+        feed_lift(
+            part,
+            pose,
+            tool.ball_radius,
+            to_safe(pose),
+            options.rapid_margin,
+        )
+        .max(options.clearance)
+        .min(to_safe(pose))
+    };
     // Trimming is the expensive part (long swept bodies); segments are independent.
     let kept: Vec<(usize, usize)> = segments
         .par_iter()
@@ -97,7 +115,7 @@ pub fn link(
             options.rapid_feed,
         ));
         path.moves.push(mv(
-            along(&entry, options.clearance.min(to_safe(&entry))),
+            along(&entry, feed_length(&entry)),
             MoveKind::Rapid,
             options.rapid_feed,
         ));
@@ -107,7 +125,7 @@ pub fn link(
             path.moves.push(mv(*pose, MoveKind::Cut, options.cut_feed));
         }
         path.moves.push(mv(
-            along(&exit, options.clearance.min(to_safe(&exit))),
+            along(&exit, feed_length(&exit)),
             MoveKind::Retract,
             options.retract_feed,
         ));
@@ -118,4 +136,25 @@ pub fn link(
         ));
     }
     (path, report)
+}
+
+/// How far up the axis from `pose` the ball must be fed before the rest of the way, up to
+/// `to_safe`, keeps `margin` from the part. Sampled every `h` from the safe plane down: the
+/// distance to the part changes by at most `h/2` between a sample and the nearer of its
+/// neighbours (it is 1-Lipschitz), so samples at `r + 1.25·margin + h/2` or more keep the whole
+/// stretch between them at `r + 1.25·margin` (the quarter is room for the back-simulation's own
+/// error bound on rapids).
+fn feed_lift(part: &PartCollider, pose: &ToolPose, r: f64, to_safe: f64, margin: f64) -> f64 {
+    let h = (0.5 * margin).clamp(0.01, 1.0);
+    let needed = r + 1.25 * margin + 0.5 * h;
+    let samples = (to_safe / h).ceil().max(1.0) as usize;
+    let axis = pose.axis.into_inner();
+    let centre = |s: f64| pose.tip + axis * (r + s);
+    for k in (0..=samples).rev() {
+        let s = (k as f64 * h).min(to_safe);
+        if part.surface().any_within(&centre(s), needed) {
+            return ((k + 1) as f64 * h).min(to_safe);
+        }
+    }
+    0.0
 }

@@ -71,6 +71,9 @@ pub fn stepover_for_scallop(radius: f64, scallop: f64) -> f64 {
 #[derive(Clone, Debug, PartialEq)]
 pub struct CutSegment {
     pub poses: Vec<ToolPose>,
+    /// At each pose, the unit direction the pass runs in there (the drive curve's tangent):
+    /// every step of the ball centre has a positive component along the direction at its end.
+    pub pass_directions: Vec<Vector3>,
 }
 
 /// Why a drive point could not be machined.
@@ -117,6 +120,8 @@ pub struct Finishing {
     pub splits_at_refinement: usize,
     /// What the axis smoothing did (before refinement).
     pub smoothing: SmoothingStats,
+    /// Poses dropped because they stepped back along the pass (or by less than 0.1 µm).
+    pub backward_poses_dropped: usize,
 }
 
 /// Everything the per-point work needs, borrowed.
@@ -187,6 +192,7 @@ pub fn finishing_passes(
         out.inserted_poses += p.inserted_poses;
         out.splits_at_unreachable += p.splits_at_unreachable;
         out.splits_at_refinement += p.splits_at_refinement;
+        out.backward_poses_dropped += p.backward_poses_dropped;
         out.smoothing.merge(&p.smoothing);
     }
     out
@@ -264,33 +270,116 @@ fn drive_curve(
                 p.axis = Direction::new_normalize(axis);
             }
         }
-        // 3. Refine the moves between consecutive poses; split where that fails.
-        let mut current: Vec<ToolPose> = Vec::new();
+        // 3. Refine the moves between consecutive poses; split where that fails. Each pose
+        //    keeps the pass direction it was driven in (inserted ones: between their ends').
+        let mut current: Vec<(ToolPose, Vector3)> = Vec::new();
         for k in 0..run.len() {
             let (placed, feed) = &run[k];
             if k > 0 {
                 match refine(ctx, options, &run[k - 1].0, placed, feed, 0) {
                     Some(inner) => {
                         out.inserted_poses += inner.len();
-                        current.extend(inner.iter().map(|p| pose_of(p, r)));
+                        let between = (run[k - 1].1 + feed).try_normalize(1e-9).unwrap_or(*feed);
+                        current.extend(inner.iter().map(|p| (pose_of(p, r), between)));
                     }
                     None => {
                         out.splits_at_refinement += 1;
-                        if current.len() >= 2 {
-                            out.segments.push(CutSegment {
-                                poses: std::mem::take(&mut current),
-                            });
-                        }
-                        current.clear();
+                        push_forward_runs(ctx, options, std::mem::take(&mut current), out);
                     }
                 }
             }
-            current.push(pose_of(placed, r));
+            current.push((pose_of(placed, r), *feed));
         }
-        if current.len() >= 2 {
-            out.segments.push(CutSegment { poses: current });
-        }
+        push_forward_runs(ctx, options, current, out);
     }
+}
+
+/// Steps shorter than this (mm) carry no direction and are dropped.
+const MIN_STEP: f64 = 1e-4;
+
+/// Consecutive poses that each turn the travel back before the turn counts as the pass's own
+/// (a sharp concave corner) rather than a zig: the pass is split there instead.
+const TURN_STREAK: usize = 32;
+
+/// Pushes `poses` (with their pass directions) as cut segments that never step backwards.
+///
+/// In a concave corner the ball centres of neighbouring drive points overtake each other (the
+/// offset of the section has a swallowtail there), neighbouring drive points whose normals
+/// differ place their balls a little sideways and back, and refinement can place a midpoint
+/// beyond its neighbours: followed in order, the tool would zig back and forth along the
+/// pass. So a pose is dropped when its step from the last kept one is shorter than
+/// [`MIN_STEP`], goes against its pass direction (the drive curve's tangent), or turns the
+/// travel back (negative projection on the step before). The chord that then spans the gap is
+/// checked exactly like every other (ball within the chord tolerance, axis turn within its
+/// bound); where it fails, or where [`TURN_STREAK`] poses in a row turn back (the centre path
+/// itself turns by more than 90°, as in an acute concave corner), the pass is split instead.
+fn push_forward_runs(
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    poses: Vec<(ToolPose, Vector3)>,
+    out: &mut Finishing,
+) {
+    let r = ctx.tool.ball_radius;
+    let centre = |p: &ToolPose| p.tip + p.axis.into_inner() * r;
+    let empty = || CutSegment {
+        poses: Vec::new(),
+        pass_directions: Vec::new(),
+    };
+    let emit = |run: CutSegment, out: &mut Finishing| {
+        if run.poses.len() >= 2 {
+            out.segments.push(run);
+        }
+    };
+    let mut run = empty();
+    let mut dropped = false;
+    // First pose of the current run of poses that turned the travel back.
+    let mut turning: Option<(usize, usize)> = None;
+    let mut i = 0;
+    while i < poses.len() {
+        let (pose, direction) = poses[i];
+        i += 1;
+        let Some(last) = run.poses.last() else {
+            run.poses.push(pose);
+            run.pass_directions.push(direction);
+            continue;
+        };
+        let step = centre(&pose) - centre(last);
+        let turns_back = run.poses.len() >= 2
+            && step.dot(&(centre(last) - centre(&run.poses[run.poses.len() - 2]))) < 0.0;
+        if step.norm() < MIN_STEP || step.dot(&direction) < 0.0 || turns_back {
+            dropped = true;
+            out.backward_poses_dropped += 1;
+            if turns_back {
+                let (first, count) = turning.unwrap_or((i - 1, 0));
+                turning = Some((first, count + 1));
+                if count + 1 == TURN_STREAK {
+                    // The path turns here: end the run and start the next at the turn.
+                    out.backward_poses_dropped -= TURN_STREAK;
+                    out.splits_at_refinement += 1;
+                    emit(std::mem::replace(&mut run, empty()), out);
+                    (i, dropped, turning) = (first, false, None);
+                }
+            }
+            continue;
+        }
+        turning = None;
+        if std::mem::take(&mut dropped) {
+            let chord_ok = !ctx.part.surface().segment_within(
+                &centre(last),
+                &centre(&pose),
+                r - options.tolerance,
+            );
+            let turn_ok =
+                angle_between(&last.axis, &pose.axis).to_degrees() <= options.max_axis_turn_deg;
+            if !(chord_ok && turn_ok) {
+                out.splits_at_refinement += 1;
+                emit(std::mem::replace(&mut run, empty()), out);
+            }
+        }
+        run.poses.push(pose);
+        run.pass_directions.push(direction);
+    }
+    emit(run, out);
 }
 
 fn pose_of(p: &Placed, r: f64) -> ToolPose {
@@ -350,11 +439,11 @@ fn refine(
     depth: u32,
 ) -> Option<Vec<Placed>> {
     let r = ctx.tool.ball_radius;
-    let mid_centre = nalgebra::center(&a.centre, &b.centre);
-    let chord_ok = ctx
+    // The whole chord, exactly: it can cut deepest anywhere along its length.
+    let chord_ok = !ctx
         .part
-        .check_ball(&mid_centre, r, options.tolerance)
-        .is_ok();
+        .surface()
+        .segment_within(&a.centre, &b.centre, r - options.tolerance);
     let turn_ok = angle_between(&a.axis, &b.axis).to_degrees() <= options.max_axis_turn_deg;
     if chord_ok && turn_ok {
         return Some(Vec::new());
