@@ -75,7 +75,11 @@ fn bad_input_gives_exit_code_and_names_the_problem() {
         "--out",
         out,
     ]);
-    assert_eq!(tool.status.code(), Some(1));
+    assert_eq!(
+        tool.status.code(),
+        Some(2),
+        "a bad flag value is a usage error"
+    );
     assert!(String::from_utf8_lossy(&tool.stderr).contains("ball:x"));
 
     let job = out_dir.with_extension("toml");
@@ -219,7 +223,7 @@ fn subdivide_writes_obj_and_glb() {
         "--out",
         dir.join("blade.stl").to_str().unwrap(),
     ]);
-    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(bad.status.code(), Some(2), "a bad --out is a usage error");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -322,10 +326,10 @@ fn offsets_writes_verified_shapes_identically_for_any_thread_count() {
         );
     }
     let bad = run_offsets(&one, "1", &["--allowances", "0.5,1.0"]);
-    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--allowances"));
     let bad = run_offsets(&one, "1", &["--tool", "flat:4"]);
-    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--tool"));
     for d in [one, two] {
         std::fs::remove_dir_all(&d).unwrap();
@@ -341,8 +345,7 @@ fn access_writes_maps_statistics_and_query_answers() {
     let out = dir.to_str().unwrap();
     let part = repo_file("data/impeller.glb");
     let part = part.to_str().unwrap();
-    std::fs::create_dir_all(&dir).unwrap();
-    let query = dir.join("points.csv");
+    let query = dir.with_extension("points.csv");
     // A point far above the part looking up and one far below it looking down: each sees its
     // whole open hemisphere.
     std::fs::write(&query, "x,y,z,nx,ny,nz\n0,0,500,0,0,1\n0,0,-500,0,0,-1\n").unwrap();
@@ -409,15 +412,17 @@ fn access_writes_maps_statistics_and_query_answers() {
         );
     }
 
-    let fails = |args: &[&str], needles: &[&str]| {
+    let fails_with = |code: i32, args: &[&str], needles: &[&str]| {
         let r = wavemill(args);
-        assert_eq!(r.status.code(), Some(1), "{args:?}");
+        assert_eq!(r.status.code(), Some(code), "{args:?}");
         let err = String::from_utf8_lossy(&r.stderr);
         for n in needles {
             assert!(err.contains(n), "{args:?}: {err}");
         }
     };
-    fails(
+    let fails = |args: &[&str], needles: &[&str]| fails_with(1, args, needles);
+    fails_with(
+        2,
         &["access", part, "--directions", "100", "--out", out],
         &["100", "10242"],
     );
@@ -432,7 +437,7 @@ fn access_writes_maps_statistics_and_query_answers() {
             &["bad.csv", "line 2", "zero"],
         ),
     ] {
-        let bad = dir.join("bad.csv");
+        let bad = dir.with_extension("bad.csv");
         std::fs::write(&bad, text).unwrap();
         fails(
             &[
@@ -449,4 +454,6 @@ fn access_writes_maps_statistics_and_query_answers() {
     fails(&["access", "no/such.stl", "--out", out], &["no/such.stl"]);
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&again).unwrap();
+    let _ = std::fs::remove_file(&query);
+    let _ = std::fs::remove_file(dir.with_extension("bad.csv"));
 }

@@ -70,16 +70,16 @@ pub struct ToolsArgs {
     #[arg(long)]
     pub library: PathBuf,
     /// Units of the part file: mm, m or in.
-    #[arg(long, default_value = "mm")]
+    #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// How far a cutting end may dip into the part, mm.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, value_parser = non_negative)]
     pub tolerance: f64,
     /// At most this many points (vertices, thinned evenly) are evaluated.
-    #[arg(long, default_value_t = 20_000)]
-    pub points: usize,
+    #[arg(long, default_value_t = 20_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    pub points: u64,
     /// Largest angle between the tool axis and the surface normal, degrees (0 to 90).
-    #[arg(long, default_value_t = 90.0)]
+    #[arg(long, default_value_t = 90.0, value_parser = tilt)]
     pub max_tilt: f64,
     /// Leave out the machine table (by default the part stands on it at its lowest point and
     /// every tool stays 2 mm above it).
@@ -101,14 +101,14 @@ pub struct AccessArgs {
     #[arg(long, default_value_t = 642)]
     pub directions: usize,
     /// Cutter for the query axes, e.g. `ball:6` (diameter in mm) [default: the job default].
-    #[arg(long)]
+    #[arg(long, value_parser = ball_spec)]
     pub tool: Option<String>,
     /// Query points: CSV with a header x,y,z,nx,ny,nz; writes query.csv with, per point, the
     /// visible directions, K and the chosen tool axis (feed +X projected into the tangent plane).
     #[arg(long)]
     pub query: Option<PathBuf>,
     /// Units of the part file: mm, m or in.
-    #[arg(long, default_value = "mm")]
+    #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// Leave the run-dependent timings out of access.json (byte-identical reports).
     #[arg(long)]
@@ -127,7 +127,7 @@ pub struct ContourArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub z: Option<f64>,
     /// Units of a mesh part: mm, m or in.
-    #[arg(long, default_value = "mm")]
+    #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// Flat end mill, `flat:D` with the diameter D in mm.
     #[arg(long)]
@@ -182,13 +182,13 @@ pub struct OffsetsArgs {
     pub allowances: Vec<f64>,
     /// Ball cutter, e.g. `ball:6` (diameter in mm): the shapes become tool-centre surfaces,
     /// offset by the ball radius as well.
-    #[arg(long)]
+    #[arg(long, value_parser = ball_spec)]
     pub tool: Option<String>,
     /// Units of the input file: mm, m or in.
-    #[arg(long, default_value = "mm")]
+    #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// Fitting tolerance of the finest level, mm (0: always build one level per allowance).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
     pub tolerance: f64,
     /// Triangles of the base (coarsest) mesh.
     #[arg(long, default_value_t = 2000)]
@@ -196,17 +196,18 @@ pub struct OffsetsArgs {
     /// Stop simplifying the base when a collapse would move the surface more than this, mm.
     /// Absent: `--base-triangles` alone sizes the base (coarse levels, simple rough shapes);
     /// a bound keeps fillets and thin blades, for tighter shapes with more triangles.
-    #[arg(long)]
+    #[arg(long, value_parser = non_negative)]
     pub base_max_error: Option<f64>,
-    /// At most this many levels above the base (default: one per allowance after the first).
-    #[arg(long)]
+    /// At most this many levels above the base, 0 to 6 (default: one per allowance after the
+    /// first; each level multiplies the triangles by 4).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=6))]
     pub max_levels: Option<u32>,
     /// Edges whose faces meet at more than this angle (degrees) are feature lines.
-    #[arg(long, default_value_t = 40.0)]
+    #[arg(long, default_value_t = 40.0, value_parser = face_angle)]
     pub crease_angle: f64,
     /// Finest grid the shapes are extracted on: at most this many cells across the part's
-    /// bounding box (more: tighter shapes near the part, more triangles and time).
-    #[arg(long, default_value_t = 300.0)]
+    /// bounding box (more: tighter shapes near the part, more triangles and time), 4 to 2000.
+    #[arg(long, default_value_t = 300.0, value_parser = grid_cells)]
     pub grid_cells: f64,
     /// Leave the timings out of offsets.json (byte-identical reports).
     #[arg(long)]
@@ -221,24 +222,24 @@ pub struct LevelsArgs {
     /// Mesh file (.stl, .obj, .gltf, .glb): a manifold surface.
     pub part: PathBuf,
     /// Units of the input file: mm, m or in.
-    #[arg(long, default_value = "mm")]
+    #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// Fitting tolerance: two-sided Hausdorff distance of the finest level to the part, mm.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, value_parser = positive)]
     pub tolerance: f64,
     /// Triangles of the base (coarsest) mesh.
     #[arg(long, default_value_t = 2000)]
     pub base_triangles: usize,
     /// Stop simplifying the base earlier when a collapse would move the surface more than
     /// this, mm: keeps thin blades and fillets in the base [default: 3 × tolerance].
-    #[arg(long)]
+    #[arg(long, value_parser = non_negative)]
     pub base_max_error: Option<f64>,
-    /// At most this many levels above the base.
-    #[arg(long, default_value_t = 5)]
+    /// At most this many levels above the base, 0 to 6 (each multiplies the triangles by 4).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=6))]
     pub max_levels: u32,
     /// Edges whose faces meet at more than this angle (degrees) are feature lines, followed
     /// exactly by every level.
-    #[arg(long, default_value_t = 40.0)]
+    #[arg(long, default_value_t = 40.0, value_parser = face_angle)]
     pub crease_angle: f64,
     /// Tangential relaxation passes over each level's new vertices (each followed by
     /// re-projection onto the part); off by default: it evens the triangles but loosens the fit.
@@ -260,14 +261,18 @@ pub struct LevelsArgs {
 pub struct SubdivideArgs {
     /// Mesh file (.stl, .obj, .gltf, .glb).
     pub part: PathBuf,
-    /// Number of 1-to-4 subdivision steps.
-    #[arg(long, default_value_t = 1)]
+    /// Number of 1-to-4 subdivision steps, 0 to 8.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=8))]
     pub levels: u32,
     /// Treat edges whose faces meet at more than this angle (degrees) as sharp creases.
-    #[arg(long)]
+    #[arg(long, value_parser = face_angle)]
     pub crease_angle: Option<f64>,
+    /// Refuse to make more triangles than this (each level multiplies them by 4; a triangle
+    /// of the result costs about 100 bytes while it is built).
+    #[arg(long, default_value_t = 20_000_000)]
+    pub max_triangles: u64,
     /// Units of the input file: mm, m or in.
-    #[arg(long, default_value = "mm")]
+    #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// Output file; `.obj` or `.glb`.
     #[arg(long)]
@@ -279,7 +284,7 @@ pub struct InfoArgs {
     /// Mesh file (.stl, .obj, .gltf, .glb).
     pub part: PathBuf,
     /// Units the file is written in.
-    #[arg(long, default_value = "mm")]
+    #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// Print the report as JSON.
     #[arg(long)]
@@ -324,24 +329,29 @@ pub struct PlanArgs {
     #[arg(long)]
     pub job: Option<PathBuf>,
     /// Cutter, e.g. `ball:6` (diameter in mm); overrides the job file.
-    #[arg(long)]
+    #[arg(long, value_parser = ball_spec)]
     pub tool: Option<String>,
     /// Units of the part file: mm, m or in; overrides the job file.
-    #[arg(long)]
+    #[arg(long, value_parser = units)]
     pub units: Option<String>,
     /// Direction in the part file that should point up the C axis, e.g. `0,1,0` for a part
     /// modelled with its axis along Y; overrides the job file.
     #[arg(long, value_parser = parse_vector)]
     pub up: Option<[f64; 3]>,
     /// Scallop height target, mm; overrides the job file.
-    #[arg(long)]
+    #[arg(long, value_parser = positive)]
     pub scallop: Option<f64>,
-    /// Chord and post tolerance, mm; overrides the job file.
-    #[arg(long)]
+    /// Tolerance of the posted program, mm: the ball centre stays within it of the part along
+    /// every move as the control interpolates it; overrides the job file.
+    #[arg(long, value_parser = positive)]
     pub tolerance: Option<f64>,
-    /// Worker threads (default: all cores). Outputs are identical for any count.
-    #[arg(long)]
+    /// Worker threads, 1 to 256 (default: all cores). Outputs are identical for any count.
+    #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
+    /// Refuse a plan estimated to have more drive points than this (from the part's area, the
+    /// stepover and the step); overrides the job file's limits.max_drive_points.
+    #[arg(long)]
+    pub max_drive_points: Option<u64>,
     /// Leave the run-dependent timings out of report.json (byte-identical reports).
     #[arg(long)]
     pub no_timings: bool,
@@ -350,14 +360,90 @@ pub struct PlanArgs {
     pub out: PathBuf,
 }
 
-/// Parses `x,y,z`.
+/// Parses a direction `x,y,z`: three finite numbers, not all zero (any length: it is
+/// normalised).
 fn parse_vector(text: &str) -> std::result::Result<[f64; 3], String> {
     let parts: Vec<f64> = text
         .split(',')
         .map(|p| p.trim().parse::<f64>())
         .collect::<std::result::Result<_, _>>()
         .map_err(|_| format!("`{text}`: expected three numbers x,y,z"))?;
-    <[f64; 3]>::try_from(parts).map_err(|_| format!("`{text}`: expected three numbers x,y,z"))
+    let v = <[f64; 3]>::try_from(parts)
+        .map_err(|_| format!("`{text}`: expected three numbers x,y,z"))?;
+    job::unit_direction(v)
+        .map(|_| v)
+        .ok_or_else(|| format!("`{text}`: expected a direction (finite, not all zero)"))
+}
+
+// Value parsers: a bad value is a usage error (exit code 2, clap's message names the flag).
+
+/// A finite number > 0.
+fn positive(text: &str) -> std::result::Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{text}`: expected a positive number")),
+    }
+}
+
+/// A finite number ≥ 0.
+fn non_negative(text: &str) -> std::result::Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("`{text}`: expected a number >= 0")),
+    }
+}
+
+/// An angle between two faces, 0 to 180 degrees.
+fn face_angle(text: &str) -> std::result::Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if (0.0..=180.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}`: expected an angle from 0 to 180 degrees")),
+    }
+}
+
+/// `mm`, `m` or `in` (or their long names).
+fn units(text: &str) -> std::result::Result<String, String> {
+    text.parse::<crate::mesh::io::Units>()
+        .map(|_| text.to_string())
+        .map_err(|e| e.to_string())
+}
+
+/// Most worker threads accepted: more only costs start-up time (a thread each) and memory.
+const MAX_THREADS: usize = 256;
+
+/// A tilt from the normal, 0 to 90 degrees.
+fn tilt(text: &str) -> std::result::Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if (0.0..=90.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{text}`: expected an angle from 0 to 90 degrees")),
+    }
+}
+
+/// Grid cells across the part, 4 to 2000.
+fn grid_cells(text: &str) -> std::result::Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if (4.0..=2000.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{text}`: expected a number of cells from 4 to 2000"
+        )),
+    }
+}
+
+/// A thread count from 1 to [`MAX_THREADS`].
+fn threads(text: &str) -> std::result::Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "`{text}`: expected a thread count from 1 to {MAX_THREADS}"
+        )),
+    }
+}
+
+/// A cutter spec `ball:D` for a command that drives a ball-end mill.
+fn ball_spec(text: &str) -> std::result::Result<String, String> {
+    ball_diameter(text)
+        .map(|_| text.to_string())
+        .map_err(|e| e.to_string())
 }
 
 /// Runs the parsed command; returns the process exit code.
@@ -564,23 +650,34 @@ fn subdivide(args: &SubdivideArgs) -> Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if !matches!(extension.as_deref(), Some("obj" | "glb")) {
-        return Err(Error::Job(format!(
+        return Err(Error::Usage(format!(
             "--out {}: the output must end in .obj or .glb",
             args.out.display()
         )));
     }
-    if args.levels > 8 {
-        return Err(Error::Job(format!(
-            "--levels {}: at most 8 (each level multiplies the triangles by 4)",
-            args.levels
-        )));
-    }
-    let raw = job::load_part(&args.part, &args.units)?;
+    check_output_file(&args.out)?;
+    let raw = load(&args.part, &args.units)?;
     let mesh_error = |reason: String| Error::Mesh {
         file: name.clone(),
         reason,
     };
     let (mesh, _) = prepare(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+    let triangles = mesh.triangles.len() as f64 * 4f64.powi(args.levels as i32);
+    if triangles > args.max_triangles as f64 {
+        return Err(Error::TooLarge {
+            what: format!(
+                "subdividing {name} ({} triangles) {} times",
+                mesh.triangles.len(),
+                args.levels
+            ),
+            estimate: format!(
+                "{triangles:.3e} triangles (about {:.1} GB)",
+                triangles * 1e-7
+            ),
+            limit: format!("{} triangles", args.max_triangles),
+            how_to_raise: "use fewer --levels or raise --max-triangles".into(),
+        });
+    }
     let creases = match args.crease_angle {
         Some(angle) => multires::detect_creases(&mesh, angle),
         None => multires::Creases::none(),
@@ -610,10 +707,36 @@ fn subdivide(args: &SubdivideArgs) -> Result<()> {
     Ok(())
 }
 
-/// Reads, welds and orients a part and refuses it, saying why, unless it is a manifold surface.
-fn load_manifold_part(path: &Path, units: &str) -> Result<crate::mesh::Mesh> {
-    let name = path.display().to_string();
+/// Checks, before any work, that `path` can be written as one output file: not a folder, and
+/// its folder exists or can be made.
+fn check_output_file(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::Usage(format!(
+            "--out {}: is a folder; name the output file",
+            path.display()
+        )));
+    }
+    match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => create_dir(parent),
+        _ => Ok(()),
+    }
+}
+
+/// Reads a part and prints the reader's warnings (units that look wrong, skipped primitives)
+/// on stderr, where a script's output stays clean.
+fn load(path: &Path, units: &str) -> Result<crate::mesh::io::RawMesh> {
     let raw = job::load_part(path, units)?;
+    for w in &raw.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    Ok(raw)
+}
+
+/// Reads, welds and orients a part and refuses it, saying why, unless it is a manifold surface
+/// (and, with `closed`, a closed one).
+fn load_manifold_part(path: &Path, units: &str, closed: bool) -> Result<crate::mesh::Mesh> {
+    let name = path.display().to_string();
+    let raw = load(path, units)?;
     let (mesh, report) =
         prepare(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
             file: name.clone(),
@@ -623,6 +746,16 @@ fn load_manifold_part(path: &Path, units: &str) -> Result<crate::mesh::Mesh> {
         return Err(Error::Mesh {
             file: name,
             reason: format!("not a manifold surface: {}", report.problems().join("; ")),
+        });
+    }
+    if closed && !report.watertight {
+        return Err(Error::Mesh {
+            file: name,
+            reason: format!(
+                "shapes that enclose the part need a closed, consistently oriented surface \
+                 (inside and outside); found: {}",
+                report.problems().join("; ")
+            ),
         });
     }
     Ok(mesh)
@@ -636,19 +769,13 @@ fn create_dir(dir: &Path) -> Result<()> {
 }
 
 fn offsets(args: &OffsetsArgs) -> Result<()> {
-    if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
-        return Err(Error::Job(format!(
-            "--tolerance {}: must be a number of mm >= 0",
-            args.tolerance
-        )));
-    }
     if let Some((i, a)) = args
         .allowances
         .iter()
         .enumerate()
         .find(|&(i, &a)| !(a.is_finite() && a >= 0.0) || (i > 0 && a >= args.allowances[i - 1]))
     {
-        return Err(Error::Job(format!(
+        return Err(Error::Usage(format!(
             "--allowances: value {} ({a}) must be a number of mm >= 0, smaller than the one before",
             i + 1
         )));
@@ -657,16 +784,19 @@ fn offsets(args: &OffsetsArgs) -> Result<()> {
         .max_levels
         .unwrap_or(args.allowances.len().saturating_sub(1) as u32);
     if levels_above_base > 6 {
-        return Err(Error::Job(format!(
-            "--max-levels {levels_above_base}: at most 6 (each level multiplies the triangles by 4)"
+        return Err(Error::Usage(format!(
+            "--allowances: {} values need {levels_above_base} levels above the base, at most 6 \
+             (each level multiplies the triangles by 4); give --max-levels",
+            args.allowances.len()
         )));
     }
     let tool_radius = match &args.tool {
-        Some(spec) => ball_diameter(spec).map_err(|e| Error::Job(format!("--tool: {e}")))? / 2.0,
+        Some(spec) => ball_diameter(spec)? / 2.0,
         None => 0.0,
     };
+    job::check_output_dir(&args.out, &job::OutputKind::OFFSETS)?;
     let name = args.part.display().to_string();
-    let mesh = load_manifold_part(&args.part, &args.units)?;
+    let mesh = load_manifold_part(&args.part, &args.units, true)?;
     let remesh = multires::RemeshOptions {
         tolerance: args.tolerance,
         base_triangles: args.base_triangles.max(4),
@@ -675,26 +805,18 @@ fn offsets(args: &OffsetsArgs) -> Result<()> {
         crease_angle_deg: args.crease_angle,
         ..Default::default()
     };
-    if !(args.grid_cells.is_finite() && args.grid_cells >= 4.0) {
-        return Err(Error::Job(format!(
-            "--grid-cells {}: must be a number >= 4",
-            args.grid_cells
-        )));
-    }
     let options = crate::offset::OffsetOptions {
         max_cells_across: args.grid_cells,
         ..Default::default()
     }
     .with_tool_radius(tool_radius);
-    let job::OffsetsOutput { files, report, .. } =
-        job::offsets(&mesh, &remesh, &args.allowances, &options, !args.no_timings)?;
-    create_dir(&args.out)?;
-    for (file, bytes) in &files {
-        job::write_atomically(&args.out.join(file), bytes)?;
-    }
+    let job::OffsetsOutput {
+        mut files, report, ..
+    } = job::offsets(&mesh, &remesh, &args.allowances, &options, !args.no_timings)?;
     let json = serde_json::to_string_pretty(&report).unwrap_or_default() + "\n";
+    files.push(("offsets.json".to_string(), json.into_bytes()));
+    job::write_output_set(&args.out, &job::OutputKind::OFFSETS, &files)?;
     let json_path = args.out.join("offsets.json");
-    job::write_atomically(&json_path, json.as_bytes())?;
     for s in &report.shapes {
         let f = &s.figures;
         say!(
@@ -729,20 +851,9 @@ fn offsets(args: &OffsetsArgs) -> Result<()> {
 }
 
 fn levels(args: &LevelsArgs) -> Result<()> {
-    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
-        return Err(Error::Job(format!(
-            "--tolerance {}: must be a positive number of mm",
-            args.tolerance
-        )));
-    }
-    if args.max_levels > 6 {
-        return Err(Error::Job(format!(
-            "--max-levels {}: at most 6 (each level multiplies the triangles by 4)",
-            args.max_levels
-        )));
-    }
+    job::check_output_dir(&args.out, &job::OutputKind::LEVELS)?;
     let name = args.part.display().to_string();
-    let mesh = load_manifold_part(&args.part, &args.units)?;
+    let mesh = load_manifold_part(&args.part, &args.units, false)?;
     let options = multires::RemeshOptions {
         tolerance: args.tolerance,
         base_triangles: args.base_triangles.max(4),
@@ -754,13 +865,10 @@ fn levels(args: &LevelsArgs) -> Result<()> {
     };
     let wavelet_options =
         multires::WaveletOptions::default().with_kdisk_update(!args.plain_lifting);
-    let (files, report) = job::levels(&mesh, &options, &wavelet_options, !args.no_timings)?;
-    create_dir(&args.out)?;
-    for (file, bytes) in &files {
-        job::write_atomically(&args.out.join(file), bytes)?;
-    }
+    let (mut files, report) = job::levels(&mesh, &options, &wavelet_options, !args.no_timings)?;
     let json = serde_json::to_string_pretty(&report).unwrap_or_default() + "\n";
-    job::write_atomically(&args.out.join("levels.json"), json.as_bytes())?;
+    files.push(("levels.json".to_string(), json.into_bytes()));
+    job::write_output_set(&args.out, &job::OutputKind::LEVELS, &files)?;
     for l in &report.levels {
         say!(
             "level {}: {:>8} triangles, max deviation to finest {:.4} mm, fit to input {:.4} mm",
@@ -783,9 +891,9 @@ fn levels(args: &LevelsArgs) -> Result<()> {
 /// The diameter of a `ball:D` spec; other cutters are refused by name (the 5-axis stages drive
 /// a ball centre).
 fn ball_diameter(spec: &str) -> Result<f64> {
-    match parse_cutter(spec).map_err(|e| Error::Job(e.to_string()))? {
+    match parse_cutter(spec).map_err(|e| Error::Usage(e.to_string()))? {
         Cutter::Ball { diameter, .. } => Ok(diameter),
-        other => Err(Error::Job(format!(
+        other => Err(Error::Usage(format!(
             "tool `{spec}` is a {} cutter: this command drives a ball-end mill (ball:D)",
             other.kind()
         ))),
@@ -802,27 +910,13 @@ fn set_tool(job: &mut Job, spec: &str) -> Result<()> {
 }
 
 fn tools(args: &ToolsArgs) -> Result<()> {
-    if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
-        return Err(Error::Job(format!(
-            "--tolerance {}: must be a non-negative number of mm",
-            args.tolerance
-        )));
-    }
-    if !(0.0..=90.0).contains(&args.max_tilt) {
-        return Err(Error::Job(format!(
-            "--max-tilt {}: must be between 0 and 90 degrees",
-            args.max_tilt
-        )));
-    }
-    if args.points == 0 {
-        return Err(Error::Job("--points 0: evaluate at least one point".into()));
-    }
+    job::check_output_dir(&args.out, &job::OutputKind::TOOLS)?;
     let library = crate::tool::ToolLibrary::read(&args.library).map_err(Error::Job)?;
     let name = args.part.display().to_string();
-    let raw = job::load_part(&args.part, &args.units)?;
+    let raw = load(&args.part, &args.units)?;
     let options = crate::tool_choice::ToolChoiceOptions {
         tolerance: args.tolerance,
-        max_points: args.points,
+        max_points: args.points as usize,
         max_tilt_deg: args.max_tilt,
         table_margin: if args.no_table { None } else { Some(2.0) },
         ..Default::default()
@@ -870,7 +964,8 @@ fn access(args: &AccessArgs) -> Result<()> {
         set_tool(&mut job, spec)?;
     }
     crate::access::level_for_count(args.directions)
-        .map_err(|e| Error::Job(format!("--directions: {e}")))?;
+        .map_err(|e| Error::Usage(format!("--directions: {e}")))?;
+    job::check_output_dir(&args.out, &job::OutputKind::ACCESS)?;
     let query = match &args.query {
         Some(path) => {
             let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
@@ -882,7 +977,7 @@ fn access(args: &AccessArgs) -> Result<()> {
         None => None,
     };
     let name = args.part.display().to_string();
-    let raw = job::load_part(&args.part, &args.units)?;
+    let raw = load(&args.part, &args.units)?;
     let options = job::AccessOptions {
         directions: args.directions,
         timings: !args.no_timings,
@@ -920,8 +1015,12 @@ fn plan(args: &PlanArgs) -> Result<()> {
         Some(path) => Job::load(path).map_err(Error::Job)?,
         None => Job::default(),
     };
+    // Flags override the job file; a value they make unusable is a usage error naming the flag.
+    let mut flags: Vec<(&str, &str)> = Vec::new();
     if let Some(spec) = &args.tool {
         set_tool(&mut job, spec)?;
+        flags.push(("tool.", "--tool"));
+        flags.push(("scallop_height", "--tool"));
     }
     if let Some(u) = &args.units {
         job.part.units = Some(u.clone());
@@ -931,31 +1030,42 @@ fn plan(args: &PlanArgs) -> Result<()> {
     }
     if let Some(s) = args.scallop {
         job.strategy.scallop_height = s;
+        flags.push(("strategy.scallop_height", "--scallop"));
     }
     if let Some(t) = args.tolerance {
         job.strategy.tolerance = t;
+        flags.push(("strategy.tolerance", "--tolerance"));
+    }
+    if let Some(n) = args.max_drive_points {
+        job.limits.max_drive_points = n;
+        flags.push(("limits.max_drive_points", "--max-drive-points"));
+    }
+    if let Err(e) = job.validate() {
+        return Err(match flags.iter().find(|(key, _)| e.contains(key)) {
+            Some((_, flag)) => Error::Usage(format!("{flag}: {e}")),
+            None => Error::Job(e),
+        });
     }
     let part_path: PathBuf = match (&args.part, &job.part.path) {
         (Some(p), _) => p.clone(),
         (None, Some(p)) => p.clone(),
         (None, None) => {
-            return Err(Error::Job(
+            return Err(Error::Usage(
                 "no part: give PART or set part.path in the job file".into(),
             ));
         }
     };
+    job::check_output_dir(&args.out, &job::OutputKind::PLAN)?;
     let units = job.part.units.clone().unwrap_or_else(|| "mm".into());
     let threads = args.threads.unwrap_or(0);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .map_err(|e| Error::Job(format!("--threads: {e}")))?;
+        .map_err(|e| Error::Job(format!("worker threads: {e}")))?;
     let name = part_path.display().to_string();
+    let raw = load(&part_path, &units)?;
     let observer = progress::Bars::new();
-    let output = pool.install(|| -> Result<_> {
-        let raw = job::load_part(&part_path, &units)?;
-        job::plan(&raw, &name, &units, &job, &observer)
-    })?;
+    let output = pool.install(|| job::plan(&raw, &name, &units, &job, &observer))?;
     job::write_outputs(&args.out, &output, !args.no_timings)?;
     summarise(&output.report, &args.out);
     Ok(())

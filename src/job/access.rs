@@ -20,7 +20,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::config::Job;
-use super::output::{create_output_dir, write_atomically, write_json};
+use super::output::{OutputKind, json_bytes, write_output_set};
 use crate::access::{
     DirectionSet, RayScene, SurfacePoint, VisibilityOptions, level_for_count, vertex_points,
     visibility_brute_force, visibility_hierarchical,
@@ -422,13 +422,17 @@ pub fn parse_query_csv(text: &str, file: &str) -> Result<Vec<SurfacePoint>> {
 /// Writes `access.glb`, `access.json` and, with queries, `query.csv` into `dir` (created if
 /// missing), each atomically.
 pub fn write_access_outputs(dir: &Path, output: &AccessOutput) -> Result<()> {
-    create_output_dir(dir)?;
-    write_atomically(&dir.join("access.glb"), &output.glb)?;
-    write_json(dir, "access.json", &output.report)?;
+    let mut files = vec![
+        ("access.glb".to_string(), output.glb.clone()),
+        (
+            "access.json".to_string(),
+            json_bytes("access.json", &output.report)?,
+        ),
+    ];
     if let Some(csv) = &output.query_csv {
-        write_atomically(&dir.join("query.csv"), csv.as_bytes())?;
+        files.push(("query.csv".to_string(), csv.clone().into_bytes()));
     }
-    Ok(())
+    write_output_set(dir, &OutputKind::ACCESS, &files)
 }
 
 #[cfg(test)]

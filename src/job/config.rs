@@ -21,6 +21,28 @@ pub struct Job {
     pub strategy: StrategySection,
     pub feeds: FeedSection,
     pub safety: SafetySection,
+    pub limits: LimitsSection,
+}
+
+/// How much work a job may ask for before it is refused (with a message saying how to raise
+/// the limit), so that a mistyped unit or scallop height fails at once instead of running for
+/// hours or exhausting memory.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LimitsSection {
+    /// Most drive points the finishing passes may have, estimated before planning as the
+    /// part's area over (stepover × `strategy.max_step`), a lower estimate (the sample impeller
+    /// at the defaults: 55 thousand estimated, 156 thousand planned in about 35 s). Each point
+    /// costs a few collision queries.
+    pub max_drive_points: u64,
+}
+
+impl Default for LimitsSection {
+    fn default() -> Self {
+        Self {
+            max_drive_points: 2_000_000,
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -373,15 +395,42 @@ impl Job {
             ));
         }
         if let Some(up) = self.part.up
-            && (!up.iter().all(|c| c.is_finite()) || up.iter().map(|c| c * c).sum::<f64>() < 1e-12)
+            && unit_direction(up).is_none()
         {
             return Err(format!("part.up must be a non-zero vector, got {up:?}"));
         }
         let n = self.strategy.drive_normal;
-        if !n.iter().all(|c| c.is_finite()) || n.iter().map(|c| c * c).sum::<f64>() < 1e-12 {
+        if unit_direction(n).is_none() {
             return Err(format!(
                 "strategy.drive_normal must be a non-zero vector, got {n:?}"
             ));
+        }
+        if let Some(units) = &self.part.units
+            && units.parse::<crate::mesh::io::Units>().is_err()
+        {
+            return Err(format!(
+                "part.units must be \"mm\", \"m\" or \"in\", got \"{units}\""
+            ));
+        }
+        // A lead or tilt of 90° or more turns the axis into or behind the surface.
+        for (key, v) in [
+            ("strategy.lead_deg", self.strategy.lead_deg),
+            ("strategy.tilt_deg", self.strategy.tilt_deg),
+        ] {
+            if !(v.is_finite() && v.abs() < 90.0) {
+                return Err(format!(
+                    "{key} must be a number of degrees between -90 and 90 (exclusive), got {v}"
+                ));
+            }
+        }
+        if !(self.strategy.max_axis_deviation_deg <= 180.0) {
+            return Err(format!(
+                "strategy.max_axis_deviation_deg must be at most 180, got {}",
+                self.strategy.max_axis_deviation_deg
+            ));
+        }
+        if self.limits.max_drive_points == 0 {
+            return Err("limits.max_drive_points must be at least 1".into());
         }
         for (key, v) in [
             ("feeds.cut", self.feeds.cut),
@@ -429,6 +478,21 @@ impl Job {
     }
 }
 
+/// `v` scaled to unit length, or `None` when it is zero or not finite. Scaled by its largest
+/// component first, so that `[1e200, 1e200, 0]` is a direction too (its squared length would
+/// overflow).
+pub fn unit_direction(v: [f64; 3]) -> Option<nalgebra::Vector3<f64>> {
+    if !v.iter().all(|c| c.is_finite()) {
+        return None;
+    }
+    let largest = v.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    if largest == 0.0 {
+        return None;
+    }
+    let scaled = nalgebra::Vector3::from(v) / largest;
+    Some(scaled / scaled.norm())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -460,6 +524,46 @@ mod tests {
         assert!(e.contains("a_limits"), "{e}");
         let e = Job::from_toml("[strategy]\nscallop_height = 5\n", "j.toml").unwrap_err();
         assert!(e.contains("ball radius"), "{e}");
+    }
+
+    /// Issue 17 item 9: `lead_deg = nan` (or inf, or 720) gave an empty program with exit 0.
+    #[test]
+    fn lead_and_tilt_must_be_usable_angles() {
+        for text in [
+            "lead_deg = nan",
+            "tilt_deg = nan",
+            "lead_deg = inf",
+            "lead_deg = 720",
+            "tilt_deg = -90",
+        ] {
+            let e = Job::from_toml(&format!("[strategy]\n{text}\n"), "j.toml").unwrap_err();
+            let key = text.split(' ').next().unwrap();
+            assert!(e.contains(&format!("strategy.{key}")), "{text}: {e}");
+        }
+        assert!(Job::from_toml("[strategy]\nlead_deg = 45\ntilt_deg = -30\n", "j").is_ok());
+    }
+
+    /// Issue 17 item 13: a bad unit in the job file is named by its key, not as `--units`.
+    #[test]
+    fn bad_units_in_the_job_file_name_the_key() {
+        let e = Job::from_toml("[part]\nunits = \"furlong\"\n", "j.toml").unwrap_err();
+        assert!(e.contains("part.units") && e.contains("furlong"), "{e}");
+        assert!(!e.contains("--units"), "{e}");
+    }
+
+    /// Issue 17 item 13: `--up 1e200,1e200,0` was silently ignored (its squared length
+    /// overflowed, normalising gave NaN). It is a direction like any other.
+    #[test]
+    fn huge_and_tiny_directions_are_directions() {
+        let u = unit_direction([1e200, 1e200, 0.0]).unwrap();
+        assert!((u - nalgebra::Vector3::new(1.0, 1.0, 0.0).normalize()).norm() < 1e-15);
+        let u = unit_direction([0.0, 1e-300, 0.0]).unwrap();
+        assert_eq!(u, nalgebra::Vector3::y());
+        for bad in [[0.0; 3], [f64::NAN, 0.0, 1.0], [f64::INFINITY, 0.0, 0.0]] {
+            assert!(unit_direction(bad).is_none(), "{bad:?}");
+        }
+        let e = Job::from_toml("[part]\nup = [0, 0, 0]\n", "j.toml").unwrap_err();
+        assert!(e.contains("part.up"), "{e}");
     }
 
     #[test]

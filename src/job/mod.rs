@@ -26,7 +26,8 @@ pub use access::{
 };
 pub use budget::ToleranceBudget;
 pub use config::{
-    FeedSection, Job, MachineSection, PartSection, SafetySection, StrategySection, ToolSection,
+    FeedSection, Job, LimitsSection, MachineSection, PartSection, SafetySection, StrategySection,
+    ToolSection, unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, MethodFigures, StockSpec, contour_compare,
@@ -34,7 +35,7 @@ pub use contour::{
 };
 pub use levels::{LevelSummary, LevelsReport, levels};
 pub use offsets::{OffsetsOutput, OffsetsReport, ShapeSummary, offset_specs, offsets, shape_glb};
-pub use output::{write_atomically, write_outputs};
+pub use output::{OutputKind, check_output_dir, write_atomically, write_output_set, write_outputs};
 pub use pipeline::{Observer, Operation, PlanOutput, Quiet, load_part, plan};
 pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use samples::{SamplePart, sample_files};

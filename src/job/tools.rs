@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::output::{create_output_dir, write_atomically, write_json};
+use super::output::{OutputKind, json_bytes, write_output_set};
 use crate::error::{Error, Result};
 use crate::mesh::io::{GlbBuilder, RawMesh};
 use crate::mesh::{PrepareOptions, prepare};
@@ -141,7 +141,15 @@ pub fn tools(
 
 /// Writes `tools.glb` and `tools.json` into `dir` (created if missing), each atomically.
 pub fn write_tools_outputs(dir: &Path, output: &ToolsOutput) -> Result<()> {
-    create_output_dir(dir)?;
-    write_atomically(&dir.join("tools.glb"), &output.glb)?;
-    write_json(dir, "tools.json", &output.report)
+    write_output_set(
+        dir,
+        &OutputKind::TOOLS,
+        &[
+            ("tools.glb".to_string(), output.glb.clone()),
+            (
+                "tools.json".to_string(),
+                json_bytes("tools.json", &output.report)?,
+            ),
+        ],
+    )
 }

@@ -290,3 +290,97 @@ pub fn parse_cl(text: &str) -> Vec<ClRow> {
         })
         .collect()
 }
+
+/// One motion block of a posted program, read the way a control reads it: modal G0/G1, every
+/// axis keeps its last commanded value.
+#[derive(Clone, Debug)]
+pub struct PostedBlock {
+    pub line: usize,
+    pub rapid: bool,
+    /// X, Y, Z (mm), A, C (degrees) after the block.
+    pub axes: [f64; 5],
+}
+
+/// The motion blocks of a table-table A/C program once every axis has a value (the earlier
+/// ones only position single axes). Written for the tests alone: comments in parentheses,
+/// words as letter + number, nothing shared with the post or the library's reader.
+pub fn read_ac_program(text: &str) -> Vec<PostedBlock> {
+    let mut axes: [Option<f64>; 5] = [None; 5];
+    let mut rapid = true;
+    let mut out = Vec::new();
+    for (index, raw) in text.lines().enumerate() {
+        let code: String = {
+            let mut depth = 0;
+            raw.chars()
+                .filter(|&c| {
+                    match c {
+                        '(' => depth += 1,
+                        ')' => {
+                            depth -= 1;
+                            return false;
+                        }
+                        _ => {}
+                    }
+                    depth == 0
+                })
+                .collect()
+        };
+        let mut moved = false;
+        let mut chars = code.trim().chars().peekable();
+        while let Some(letter) = chars.next() {
+            if letter.is_whitespace() || letter == '%' {
+                continue;
+            }
+            let mut number = String::new();
+            while let Some(&c) = chars.peek() {
+                if c.is_ascii_digit() || c == '.' || c == '-' {
+                    number.push(c);
+                    chars.next();
+                } else {
+                    break;
+                }
+            }
+            let value: f64 = number
+                .parse()
+                .unwrap_or_else(|_| panic!("line {}: word {letter}{number}", index + 1));
+            let slot = match letter {
+                'G' if value == 0.0 => {
+                    rapid = true;
+                    None
+                }
+                'G' if value == 1.0 => {
+                    rapid = false;
+                    None
+                }
+                'X' => Some(0),
+                'Y' => Some(1),
+                'Z' => Some(2),
+                'A' => Some(3),
+                'C' => Some(4),
+                _ => None,
+            };
+            if let Some(i) = slot {
+                axes[i] = Some(value);
+                moved = true;
+            }
+        }
+        if moved && let [Some(x), Some(y), Some(z), Some(a), Some(c)] = axes {
+            out.push(PostedBlock {
+                line: index + 1,
+                rapid,
+                axes: [x, y, z, a, c],
+            });
+        }
+    }
+    out
+}
+
+/// The ball centre in the part frame for table-table A/C joints: the tool points along
+/// machine +Z with its tip at X Y Z; the table turns a part point `p` to
+/// `R_x(A) · R_z(C) · (p + origin)`, so the centre is that map inverted.
+pub fn ac_ball_centre(joints: &[f64; 5], radius: f64, origin: &Vector3<f64>) -> Point3<f64> {
+    let machine = Vector3::new(joints[0], joints[1], joints[2] + radius);
+    let table = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), joints[3].to_radians())
+        * nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), joints[4].to_radians());
+    Point3::from(table.inverse() * machine - origin)
+}
