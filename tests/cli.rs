@@ -457,3 +457,208 @@ fn access_writes_maps_statistics_and_query_answers() {
     let _ = std::fs::remove_file(&query);
     let _ = std::fs::remove_file(dir.with_extension("bad.csv"));
 }
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Issue 17 item 7: `--out` naming an existing file failed after the whole plan with a raw
+/// "File exists (os error 17)". It is checked first: with a part that does not exist either,
+/// the answer is about --out, and it is a usage error.
+#[test]
+fn out_is_checked_before_any_work() {
+    let dir = temp_dir("out-first");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("a-file");
+    std::fs::write(&file, "mine").unwrap();
+    let run = wavemill(&["plan", "no/such/part.stl", "--out", file.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains("a-file") && stderr(&run).contains("not a folder"),
+        "{}",
+        stderr(&run)
+    );
+    // A folder holding files the command does not write is refused before any work, and the
+    // files are left alone (the output set replaces the folder's contents).
+    let run = wavemill(&["levels", "no/such/part.stl", "--out", dir.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    assert!(stderr(&run).contains("a-file"), "{}", stderr(&run));
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+    let run = wavemill(&[
+        "subdivide",
+        "no/such/part.stl",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 17 items 9, 11, 13: values that gave an empty program, ran for minutes or were
+/// silently ignored are refused at once: bad flag values with exit code 2, work past a limit
+/// with a message saying how to raise it, a part with nothing to cut with exit code 4.
+#[test]
+fn hostile_values_are_refused_with_clear_errors() {
+    let dir = temp_dir("hostile");
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let part = repo_file("data/impeller.glb");
+    let part = part.to_str().unwrap();
+    for (args, needle) in [
+        (&["plan", part, "--threads", "10000"][..], "--threads"),
+        (&["plan", part, "--up", "0,0,0"], "--up"),
+        (&["plan", part, "--up", "1,nan,0"], "--up"),
+        (&["plan", part, "--scallop", "nan"], "--scallop"),
+        (&["plan", part, "--tolerance=-1"], "--tolerance"),
+        (&["plan", part, "--scallop", "3"], "--scallop"),
+        (&["plan", part, "--units", "furlong"], "--units"),
+        (&["levels", part, "--crease-angle", "nan"], "--crease-angle"),
+        (
+            &["subdivide", part, "--crease-angle", "nan"],
+            "--crease-angle",
+        ),
+        (&["subdivide", part, "--levels", "9"], "--levels"),
+        (&["offsets", part, "--allowances", "1,nan"], "--allowances"),
+    ] {
+        let mut full = args.to_vec();
+        full.extend(["--out", out]);
+        let run = wavemill(&full);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
+        assert!(stderr(&run).contains(needle), "{args:?}: {}", stderr(&run));
+    }
+
+    // --up 1e200,1e200,0 is a direction (it was silently ignored): the plan goes on to the
+    // drive-point limit, which a tiny --max-drive-points trips at once.
+    let run = wavemill(&[
+        "plan",
+        part,
+        "--up",
+        "1e200,1e200,0",
+        "--max-drive-points",
+        "1",
+        "--out",
+        out,
+    ]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains("--max-drive-points"),
+        "{}",
+        stderr(&run)
+    );
+
+    // A part read in inches that is plainly in millimetres: a warning, and the work estimate
+    // refuses it instead of running for minutes.
+    let run = wavemill(&["plan", part, "--units", "in", "--out", out]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(
+        err.contains("warning") && err.contains("suggests millimetres"),
+        "{err}"
+    );
+    assert!(
+        err.contains("drive points") && err.contains("limit"),
+        "{err}"
+    );
+
+    // subdivide --levels 8 aborted on a failed allocation: now an estimate refuses it.
+    let obj = dir.join("x.obj");
+    let run = wavemill(&[
+        "subdivide",
+        part,
+        "--levels",
+        "8",
+        "--out",
+        obj.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(stderr(&run).contains("--max-triangles"), "{}", stderr(&run));
+    assert!(!obj.exists());
+
+    // Job-file values that gave an empty program with exit 0 are named by their key.
+    std::fs::create_dir_all(&dir).unwrap();
+    for (text, key) in [
+        ("[strategy]\nlead_deg = nan\n", "strategy.lead_deg"),
+        ("[strategy]\ntilt_deg = nan\n", "strategy.tilt_deg"),
+        ("[strategy]\nlead_deg = inf\n", "strategy.lead_deg"),
+        ("[strategy]\nlead_deg = 720\n", "strategy.lead_deg"),
+        ("[machine]\ntable_z = 100\n", "machine.table_z"),
+        ("[part]\nunits = \"furlong\"\n", "part.units"),
+    ] {
+        let job = dir.join("job.toml");
+        std::fs::write(&job, text).unwrap();
+        let run = wavemill(&["plan", part, "--job", job.to_str().unwrap(), "--out", out]);
+        assert_eq!(run.status.code(), Some(1), "{text}: {}", stderr(&run));
+        assert!(stderr(&run).contains(key), "{text}: {}", stderr(&run));
+        assert!(
+            !stderr(&run).contains("--units"),
+            "{text}: {}",
+            stderr(&run)
+        );
+    }
+    assert!(!std::path::Path::new(out).join("job.nc").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 17 item 9: a part far smaller than the tool (the sample impeller scaled by 1e-6)
+/// gave an empty program with exit 0; nothing to cut is its own exit code, and no program is
+/// written.
+#[test]
+fn a_part_with_nothing_to_cut_is_exit_code_4() {
+    let dir = temp_dir("tiny");
+    std::fs::create_dir_all(&dir).unwrap();
+    let source = std::fs::read_to_string(repo_file("data/impeller.obj")).unwrap();
+    let tiny: String = source
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(rest) => {
+                let c: Vec<f64> = rest
+                    .split_whitespace()
+                    .map(|v| v.parse().unwrap())
+                    .collect();
+                format!("v {:e} {:e} {:e}\n", c[0] * 1e-6, c[1] * 1e-6, c[2] * 1e-6)
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let part = dir.join("tiny.obj");
+    std::fs::write(&part, tiny).unwrap();
+    let out = dir.join("out");
+    let run = wavemill(&[
+        "plan",
+        part.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(4), "{}", stderr(&run));
+    assert!(stderr(&run).contains("nothing to cut"), "{}", stderr(&run));
+    assert!(!out.join("job.nc").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 17 item 13: `offsets` of an open surface said "verified"; shapes that enclose the part
+/// need inside and outside, so an open surface is refused, saying so.
+#[test]
+fn offsets_of_an_open_surface_are_refused() {
+    let dir = temp_dir("open");
+    std::fs::create_dir_all(&dir).unwrap();
+    let part = dir.join("open.obj");
+    std::fs::write(
+        &part,
+        "v 0 0 0\nv 40 0 0\nv 40 40 0\nv 0 40 0\nv 20 20 5\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let run = wavemill(&[
+        "offsets",
+        part.to_str().unwrap(),
+        "--allowances",
+        "0.5,0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(err.contains("open.obj") && err.contains("closed"), "{err}");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1065,7 +1065,22 @@ fn plan(args: &PlanArgs) -> Result<()> {
     let name = part_path.display().to_string();
     let raw = load(&part_path, &units)?;
     let observer = progress::Bars::new();
-    let output = pool.install(|| job::plan(&raw, &name, &units, &job, &observer))?;
+    let output = pool
+        .install(|| job::plan(&raw, &name, &units, &job, &observer))
+        .map_err(|e| match e {
+            Error::TooLarge {
+                what,
+                estimate,
+                limit,
+                how_to_raise,
+            } => Error::TooLarge {
+                what,
+                estimate,
+                limit,
+                how_to_raise: format!("{how_to_raise} (--max-drive-points)"),
+            },
+            other => other,
+        })?;
     job::write_outputs(&args.out, &output, !args.no_timings)?;
     summarise(&output.report, &args.out);
     Ok(())

@@ -423,7 +423,7 @@ impl Job {
                 ));
             }
         }
-        if !(self.strategy.max_axis_deviation_deg <= 180.0) {
+        if self.strategy.max_axis_deviation_deg > 180.0 {
             return Err(format!(
                 "strategy.max_axis_deviation_deg must be at most 180, got {}",
                 self.strategy.max_axis_deviation_deg

@@ -243,14 +243,12 @@ pub fn write_output_set(dir: &Path, kind: &OutputKind, files: &[(String, Vec<u8>
         return Err(e);
     }
     let had_old = dir.exists();
-    if had_old {
-        if let Err(source) = std::fs::rename(dir, &old) {
-            let _ = std::fs::remove_dir_all(&staging);
-            return Err(Error::Io {
-                path: dir.display().to_string(),
-                source,
-            });
-        }
+    if had_old && let Err(source) = std::fs::rename(dir, &old) {
+        let _ = std::fs::remove_dir_all(&staging);
+        return Err(Error::Io {
+            path: dir.display().to_string(),
+            source,
+        });
     }
     if let Err(source) = std::fs::rename(&staging, dir) {
         if had_old {
@@ -328,5 +326,73 @@ mod tests {
         let e = write_atomically(&dir.join("missing/b.txt"), b"x").unwrap_err();
         assert!(e.to_string().contains("missing"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut n: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        n.sort();
+        n
+    }
+
+    fn set(names: &[&str], content: &str) -> Vec<(String, Vec<u8>)> {
+        names
+            .iter()
+            .map(|n| (n.to_string(), content.as_bytes().to_vec()))
+            .collect()
+    }
+
+    /// Issue 17 item 6: `levels` left a stale `level-2.glb` from an earlier, larger run, and a
+    /// failed write left a new file beside older ones. The set is replaced whole, nothing else
+    /// is left beside the folder, and a write that fails leaves the old set as it was.
+    #[test]
+    fn an_output_set_replaces_the_old_one_whole() {
+        let parent = std::env::temp_dir().join(format!("wavemill-set-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&parent);
+        std::fs::create_dir_all(&parent).unwrap();
+        let dir = parent.join("out");
+        let kind = OutputKind::LEVELS;
+        let big = set(
+            &["level-0.glb", "level-1.glb", "level-2.glb", "levels.json"],
+            "a",
+        );
+        write_output_set(&dir, &kind, &big).unwrap();
+        assert_eq!(names(&dir).len(), 4);
+        write_output_set(&dir, &kind, &set(&["level-0.glb", "levels.json"], "b")).unwrap();
+        assert_eq!(names(&dir), ["level-0.glb", "levels.json"]);
+        assert_eq!(std::fs::read(dir.join("levels.json")).unwrap(), b"b");
+        assert_eq!(names(&parent), ["out"], "no staging folders left");
+
+        // A failure while staging (the staging name is taken by a file): the error names the
+        // place, the old set is untouched.
+        let (staging, _, _) = staging_dirs(&dir).unwrap();
+        std::fs::write(&staging, "in the way").unwrap();
+        let e = write_output_set(&dir, &kind, &big).unwrap_err();
+        assert!(matches!(e, Error::Io { .. }), "{e}");
+        assert_eq!(names(&dir), ["level-0.glb", "levels.json"]);
+        assert_eq!(std::fs::read(dir.join("levels.json")).unwrap(), b"b");
+        std::fs::remove_file(&staging).unwrap();
+
+        // A file the command does not write makes the folder unusable, before any work.
+        std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+        let e = check_output_dir(&dir, &kind).unwrap_err();
+        assert!(e.to_string().contains("notes.txt"), "{e}");
+        assert_eq!(e.exit_code(), 2);
+        assert!(write_output_set(&dir, &kind, &big).is_err());
+        assert_eq!(std::fs::read(dir.join("notes.txt")).unwrap(), b"mine");
+        // Nor may it be a file.
+        let e = check_output_dir(&dir.join("notes.txt"), &kind).unwrap_err();
+        assert!(e.to_string().contains("not a folder"), "{e}");
+        std::fs::remove_dir_all(&parent).unwrap();
+    }
+
+    #[test]
+    fn each_command_owns_only_its_own_files() {
+        assert!(OutputKind::LEVELS.owns("level-12.glb"));
+        assert!(!OutputKind::LEVELS.owns("level-.glb") && !OutputKind::LEVELS.owns("level-1.obj"));
+        assert!(OutputKind::OFFSETS.owns("offset-0.glb") && !OutputKind::OFFSETS.owns("job.nc"));
+        assert!(OutputKind::PLAN.owns("job.nc") && !OutputKind::PLAN.owns("levels.json"));
     }
 }

@@ -145,11 +145,35 @@ fn units_warning(mesh: &crate::mesh::Mesh, units: Units) -> Option<String> {
         (UnitsGuess::MillimetresOrInches, Units::Metres) => Units::Millimetres,
         _ => return None,
     };
+    let name = |u: Units| match u {
+        Units::Millimetres => "millimetres",
+        Units::Metres => "metres",
+        Units::Inches => "inches",
+    };
     Some(format!(
-        "read in {units} the part is {diagonal_mm:.1} mm across ({in_file_units:.4} {units}); \
-         its size suggests {suggested} ({:.1} mm): check the units",
-        in_file_units * suggested.scale_to_mm()
+        "read in {} the part is {} mm across ({} {units} in the file); its size suggests {} \
+         ({} mm): check the units",
+        name(units),
+        significant(diagonal_mm),
+        significant(in_file_units),
+        name(suggested),
+        significant(in_file_units * suggested.scale_to_mm())
     ))
+}
+
+/// `v` with four significant digits, in plain notation where that stays short.
+fn significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        format!("{v}")
+    } else if !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:.3e}")
+    } else {
+        format!(
+            "{:.*}",
+            (3 - v.abs().log10().floor() as i64).max(0) as usize,
+            v
+        )
+    }
 }
 
 fn ms(since: Instant) -> f64 {
@@ -193,14 +217,6 @@ pub fn plan(
     }
     timings.prepare = ms(t);
     check_drive_points(&mesh_report, job)?;
-
-    let t = Instant::now();
-    observer.stage("drive surface", 0);
-    let (drive, surface) = drive_surface(&part, &job.surface).map_err(mesh_error)?;
-    timings.drive_surface = ms(t);
-
-    let t = Instant::now();
-    observer.stage("collision structures", 0);
     let lowest = part.aabb().min.z;
     let table_z = job.machine.table_z.unwrap_or(lowest);
     if table_z > lowest + job.strategy.tolerance {
@@ -209,6 +225,14 @@ pub fn plan(
              after turning the part up): the part would stand inside the table"
         )));
     }
+
+    let t = Instant::now();
+    observer.stage("drive surface", 0);
+    let (drive, surface) = drive_surface(&part, &job.surface).map_err(mesh_error)?;
+    timings.drive_surface = ms(t);
+
+    let t = Instant::now();
+    observer.stage("collision structures", 0);
     let table = Table {
         top_z: table_z,
         margin: job.safety.table_margin,
@@ -493,7 +517,7 @@ pub fn plan(
     };
     let by_reason = unreachable_by_reason(&finishing.unreachable);
     if !toolpath.moves.iter().any(|m| m.kind == MoveKind::Cut) {
-        let reasons: Vec<String> = by_reason.iter().map(|(r, n)| format!("{n} {r}")).collect();
+        let reasons: Vec<String> = by_reason.iter().map(|(r, n)| format!("{r}: {n}")).collect();
         return Err(Error::NothingToCut(format!(
             "{part_name}: none of the {} drive points can be machined{}",
             finishing.drive_points,

@@ -166,3 +166,46 @@ pub fn verify(
         search_distance: search,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn clear() -> Verification {
+        Verification {
+            checked_poses: 10,
+            checked_midpoints: 9,
+            min_cutter_clearance: 0.0,
+            min_chord_clearance: -0.004,
+            min_flutes_clearance: 0.1,
+            min_shank_clearance: 0.6,
+            min_holder_clearance: 2.5,
+            min_table_clearance: 3.0,
+            search_distance: 7.0,
+        }
+    }
+
+    /// One path per check, each made to fail exactly that check (tolerance 0.005, margins
+    /// 0.5 / 2 / 2): the message names what failed. Issue 17 item 5: the table clearance was
+    /// computed and never checked, so a path into the table passed.
+    #[test]
+    fn each_check_fails_the_path_made_to_fail_it() {
+        let check = |v: &Verification| v.passes(0.005, 0.5, 2.0, 2.0);
+        assert!(check(&clear()).is_ok());
+        type Breaker = fn(&mut Verification);
+        let cases: [(Breaker, &str); 6] = [
+            (|v| v.min_cutter_clearance = -0.001, "gouges"),
+            (|v| v.min_chord_clearance = -0.006, "straight move"),
+            (|v| v.min_flutes_clearance = -0.01, "flutes"),
+            (|v| v.min_shank_clearance = 0.49, "shank"),
+            (|v| v.min_holder_clearance = 1.9, "holder"),
+            (|v| v.min_table_clearance = 1.5, "table"),
+        ];
+        for (break_it, needle) in cases {
+            let mut v = clear();
+            break_it(&mut v);
+            let e = check(&v).unwrap_err();
+            assert!(e.contains(needle) && !e.contains(';'), "{needle}: {e}");
+        }
+    }
+}
