@@ -4,6 +4,8 @@
 
 #![allow(dead_code)]
 
+pub mod plan_checks;
+
 use std::path::PathBuf;
 
 use nalgebra::{Point3, Vector3};

@@ -1,0 +1,97 @@
+//! Checks of a whole plan's outputs shared by the end-to-end plan tests: written against the
+//! CL data and the G-code text, with the tests' own reader, kinematics and distance oracle.
+
+use nalgebra::Vector3;
+use wavemill::job::{self, Job};
+
+use super::{ClRow, Oracle, ac_ball_centre, read_ac_program};
+
+/// Issue 17 item 2: inside a run of cut poses the ball centre never steps back along the
+/// direction it was travelling: the projection of each step on the step before is never below
+/// −1e-6 mm (the planner's passes zig-zagged along themselves by up to 0.8 mm).
+pub fn passes_never_step_backwards(rows: &[ClRow], r: f64) {
+    let centre = |row: &ClRow| row.tip + row.axis * r;
+    let mut steps = 0;
+    for run in rows.split(|row| row.kind != "cut") {
+        for w in run.windows(3) {
+            let before = centre(&w[1]) - centre(&w[0]);
+            let step = centre(&w[2]) - centre(&w[1]);
+            if before.norm() == 0.0 {
+                continue;
+            }
+            steps += 1;
+            let along = step.dot(&before.normalize());
+            assert!(
+                along >= -1e-6,
+                "a cut step goes {along} mm back along its pass at {:?}",
+                w[2]
+            );
+        }
+    }
+    assert!(steps > 1000, "{steps} steps checked");
+}
+
+/// Issue 17 items 1, 3, 4: the program as posted and rounded, read back by the tests' own
+/// reader, interpolated in machine axes as the control does and turned into ball centres by
+/// the tests' own forward kinematics: along every feed block the ball stays within the
+/// tolerance of the part, along every rapid it keeps the shank margin. The samples are
+/// 0.02 mm apart along feed blocks (0.2 mm along rapids); the report's certified minimum, a
+/// lower bound for the whole curve, must not exceed what the samples find.
+pub fn posted_program_keeps_the_ball_within_the_tolerance(
+    out: &job::PlanOutput,
+    job: &Job,
+    oracle: &Oracle,
+) {
+    let r = job.tool.diameter / 2.0;
+    let origin = -Vector3::from(out.report.machine.pivot_in_part_frame);
+    let blocks = read_ac_program(&out.gcode);
+    assert!(blocks.len() > 1000, "{} blocks", blocks.len());
+    let (mut feed_min, mut rapid_min) = (f64::INFINITY, f64::INFINITY);
+    let mut samples = 0usize;
+    for w in blocks.windows(2) {
+        let (from, to) = (&w[0].axes, &w[1].axes);
+        let at = |t: f64| {
+            let joints: [f64; 5] = std::array::from_fn(|i| from[i] + (to[i] - from[i]) * t);
+            ac_ball_centre(&joints, r, &origin)
+        };
+        let length: f64 = (0..16)
+            .map(|k| (at((k + 1) as f64 / 16.0) - at(k as f64 / 16.0)).norm())
+            .sum();
+        let spacing = if w[1].rapid { 0.2 } else { 0.02 };
+        let n = (length / spacing).ceil().max(1.0) as usize;
+        for k in 1..=n {
+            let centre = at(k as f64 / n as f64);
+            let d = oracle.distance_below(&centre, r + 1.0) - r;
+            samples += 1;
+            if w[1].rapid {
+                rapid_min = rapid_min.min(d);
+            } else {
+                feed_min = feed_min.min(d);
+            }
+        }
+    }
+    let posted = out
+        .report
+        .posted
+        .as_ref()
+        .expect("back-simulation in the report");
+    let tolerance = job.strategy.tolerance;
+    assert!(
+        feed_min >= -tolerance,
+        "a posted feed move cuts {} mm into the part (tolerance {tolerance}, {samples} samples)",
+        -feed_min
+    );
+    assert!(
+        posted.min_feed_clearance_mm >= -tolerance
+            && posted.min_feed_clearance_mm <= feed_min + 1e-9,
+        "certified {} mm vs sampled {feed_min} mm",
+        posted.min_feed_clearance_mm
+    );
+    assert!(
+        rapid_min - 0.1 >= job.safety.shank_margin,
+        "a rapid passes {rapid_min} mm from the part (shank margin {})",
+        job.safety.shank_margin
+    );
+    assert!(posted.min_rapid_clearance_mm >= job.safety.shank_margin);
+    assert!(posted.problems.is_empty(), "{:?}", posted.problems);
+}
