@@ -519,6 +519,7 @@ fn hostile_values_are_refused_with_clear_errors() {
         ),
         (&["subdivide", part, "--levels", "9"], "--levels"),
         (&["offsets", part, "--allowances", "1,nan"], "--allowances"),
+        (&["sample", "impeller", "--blades", "0"], "--blades"),
     ] {
         let mut full = args.to_vec();
         full.extend(["--out", out]);

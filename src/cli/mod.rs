@@ -620,7 +620,13 @@ fn sample_part(args: &SampleArgs) -> Result<()> {
             SamplePart::Blade(p)
         }
     };
-    let (mesh, files) = sample_files(&part)?;
+    // Only --blades and --resolution can make the parameters invalid: a usage error.
+    let (mesh, files) = sample_files(&part).map_err(|e| match e {
+        Error::Sample(e @ sample::SampleError::InvalidParameter { .. }) => {
+            Error::Usage(format!("--blades / --resolution: {e}"))
+        }
+        other => other,
+    })?;
     std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
         path: args.out.display().to_string(),
         source,
