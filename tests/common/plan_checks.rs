@@ -44,6 +44,18 @@ pub fn posted_program_keeps_the_ball_within_the_tolerance(
 ) {
     let r = job.tool.diameter / 2.0;
     let origin = -Vector3::from(out.report.machine.pivot_in_part_frame);
+    // Issue 17 item 4: the first block moved X, Y, A and C before G43 set Z. Now the first
+    // block with an axis word switches length compensation on and moves Z alone.
+    let first = out
+        .gcode
+        .lines()
+        .map(|l| l.split('(').next().unwrap_or(""))
+        .find(|l| l.chars().any(|c| "XYZAC".contains(c)))
+        .expect("a motion block");
+    assert!(
+        first.contains("G43") && first.contains('Z') && !first.contains(['X', 'Y', 'A', 'C']),
+        "first motion block: {first}"
+    );
     let blocks = read_ac_program(&out.gcode);
     assert!(blocks.len() > 1000, "{} blocks", blocks.len());
     let (mut feed_min, mut rapid_min) = (f64::INFINITY, f64::INFINITY);
