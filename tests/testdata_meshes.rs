@@ -5,7 +5,7 @@
 mod common;
 
 use wavemill::mesh::io::{Units, read_mesh};
-use wavemill::mesh::{MeshReport, PrepareOptions, prepare};
+use wavemill::mesh::{MeshReport, PrepareOptions, prepare, prepare_without_stray_pieces};
 
 /// (file, units, documented triangles) from testdata/README.md.
 const MESHES: &[(&str, Units, usize)] = &[
@@ -244,4 +244,69 @@ fn cli_on_the_dirty_propeller() {
         text.contains("watertight       no") && text.contains("622 zero-area faces dropped"),
         "{text}"
     );
+}
+
+/// Issue 17 item 8: one triangle at (1e6, 1e6, 1e6) mm used to stretch the box-relative
+/// tolerances (weld 0.17 mm, minimum area 3 mm²) so far that 19,363 of the compressor's 25,278
+/// faces were dropped as "zero-area" and `access` went on with the wreck. The impeller must come through whole, with the triangle reported
+/// as one stray piece and set aside for planning.
+#[test]
+fn a_far_stray_triangle_leaves_the_compressor_whole() {
+    let Some(dir) = common::testdata() else {
+        return;
+    };
+    let src = dir.join("meshes/impeller_compressor_splitter__omorellAUS_Impellor-V3.stl");
+    let mut stl = std::fs::read(&src).unwrap();
+    // Binary STL: bump the facet count and append one facet (normal, 3 corners, attribute).
+    let count = u32::from_le_bytes(stl[80..84].try_into().unwrap());
+    stl[80..84].copy_from_slice(&(count + 1).to_le_bytes());
+    stl.extend_from_slice(&[0u8; 12]);
+    for p in [
+        [1e6f32, 1e6, 1e6],
+        [1e6 + 1.0, 1e6, 1e6],
+        [1e6, 1e6 + 1.0, 1e6],
+    ] {
+        for x in p {
+            stl.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    stl.extend_from_slice(&[0u8; 2]);
+    let tmp = std::env::temp_dir().join(format!("wavemill-stray-{}.stl", std::process::id()));
+    std::fs::write(&tmp, &stl).unwrap();
+
+    let options = PrepareOptions::default();
+    let alone = prepare(&read_mesh(&src, Units::Millimetres).unwrap().mesh, &options)
+        .unwrap()
+        .1;
+    let raw = read_mesh(&tmp, Units::Millimetres).unwrap();
+    let (_, r) = prepare(&raw.mesh, &options).unwrap();
+    assert_eq!(r.input_triangles, 25_279);
+    assert_eq!(r.dropped_zero_area_faces, 0, "{:?}", r.problems());
+    assert_eq!(r.triangles, alone.triangles + 1);
+    assert_eq!(r.stray_piece_count, 1);
+    assert_eq!(r.pieces[0].triangles, alone.triangles);
+    assert!(r.pieces[1].stray && r.pieces[1].triangles == 1);
+
+    let (part, kept, stray) = prepare_without_stray_pieces(&raw.mesh, &options).unwrap();
+    assert_eq!(part.triangles.len(), 25_278);
+    assert_eq!(kept.triangles, alone.triangles);
+    assert!(
+        kept.watertight && kept.genus == Some(1),
+        "{:?}",
+        kept.problems()
+    );
+    assert_eq!(kept.volume, alone.volume);
+    assert_eq!(stray.len(), 1);
+    assert_eq!(stray[0].bounding_box_min, [1e6, 1e6, 1e6]);
+
+    // `info` shows the piece; it exits 0 because describing a file is not refusing it.
+    let info = std::process::Command::new(env!("CARGO_BIN_EXE_wavemill"))
+        .args(["info", tmp.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert_eq!(info.status.code(), Some(0), "{text}");
+    assert!(text.contains("triangles        25279"), "{text}");
+    assert!(text.contains("1 stray pieces"), "{text}");
+    let _ = std::fs::remove_file(&tmp);
 }

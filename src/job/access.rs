@@ -29,7 +29,7 @@ use crate::collide::{Margins, PartCollider, PreparedTool};
 use crate::error::{Error, Result};
 use crate::geom::{Vector3, positive_zero};
 use crate::mesh::io::{GlbBuilder, RawMesh};
-use crate::mesh::{PrepareOptions, prepare};
+use crate::mesh::{Piece, PrepareOptions, prepare_without_stray_pieces};
 use crate::orient::{AxisChooser, AxisOptions};
 
 /// What `access` computes.
@@ -59,6 +59,8 @@ pub struct AccessReport {
     pub wavemill_version: &'static str,
     pub part: String,
     pub triangles: usize,
+    /// Stray debris of the file left out of the maps, largest first.
+    pub stray_pieces: Vec<Piece>,
     /// Vertices with a map (all but those whose normal is undefined).
     pub points: usize,
     pub skipped_vertices: usize,
@@ -148,7 +150,9 @@ pub fn access(
         reason,
     };
     let t = Instant::now();
-    let (part, _) = prepare(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+    // As `plan` does: stray debris is left out of the maps and reported.
+    let (part, _, stray_pieces) =
+        prepare_without_stray_pieces(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
     let prepare_ms = ms(t);
     let t = Instant::now();
     let scene = RayScene::new(&part);
@@ -222,6 +226,7 @@ pub fn access(
         wavemill_version: env!("CARGO_PKG_VERSION"),
         part: part_name.to_string(),
         triangles: part.triangles.len(),
+        stray_pieces,
         points: points.len(),
         skipped_vertices: part.positions.len() - points.len(),
         directions: options.directions,

@@ -16,7 +16,7 @@ use crate::collide::{Margins, PartCollider, PreparedTool, Table};
 use crate::error::{Error, Result};
 use crate::geom::{Point3, Vector3, positive_zero};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
-use crate::mesh::{Mesh, PrepareOptions, prepare};
+use crate::mesh::{Mesh, PrepareOptions, prepare_without_stray_pieces, set_aside_warning};
 use crate::multires::Hierarchy;
 use crate::orient::{AxisChooser, AxisOptions, SmoothingOptions};
 use crate::path::{
@@ -208,7 +208,10 @@ pub fn plan(
         ),
         None => raw.mesh.clone(),
     };
-    let (part, mesh_report) = prepare(&upright, &PrepareOptions::default()).map_err(mesh_error)?;
+    // Debris (a lone far triangle, a sliver shell) is set aside and reported, not planned:
+    // it would make the part open or stretch every size taken from its box (issue 17 item 8).
+    let (part, mesh_report, stray_pieces) =
+        prepare_without_stray_pieces(&upright, &PrepareOptions::default()).map_err(mesh_error)?;
     if !mesh_report.watertight {
         return Err(mesh_error(format!(
             "the part must be a closed, consistently oriented surface to tell inside from outside; found: {}",
@@ -534,9 +537,15 @@ pub fn plan(
             file: part_name.to_string(),
             units: units.to_string(),
             up: job.part.up,
-            warnings: raw.warnings.clone(),
+            warnings: raw
+                .warnings
+                .iter()
+                .cloned()
+                .chain(set_aside_warning(&stray_pieces))
+                .collect(),
             problems: mesh_report.problems(),
             mesh: mesh_report,
+            stray_pieces,
         },
         tool: ToolSummary {
             description: tool.describe(),

@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::mesh::MeshReport;
+use crate::mesh::{MeshReport, Piece};
 use crate::path::LinkReport;
 use crate::post::TimeEstimate;
 use crate::tool::ToolAssembly;
@@ -52,8 +52,12 @@ pub struct PartSummary {
     pub up: Option<[f64; 3]>,
     pub warnings: Vec<String>,
     pub problems: Vec<String>,
+    /// The part as planned: the file's figures without its stray pieces, except the counts of
+    /// what reading and cleaning met (see `mesh::prepare_without_stray_pieces`).
     #[serde(flatten)]
     pub mesh: MeshReport,
+    /// Stray debris of the file left out of planning, largest first (also a warning).
+    pub stray_pieces: Vec<Piece>,
 }
 
 /// The surface the passes were driven on (`[surface]` of the job).

@@ -17,7 +17,7 @@ use serde::Serialize;
 use super::output::{OutputKind, json_bytes, write_output_set};
 use crate::error::{Error, Result};
 use crate::mesh::io::{GlbBuilder, RawMesh};
-use crate::mesh::{PrepareOptions, prepare};
+use crate::mesh::{Piece, PrepareOptions, prepare_without_stray_pieces};
 use crate::tool::ToolLibrary;
 use crate::tool_choice::{ToolChoiceOptions, ToolChoiceReport, choose_tools};
 
@@ -29,6 +29,8 @@ pub struct ToolsReport {
     pub library: String,
     pub library_tools: usize,
     pub triangles: usize,
+    /// Stray debris of the file left out of the choice, largest first.
+    pub stray_pieces: Vec<Piece>,
     pub max_tilt_deg: f64,
     pub table: bool,
     /// Colour of each proposed tool in tools.glb, in the proposal's order (linear RGB).
@@ -83,7 +85,9 @@ pub fn tools(
         file: part_name.to_string(),
         reason,
     };
-    let (part, report) = prepare(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+    // As `plan` does: stray debris is left out of the choice and reported.
+    let (part, report, stray_pieces) =
+        prepare_without_stray_pieces(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
     if report.non_manifold_edges > 0 || report.boundary_edges > 0 {
         return Err(mesh_error(format!(
             "tool choice needs a closed manifold part (inside and outside must be defined): {}",
@@ -126,6 +130,7 @@ pub fn tools(
             library: library_name.to_string(),
             library_tools: library.tools.len(),
             triangles: part.triangles.len(),
+            stray_pieces,
             max_tilt_deg: options.max_tilt_deg,
             table: options.table_margin.is_some(),
             colours: legend,

@@ -4,17 +4,25 @@
 //! * [`weld`] merges duplicate vertices (every STL stores three copies of each vertex);
 //! * [`topology`] finds edges, boundaries, non-manifold places, components, genus, and makes the
 //!   winding consistent and outward where the surface allows it;
-//! * [`prepare`] runs those in order and returns the clean [`Mesh`] with a [`MeshReport`].
+//! * [`pieces`] lists the connected pieces and tells stray debris (tiny against the largest
+//!   piece) from the part;
+//! * [`prepare`] runs those in order and returns the clean [`Mesh`] with a [`MeshReport`];
+//!   [`prepare_without_stray_pieces`] also sets the stray pieces aside, for planning.
 //!
 //! Connectivity code never looks at positions except where a decision needs geometry (zero-area
 //! faces, the outward sign of a closed component): the same split spade and geometry-central make.
 
 pub mod io;
+pub mod pieces;
 mod prepare;
 pub mod topology;
 pub mod weld;
 
-pub use prepare::{MeshReport, PrepareOptions, UnitsGuess, prepare};
+pub use pieces::{Piece, PieceSplit, StrayPieceRule, set_aside_warning, split_stray_pieces};
+pub use prepare::{
+    MAX_LISTED_PIECES, MeshReport, PrepareOptions, UnitsGuess, prepare,
+    prepare_without_stray_pieces,
+};
 
 use crate::geom::{Aabb, Point3, Vector3, triangle_area, triangle_normal};
 

@@ -1,29 +1,101 @@
 //! From a raw triangle soup to the clean mesh the planner works on, with a report of what was
 //! found and fixed.
+//!
+//! Every tolerance here is absolute (mm) or judged per triangle from its own edges, never
+//! scaled by the part's bounding box: one stray triangle a kilometre away used to stretch the
+//! box a thousandfold, weld the real part's vertices together and drop three quarters of its
+//! faces as "zero-area" (issue 17 item 8). Stray pieces themselves are found by
+//! [`super::pieces`] and set aside by [`prepare_without_stray_pieces`].
 
 use serde::Serialize;
 
 use super::Mesh;
+use super::pieces::{Piece, StrayPieceRule, pieces_of, split_stray_pieces};
 use super::topology::{self, Topology};
 use super::weld::weld;
-use crate::geom::{triangle_area, triangle_normal};
+use crate::geom::{Point3, triangle_area, triangle_normal};
 
-/// Tolerances for [`prepare`], relative to the bounding-box diagonal so that they scale with
-/// the part.
+/// Pieces listed in a [`MeshReport`] (the largest); `components` counts all of them.
+pub const MAX_LISTED_PIECES: usize = 100;
+
+/// Tolerances for [`prepare`]. Lengths are in millimetres: meshes are prepared after reading,
+/// when they are already in mm. None depends on the part's overall size.
 #[derive(Clone, Copy, Debug)]
 pub struct PrepareOptions {
-    /// Vertices closer than this × diagonal are merged. Default 1e-7 (0.01 µm on a 100 mm part):
-    /// well below any machining tolerance, above the noise of f32 CAD exports.
+    /// Vertices closer than this (mm) are merged. Default 1e-4 mm (0.1 µm).
+    ///
+    /// Absolute, because welding decides whether two points are the same point, which is a
+    /// question of the file's precision and of the machining tolerance, both in mm, not of the
+    /// part's size. 0.1 µm is ten times below 1 µm (far below any finishing tolerance) and
+    /// above the rounding of f32 coordinates up to about 1 m from the origin (half an f32 step
+    /// is 3e-5 mm at 512–1024 mm). On every shared test mesh the closest distinct vertices are
+    /// more than 5e-4 mm apart (measured), so nothing real is merged.
     pub weld_tolerance: f64,
-    /// Faces with area below this × diagonal² are dropped. Default 1e-12.
-    pub min_area: f64,
+    /// A face is dropped as zero-area when its area is at most this × its own longest edge²
+    /// (dimensionless). Default 1e-12: the face's height is below 2e-12 × its longest edge, so
+    /// it is flat to rounding and its normal is noise.
+    ///
+    /// Judged per triangle from its own edges, so a face is judged by its shape wherever it
+    /// is and however big the rest is. Deliberately tight: dropping a face that still has
+    /// three distinct corners leaves a crack, so only faces without a usable normal go. On the
+    /// shared test meshes every dropped face has a repeated corner after welding, and the
+    /// flattest kept face has a ratio of 1.4e-5.
+    pub degenerate_ratio: f64,
+    /// Which pieces are stray debris ([`super::pieces`]); reported by [`prepare`], set aside
+    /// by [`prepare_without_stray_pieces`].
+    pub stray_pieces: StrayPieceRule,
 }
 
 impl Default for PrepareOptions {
     fn default() -> Self {
         Self {
-            weld_tolerance: 1e-7,
-            min_area: 1e-12,
+            weld_tolerance: 1e-4,
+            degenerate_ratio: 1e-12,
+            stray_pieces: StrayPieceRule::default(),
+        }
+    }
+}
+
+impl PrepareOptions {
+    pub fn with_weld_tolerance(self, weld_tolerance: f64) -> Self {
+        Self {
+            weld_tolerance,
+            ..self
+        }
+    }
+
+    pub fn with_degenerate_ratio(self, degenerate_ratio: f64) -> Self {
+        Self {
+            degenerate_ratio,
+            ..self
+        }
+    }
+
+    pub fn with_stray_pieces(self, stray_pieces: StrayPieceRule) -> Self {
+        Self {
+            stray_pieces,
+            ..self
+        }
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let fraction = self.stray_pieces.max_area_fraction;
+        if !(self.weld_tolerance.is_finite() && self.weld_tolerance >= 0.0) {
+            Err(format!(
+                "weld tolerance {} mm: must be a finite length ≥ 0",
+                self.weld_tolerance
+            ))
+        } else if !(self.degenerate_ratio.is_finite() && self.degenerate_ratio >= 0.0) {
+            Err(format!(
+                "degenerate ratio {}: must be finite and ≥ 0",
+                self.degenerate_ratio
+            ))
+        } else if !(0.0..=1.0).contains(&fraction) {
+            Err(format!(
+                "stray piece area fraction {fraction}: must be between 0 and 1"
+            ))
+        } else {
+            Ok(())
         }
     }
 }
@@ -57,6 +129,11 @@ pub struct MeshReport {
     pub volume: Option<f64>,
     pub surface_area: f64,
     pub units_guess: UnitsGuess,
+    /// Pieces that are stray debris by [`PrepareOptions::stray_pieces`] (tiny against the
+    /// largest piece); planning sets them aside.
+    pub stray_piece_count: usize,
+    /// The pieces, largest area first: all of them up to [`MAX_LISTED_PIECES`].
+    pub pieces: Vec<Piece>,
 }
 
 impl MeshReport {
@@ -108,6 +185,21 @@ impl MeshReport {
         if self.components > 1 {
             p.push(format!("{} separate pieces", self.components));
         }
+        if self.stray_piece_count > 0 {
+            let listed: Vec<&Piece> = self.pieces.iter().filter(|q| q.stray).collect();
+            let triangles: usize = listed.iter().map(|q| q.triangles).sum();
+            let area: f64 = listed.iter().map(|q| q.area).sum();
+            let shown = if listed.len() < self.stray_piece_count {
+                format!(" ({} listed)", listed.len())
+            } else {
+                String::new()
+            };
+            p.push(format!(
+                "{} stray pieces{shown}, tiny against the largest piece ({triangles} triangles, \
+                 {area:.4} mm² in all): planning leaves them out",
+                self.stray_piece_count
+            ));
+        }
         p
     }
 }
@@ -137,24 +229,34 @@ impl UnitsGuess {
 }
 
 /// Welds, drops zero-area and duplicate faces, repairs the winding where the surface is
-/// orientable and turns closed components outward. Never fails on topology: problems are
-/// reported, and the caller decides what it can work with.
+/// orientable and turns closed components outward; lists the pieces and marks the stray ones.
+/// Never fails on topology: problems are reported, and the caller decides what it can work
+/// with.
 pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport), String> {
+    options.validate()?;
     raw.check_indices_and_coordinates()?;
     if raw.triangles.is_empty() {
         return Err("the file has no triangles".into());
     }
-    let diagonal = raw.aabb().diagonal();
-    let welded = weld(raw, options.weld_tolerance * diagonal).mesh;
+    let welded = weld(raw, options.weld_tolerance).mesh;
 
-    let min_area = options.min_area * diagonal * diagonal;
+    let degenerate = |a: Point3, b: Point3, c: Point3| {
+        let longest: f64 = [
+            (b - a).norm_squared(),
+            (c - b).norm_squared(),
+            (a - c).norm_squared(),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
+        triangle_area(&a, &b, &c) <= options.degenerate_ratio * longest
+    };
     let mut zero_area = 0;
     let mut duplicates = 0;
     let mut seen = std::collections::HashSet::new();
     let mut triangles = Vec::with_capacity(welded.triangles.len());
     for t in &welded.triangles {
         let [a, b, c] = t.map(|i| welded.positions[i as usize]);
-        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || triangle_area(&a, &b, &c) <= min_area {
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || degenerate(a, b, c) {
             zero_area += 1;
             continue;
         }
@@ -184,7 +286,12 @@ pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport
 
     let topo = Topology::analyse(&triangles, positions.len());
     let outward = |tris: &[[u32; 3]], faces: &[u32]| {
-        let o = raw.aabb().center();
+        // Signed volume about a corner of the component itself, so that nothing far away
+        // (another piece) costs digits.
+        let Some(&first) = faces.first() else {
+            return true;
+        };
+        let o = positions[tris[first as usize][0] as usize];
         let v: f64 = faces
             .iter()
             .map(|&f| {
@@ -202,6 +309,9 @@ pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport
     };
     let watertight = topo.is_closed_manifold() && orientation.non_orientable_components == 0;
     let aabb = mesh.aabb();
+    let (mut pieces, _) = pieces_of(&mesh, &topo, &options.stray_pieces);
+    let stray_piece_count = pieces.iter().filter(|p| p.stray).count();
+    pieces.truncate(MAX_LISTED_PIECES);
     let report = MeshReport {
         input_triangles: raw.triangles.len(),
         input_vertices: raw.positions.len(),
@@ -224,12 +334,40 @@ pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport
         volume: watertight.then(|| mesh.signed_volume()),
         surface_area: mesh.surface_area(),
         units_guess: UnitsGuess::from_diagonal(aabb.diagonal()),
+        stray_piece_count,
+        pieces,
     };
     debug_assert!(mesh.triangles.iter().all(|t| {
         let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
         triangle_normal(&a, &b, &c).norm() > 0.0
     }));
     Ok((mesh, report))
+}
+
+/// [`prepare`], then the stray pieces set aside: what planning works on. Returns the part
+/// without them, its report, and the pieces left out (all of them, largest first).
+///
+/// The report describes the part as it will be planned (watertight, genus, volume, box of
+/// the kept pieces), except the counts of what reading and cleaning met, which are of the
+/// whole file: input triangles and vertices, dropped faces, inconsistent edges, flipped faces.
+pub fn prepare_without_stray_pieces(
+    raw: &Mesh,
+    options: &PrepareOptions,
+) -> Result<(Mesh, MeshReport, Vec<Piece>), String> {
+    let (whole, report) = prepare(raw, options)?;
+    if report.stray_piece_count == 0 {
+        return Ok((whole, report, Vec::new()));
+    }
+    let split = split_stray_pieces(&whole, &options.stray_pieces);
+    // `whole` is welded, clean and oriented, so this only re-analyses what is left.
+    let (part, mut kept) = prepare(&split.main, options)?;
+    kept.input_triangles = report.input_triangles;
+    kept.input_vertices = report.input_vertices;
+    kept.dropped_zero_area_faces = report.dropped_zero_area_faces;
+    kept.dropped_duplicate_faces = report.dropped_duplicate_faces;
+    kept.inconsistent_edges = report.inconsistent_edges;
+    kept.flipped_faces = report.flipped_faces;
+    Ok((part, kept, split.stray))
 }
 
 #[cfg(test)]
@@ -266,6 +404,81 @@ mod tests {
         assert!(r.watertight);
         assert!(out.signed_volume() > 0.0);
         assert_eq!(r.flipped_faces, out.triangles.len());
+    }
+
+    /// A mesh plus one triangle with 0.01 mm legs near (1e6, 0, 0) mm.
+    fn with_far_triangle(mut m: Mesh) -> Mesh {
+        let base = m.positions.len() as u32;
+        m.positions.extend([
+            Point3::new(1e6, 0.0, 0.0),
+            Point3::new(1e6 + 0.01, 0.0, 0.0),
+            Point3::new(1e6, 0.01, 0.0),
+        ]);
+        m.triangles.push([base, base + 1, base + 2]);
+        m
+    }
+
+    /// Issue 17 item 8: tolerances scaled by the bounding box let a far triangle weld a small
+    /// part's vertices together (0.17 mm with the triangle 1 km away) and drop its faces.
+    #[test]
+    fn a_far_triangle_does_not_change_how_the_part_is_cleaned() {
+        // A 2 mm sphere: edges about 0.1 mm, corners near the poles closer still.
+        let sphere = uv_sphere(1.0, 32, 64);
+        let (alone, alone_report) = prepare(&sphere, &PrepareOptions::default()).unwrap();
+        let (both, r) = prepare(&with_far_triangle(sphere), &PrepareOptions::default()).unwrap();
+        assert_eq!(
+            r.dropped_zero_area_faces,
+            alone_report.dropped_zero_area_faces
+        );
+        assert_eq!(r.triangles, alone.triangles.len() + 1);
+        assert_eq!(r.vertices, alone.positions.len() + 3);
+        assert_eq!(r.components, 2);
+        assert_eq!(r.stray_piece_count, 1);
+        assert!(!r.watertight, "the stray triangle is open");
+        assert!(r.problems().iter().any(|p| p.contains("1 stray pieces")));
+        assert_eq!(r.pieces.len(), 2);
+        assert!(!r.pieces[0].stray && r.pieces[1].stray);
+        assert_eq!(r.pieces[0].triangles, alone.triangles.len());
+
+        // Set aside, the part is the sphere as prepared alone, with its report.
+        let (part, kept, stray) =
+            prepare_without_stray_pieces(&both, &PrepareOptions::default()).unwrap();
+        assert_eq!(part, alone);
+        assert!(kept.watertight && kept.genus == Some(0));
+        assert_eq!(kept.stray_piece_count, 0);
+        assert_eq!(kept.volume, alone_report.volume);
+        assert_eq!(stray.len(), 1);
+        assert_eq!(stray[0].triangles, 1);
+        assert_eq!(stray[0].bounding_box_min, [1e6, 0.0, 0.0]);
+    }
+
+    /// The same part a kilometre from the origin is cleaned the same way (the degenerate test
+    /// is per triangle, the weld tolerance in mm).
+    #[test]
+    fn translation_far_away_changes_nothing() {
+        let m = torus(20.0, 5.0, 48, 24);
+        let mut far = m.clone();
+        for p in &mut far.positions {
+            p.x += 1e6;
+        }
+        let (_, a) = prepare(&m, &PrepareOptions::default()).unwrap();
+        let (_, b) = prepare(&far, &PrepareOptions::default()).unwrap();
+        assert_eq!((a.triangles, a.vertices), (b.triangles, b.vertices));
+        assert!(b.watertight && b.genus == Some(1));
+        assert!((a.volume.unwrap() - b.volume.unwrap()).abs() < 1e-6 * a.volume.unwrap());
+    }
+
+    #[test]
+    fn bad_options_are_refused() {
+        let m = torus(20.0, 5.0, 12, 6);
+        for o in [
+            PrepareOptions::default().with_weld_tolerance(-1.0),
+            PrepareOptions::default().with_degenerate_ratio(f64::NAN),
+            PrepareOptions::default()
+                .with_stray_pieces(StrayPieceRule::default().with_max_area_fraction(2.0)),
+        ] {
+            assert!(prepare(&m, &o).is_err());
+        }
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! Merging vertices closer than a tolerance.
 //!
 //! STL stores three copies of every vertex, and CAD exporters write coordinates that differ in
-//! the last bits. The tolerance is relative to the bounding-box diagonal, so it means the same
-//! thing for a 5 mm part and a 500 mm part.
+//! the last bits. The tolerance is a length in mm, the same wherever the vertex is and however
+//! far the rest of the mesh reaches (see [`super::PrepareOptions::weld_tolerance`]).
 
 use std::collections::HashMap;
 

@@ -5,7 +5,16 @@
 //! and length checked against the bytes really present, because the crate's own GLB header
 //! and accessor readers trust the file (they panic or slice out of bounds on lying lengths),
 //! and its validator indexes POSITION accessors unchecked, so those indices are checked first.
-//! Reading accessors here also gives quantized positions (`KHR_mesh_quantization`) for free.
+//! Reading accessors here also gives quantized positions (`KHR_mesh_quantization`): integer
+//! POSITION accessors are decoded when the file declares that extension and refused otherwise
+//! (the core spec allows only FLOAT VEC3, and bytes read as coordinates are garbage).
+//!
+//! Files the part refers to are untrusted input too: buffers are read only from data URIs,
+//! the GLB BIN chunk, or relative paths that resolve (after percent-decoding and
+//! canonicalising, so through `..` and symlinks) to a regular file inside the part file's
+//! folder. Absolute paths, `file:` and other schemes, escapes from the folder, FIFOs, devices
+//! and directories are refused before anything is opened, and errors name the URI, never the
+//! bytes of what it points at. Images are never read (only geometry is loaded).
 //!
 //! What is loaded: every triangle primitive (`TRIANGLES`, `TRIANGLE_STRIP`, `TRIANGLE_FAN`)
 //! of every node of the default scene (else the first scene, else every root node), placed
@@ -16,7 +25,7 @@
 use std::borrow::Cow;
 use std::collections::BTreeSet;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::mesh::Mode;
@@ -73,6 +82,13 @@ pub(super) fn read_gltf(
             }
         }
     }
+    // Integer positions are only meaningful under KHR_mesh_quantization (a file that declares
+    // it must at least list it as used).
+    let quantized_positions = root
+        .extensions_used
+        .iter()
+        .chain(&root.extensions_required)
+        .any(|e| e.as_str() == "KHR_mesh_quantization");
     // Supported by the accessor reader below, unknown to the crate's validator.
     root.extensions_required
         .retain(|e| e.as_str() != "KHR_mesh_quantization");
@@ -114,6 +130,7 @@ pub(super) fn read_gltf(
                 here: &here,
                 buffers: &buffers,
                 input_len,
+                quantized_positions,
             };
             let Some(pos) = prim.get(&::gltf::Semantic::Positions) else {
                 return Err(invalid(format!("{here}: no POSITION attribute")));
@@ -423,8 +440,9 @@ fn excerpt_uri(uri: &str) -> String {
     }
 }
 
-/// The bytes of a buffer URI: a base64 data URI, or a file relative to `base_dir`. Reads at
-/// most `want` bytes and refuses files shorter than that before reading them.
+/// The bytes of a buffer URI: a base64 data URI, or a regular file inside `base_dir` (see
+/// [`resolve_inside`]). Reads at most `want` bytes and refuses files shorter than that before
+/// reading them. Messages name paths, never what a file contains.
 fn read_uri(uri: &str, want: usize, base_dir: Option<&Path>) -> Result<Cow<'static, [u8]>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((_, payload)) = rest.split_once(";base64,") else {
@@ -440,22 +458,20 @@ fn read_uri(uri: &str, want: usize, base_dir: Option<&Path>) -> Result<Cow<'stat
             .map(Cow::Owned)
             .map_err(|e| format!("bad base64: {e}"));
     }
-    if let Some((scheme, _)) = uri.split_once("://")
-        && scheme != "file"
-    {
-        return Err(format!("unsupported URI scheme '{scheme}'"));
-    }
-    let rel = percent_decode(uri.strip_prefix("file://").unwrap_or(uri));
     let dir = base_dir.ok_or_else(|| {
         "external buffer, but no directory to look in (reading from memory)".to_owned()
     })?;
-    let path = dir.join(rel);
+    let path = resolve_inside(uri, dir)?;
     let shown = path.display();
     let file = std::fs::File::open(&path).map_err(|e| format!("cannot open {shown}: {e}"))?;
-    let have = file
+    let meta = file
         .metadata()
-        .map_err(|e| format!("cannot read {shown}: {e}"))?
-        .len();
+        .map_err(|e| format!("cannot read {shown}: {e}"))?;
+    // Checked again on the open file: it may have been replaced since `resolve_inside`.
+    if !meta.is_file() {
+        return Err(format!("{shown} is not a regular file"));
+    }
+    let have = meta.len();
     if have < want as u64 {
         return Err(format!(
             "{shown} has {have} bytes, but byteLength is {want}"
@@ -466,6 +482,95 @@ fn read_uri(uri: &str, want: usize, base_dir: Option<&Path>) -> Result<Cow<'stat
         .read_to_end(&mut data)
         .map_err(|e| format!("cannot read {shown}: {e}"))?;
     Ok(Cow::Owned(data))
+}
+
+/// The file a relative URI reference names inside `dir`, canonical, checked to be a regular
+/// file there without opening it.
+///
+/// A part file is often handed over by someone else, and `wavemill` may run where it can read
+/// more than that person should see: a URI must not reach `/etc/passwd`, a sibling project or
+/// a FIFO that blocks the reader forever. So URIs with a scheme (`file:`, `http:`, and `C:`,
+/// which parses as one) and absolute paths are refused; the rest is percent-decoded, joined to
+/// `dir` and canonicalised, which resolves `..` and symlinks, and must still lie inside the
+/// canonical `dir`; and it must be a regular file (metadata is read before opening, since
+/// opening a FIFO already blocks). A file swapped for a FIFO between that check and the open
+/// is not guarded against.
+fn resolve_inside(uri: &str, dir: &Path) -> Result<PathBuf, String> {
+    // RFC 3986 §4.2: a relative reference's first segment has no ':', so a ':' before any '/'
+    // means a scheme.
+    if let Some(colon) = uri.find(':')
+        && !uri[..colon].contains('/')
+    {
+        return Err(format!(
+            "'{}:' URIs are not read: only data URIs and paths relative to the glTF file's folder",
+            &uri[..colon]
+        ));
+    }
+    let decoded = percent_decode(uri);
+    if decoded.contains('\0') {
+        return Err("the path contains a NUL byte".to_owned());
+    }
+    let rel = Path::new(&decoded);
+    if decoded.starts_with('/') || decoded.starts_with('\\') || rel.has_root() {
+        return Err(
+            "absolute paths are not read: only paths relative to the glTF file's folder".to_owned(),
+        );
+    }
+    // `Path::parent` of a bare file name is "", which canonicalize does not accept.
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let folder = dir.canonicalize().map_err(|e| {
+        format!(
+            "cannot resolve the glTF file's folder {}: {e}",
+            dir.display()
+        )
+    })?;
+    let joined = folder.join(rel);
+    let path = joined
+        .canonicalize()
+        .map_err(|e| format!("cannot open {}: {e}", joined.display()))?;
+    if !path.starts_with(&folder) {
+        return Err(format!(
+            "resolves to {}, outside the glTF file's folder {}",
+            path.display(),
+            folder.display()
+        ));
+    }
+    let meta =
+        std::fs::metadata(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    if !meta.is_file() {
+        return Err(format!(
+            "{} is {}, not a regular file",
+            path.display(),
+            file_kind(&meta.file_type())
+        ));
+    }
+    Ok(path)
+}
+
+/// What a non-regular file is, for messages.
+fn file_kind(ty: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt as _;
+        if ty.is_fifo() {
+            return "a FIFO";
+        }
+        if ty.is_char_device() || ty.is_block_device() {
+            return "a device";
+        }
+        if ty.is_socket() {
+            return "a socket";
+        }
+    }
+    if ty.is_dir() {
+        "a directory"
+    } else {
+        "a special file"
+    }
 }
 
 /// `%20` → space etc.; malformed escapes are kept as they are.
@@ -546,6 +651,8 @@ struct Ctx<'a, 'b> {
     here: &'a str,
     buffers: &'a [Option<Cow<'b, [u8]>>],
     input_len: usize,
+    /// The file declares `KHR_mesh_quantization`: integer POSITION accessors are allowed.
+    quantized_positions: bool,
 }
 
 impl Ctx<'_, '_> {
@@ -557,11 +664,31 @@ impl Ctx<'_, '_> {
         }
     }
 
+    /// POSITION is FLOAT VEC3 (glTF 2.0 §3.7.2.1); with `KHR_mesh_quantization` also BYTE,
+    /// UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT, normalized or not, which [`component`] decodes
+    /// as that extension says (the node transform then dequantizes).
     fn read_positions(&self, acc: &Accessor) -> Result<Vec<Point3<f64>>, MeshIoError> {
-        if acc.dimensions() != Dimensions::Vec3 {
+        let ty = acc.data_type();
+        let allowed = match ty {
+            DataType::F32 => !acc.normalized(),
+            DataType::I8 | DataType::U8 | DataType::I16 | DataType::U16 => self.quantized_positions,
+            DataType::U32 => false,
+        };
+        if acc.dimensions() != Dimensions::Vec3 || !allowed {
+            let hint = if self.quantized_positions {
+                "FLOAT, or BYTE/UNSIGNED_BYTE/SHORT/UNSIGNED_SHORT under KHR_mesh_quantization"
+            } else {
+                "FLOAT (integer types need the KHR_mesh_quantization extension, \
+                 which the file does not declare)"
+            };
             return Err(self.err(
                 acc.index(),
-                format!("POSITION must be VEC3, not {:?}", acc.dimensions()),
+                format!(
+                    "POSITION is declared {}{} {}, but must be VEC3 of {hint}",
+                    if acc.normalized() { "normalized " } else { "" },
+                    component_type_name(ty),
+                    dimensions_name(acc.dimensions()),
+                ),
             ));
         }
         let flat = self.read(acc)?;
@@ -581,9 +708,10 @@ impl Ctx<'_, '_> {
             return Err(self.err(
                 acc.index(),
                 format!(
-                    "indices must be unsigned integer scalars, not {:?} {:?}",
-                    acc.data_type(),
-                    acc.dimensions()
+                    "indices are declared {} {}, but must be SCALAR of UNSIGNED_BYTE, \
+                     UNSIGNED_SHORT or UNSIGNED_INT",
+                    component_type_name(acc.data_type()),
+                    dimensions_name(acc.dimensions())
                 ),
             ));
         }
@@ -737,4 +865,29 @@ fn component(data: &[u8], at: usize, ty: DataType, normalized: bool) -> Option<f
         DataType::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
         DataType::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
     })
+}
+
+/// The glTF name of a component type, as a file's author would look it up.
+fn component_type_name(ty: DataType) -> &'static str {
+    match ty {
+        DataType::I8 => "BYTE (5120)",
+        DataType::U8 => "UNSIGNED_BYTE (5121)",
+        DataType::I16 => "SHORT (5122)",
+        DataType::U16 => "UNSIGNED_SHORT (5123)",
+        DataType::U32 => "UNSIGNED_INT (5125)",
+        DataType::F32 => "FLOAT (5126)",
+    }
+}
+
+/// The glTF name of an accessor type.
+fn dimensions_name(d: Dimensions) -> &'static str {
+    match d {
+        Dimensions::Scalar => "SCALAR",
+        Dimensions::Vec2 => "VEC2",
+        Dimensions::Vec3 => "VEC3",
+        Dimensions::Vec4 => "VEC4",
+        Dimensions::Mat2 => "MAT2",
+        Dimensions::Mat3 => "MAT3",
+        Dimensions::Mat4 => "MAT4",
+    }
 }

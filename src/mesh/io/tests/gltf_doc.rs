@@ -68,6 +68,26 @@ impl Doc {
         self.accessors.len() - 1
     }
 
+    /// An accessor over `bytes` as given, declared with `componentType` and `type` and no
+    /// extension: for files that declare one thing and store another.
+    pub fn raw_accessor(
+        &mut self,
+        bytes: &[u8],
+        component_type: u32,
+        ty: &str,
+        count: usize,
+        stride: Option<usize>,
+    ) -> usize {
+        let view = self.view(bytes);
+        if let Some(stride) = stride {
+            self.views[view]["byteStride"] = json!(stride);
+        }
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": component_type, "count": count, "type": ty
+        }));
+        self.accessors.len() - 1
+    }
+
     /// Replaces vertex `index` of a positions accessor through a sparse substitution.
     pub fn sparse_replace(&mut self, accessor: usize, index: u16, value: [f32; 3]) {
         let iview = self.view(&index.to_le_bytes());

@@ -10,6 +10,7 @@ use crate::mesh::Mesh;
 mod api;
 mod fuzz;
 mod gltf_doc;
+mod gltf_uris;
 mod read_gltf;
 mod read_obj;
 mod read_stl;

@@ -406,3 +406,95 @@ fn glb_read_as_gltf_and_back_agree() {
     let b = load(&d.gltf_data_uri(), Format::Glb).unwrap();
     assert_eq!(soup(&a.mesh), soup(&b.mesh));
 }
+
+/// Issue 17 item 13: POSITION declared UNSIGNED_BYTE (the bytes of f32 coordinates read one by
+/// one) loaded as a garbage mesh. The core spec allows only FLOAT VEC3.
+#[test]
+fn integer_positions_without_quantization_are_refused_naming_the_type() {
+    let (pts, idx) = tetra_arrays();
+    let floats: Vec<u8> = pts.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let build = |quantization: bool| {
+        let mut d = Doc::default();
+        // 12 bytes per vertex read as 3 bytes + 9 bytes of stride: 4 "vertices".
+        let p = d.raw_accessor(&floats, 5121, "VEC3", 4, Some(12));
+        d.accessors[p]["min"] = json!([0, 0, 0]); // the validator wants bounds on POSITION
+        d.accessors[p]["max"] = json!([255, 255, 255]);
+        let i = d.indices_u16(&idx);
+        d.mesh(vec![Doc::prim(p, Some(i), 4)]);
+        d.node(json!({ "mesh": 0 }));
+        d.scenes = Some(vec![vec![0]]);
+        if quantization {
+            d.extensions_required.push("KHR_mesh_quantization");
+        }
+        d
+    };
+    let msg = load(&build(false).gltf_data_uri(), Format::Gltf)
+        .unwrap_err()
+        .to_string();
+    for needle in [
+        "test.gltf",
+        "mesh 0 primitive 0",
+        "POSITION",
+        "UNSIGNED_BYTE",
+        "KHR_mesh_quantization",
+    ] {
+        assert!(msg.contains(needle), "`{needle}` missing in: {msg}");
+    }
+    // Declared under KHR_mesh_quantization, the same bytes are what the file says they are:
+    // unnormalized u8 coordinates.
+    let got = load(&build(true).gltf_data_uri(), Format::Gltf).unwrap();
+    for (k, p) in got.mesh.positions.iter().enumerate() {
+        let b = &floats[12 * k..12 * k + 3];
+        assert_eq!(
+            *p,
+            Point3::new(f64::from(b[0]), f64::from(b[1]), f64::from(b[2]))
+        );
+    }
+    // UNSIGNED_INT is not a position type even under the extension; nor is VEC2 or VEC4.
+    for (ty, dims, stride) in [(5125, "VEC3", 12), (5126, "VEC2", 12), (5126, "VEC4", 16)] {
+        let mut d = Doc::default();
+        let bytes = vec![0u8; 4 * stride];
+        let p = d.raw_accessor(&bytes, ty, dims, 4, Some(stride));
+        let n = usize::from(dims.as_bytes()[3] - b'0');
+        d.accessors[p]["min"] = json!(vec![0; n]);
+        d.accessors[p]["max"] = json!(vec![0; n]);
+        d.mesh(vec![Doc::prim(p, None, 4)]);
+        d.node(json!({ "mesh": 0 }));
+        d.scenes = Some(vec![vec![0]]);
+        d.extensions_required.push("KHR_mesh_quantization");
+        let msg = load(&d.glb(), Format::Glb).unwrap_err().to_string();
+        // (the crate's validator already refuses VEC2 and VEC4 bounds on POSITION)
+        assert!(
+            msg.contains("test.gltf") && msg.contains("POSITION"),
+            "{msg}"
+        );
+        if ty == 5125 {
+            assert!(msg.contains("declared UNSIGNED_INT (5125) VEC3"), "{msg}");
+        }
+    }
+}
+
+#[test]
+fn index_accessors_must_be_unsigned_integer_scalars() {
+    let (pts, _) = tetra_arrays();
+    for (ty, dims, bytes) in [
+        (5126, "SCALAR", 1.0f32.to_le_bytes().repeat(3)), // FLOAT
+        (5122, "SCALAR", [1u8, 0].repeat(3)),             // SHORT (signed)
+        (5123, "VEC3", [1u8, 0].repeat(3)),               // UNSIGNED_SHORT, but VEC3
+    ] {
+        let mut d = Doc::default();
+        let p = d.positions(&pts);
+        let count = if dims == "VEC3" { 1 } else { 3 };
+        let i = d.raw_accessor(&bytes, ty, dims, count, None);
+        d.mesh(vec![Doc::prim(p, Some(i), 4)]);
+        d.node(json!({ "mesh": 0 }));
+        d.scenes = Some(vec![vec![0]]);
+        let msg = load(&d.gltf_data_uri(), Format::Gltf)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("test.gltf") && msg.contains("indices are declared") && msg.contains(dims),
+            "{msg}"
+        );
+    }
+}
