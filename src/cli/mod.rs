@@ -162,6 +162,10 @@ pub struct ContourArgs {
     /// Leave the run-dependent timings out of compare.json (byte-identical outputs).
     #[arg(long)]
     pub no_timings: bool,
+    /// Refuse a run estimated to need more offset levels than this (the stock's extent over
+    /// the stepover; each level offsets the whole part), before planning anything.
+    #[arg(long, default_value_t = job::DEFAULT_MAX_LEVELS)]
+    pub max_levels: usize,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -481,6 +485,7 @@ fn contour(args: &ContourArgs) -> Result<()> {
         Direction::Mixed => crate::contour::CutDirection::Mixed,
     };
     options.timings = !args.no_timings;
+    options.max_levels = args.max_levels;
     let figures_line = |name: &str, f: &job::MethodFigures| {
         say!(
             "{name:>16}: {:9.1} mm cut, {:6} blocks, {:7.2} min, uncut {:8.2} mm², clearance − r {:+.6} mm, spacing ≤ {:.3} mm, engagement mean {:.2} / max {:.2} mm",

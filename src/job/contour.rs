@@ -39,6 +39,15 @@ const MESH_EXTENSIONS: [&str; 4] = ["stl", "obj", "gltf", "glb"];
 /// The part and a stock outline must stay this far apart, mm (they must not touch).
 const STOCK_GAP: f64 = 1e-9;
 
+/// Largest coordinate accepted, mm (1000 km): no machine is near that size, and beyond it the
+/// round-off of f64 coordinates (≈ 1e-7 mm) approaches the planners' tolerances. Anything
+/// larger is an absurd scale or transform, refused naming the file.
+const MAX_COORDINATE_MM: f64 = 1e9;
+
+/// Default of [`ContourJobOptions::max_levels`]: 10,000 offset levels reach 24 m of stock
+/// at a 2.4 mm stepover; the test outlines need fewer than 100.
+pub const DEFAULT_MAX_LEVELS: usize = 10_000;
+
 /// The stock the region to machine is cut from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum StockSpec {
@@ -84,6 +93,9 @@ pub struct ContourJobOptions {
     pub machine: MachineParams,
     /// Keep the run-dependent `timings_ms` in `compare.json`.
     pub timings: bool,
+    /// Largest number of offset levels (stock extent over stepover) a run may plan; a larger
+    /// estimate is refused before any planning with [`Error::TooLarge`].
+    pub max_levels: usize,
 }
 
 impl ContourJobOptions {
@@ -101,6 +113,7 @@ impl ContourJobOptions {
             direction: CutDirection::default(),
             machine: MachineParams::default(),
             timings: true,
+            max_levels: DEFAULT_MAX_LEVELS,
         }
     }
 }
@@ -108,7 +121,7 @@ impl ContourJobOptions {
 /// Parses `flat:D` (D in mm > 0) into the tool diameter.
 pub fn parse_flat_tool(spec: &str) -> Result<f64> {
     let bad = || {
-        Error::Job(format!(
+        Error::Usage(format!(
             "--tool {spec}: expected flat:D with D > 0 mm (e.g. flat:6)"
         ))
     };
@@ -123,7 +136,7 @@ pub fn parse_flat_tool(spec: &str) -> Result<f64> {
 /// Parses `margin:M` (M in mm ≥ 0) or `outline:FILE` (an SVG or DXF file) into the stock.
 pub fn parse_stock(spec: &str) -> Result<StockSpec> {
     let bad = || {
-        Error::Job(format!(
+        Error::Usage(format!(
             "--stock {spec}: expected margin:M with M ≥ 0 mm (e.g. margin:10) or \
              outline:FILE with an .svg or .dxf file"
         ))
@@ -320,19 +333,32 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
     let file = outline.display().to_string();
     let d = opts.tool_diameter;
     if !(d.is_finite() && d > 0.0) {
-        return Err(Error::Job(format!("tool diameter {d}: must be > 0 mm")));
+        return Err(Error::Usage(format!("tool diameter {d}: must be > 0 mm")));
     }
     let s = opts.stepover.unwrap_or(0.4 * d);
     if !(s.is_finite() && s > 0.0 && s <= d) {
-        return Err(Error::Job(format!(
+        return Err(Error::Usage(format!(
             "--stepover {s}: must satisfy 0 < stepover ≤ tool diameter {d}"
         )));
     }
     if let Some(b) = opts.band
         && !(b.is_finite() && b >= 0.0)
     {
-        return Err(Error::Job(format!(
+        return Err(Error::Usage(format!(
             "--band {b}: must be a finite number of mm ≥ 0"
+        )));
+    }
+    if !(opts.scale.is_finite() && opts.scale > 0.0) {
+        return Err(Error::Usage(format!(
+            "--scale {}: must be a positive finite number (mm per outline unit)",
+            opts.scale
+        )));
+    }
+    if let StockSpec::Margin(margin) = &opts.stock
+        && !(margin.is_finite() && *margin >= 0.0)
+    {
+        return Err(Error::Usage(format!(
+            "--stock margin:{margin}: the margin must be ≥ 0 mm"
         )));
     }
     let t = Instant::now();
@@ -342,13 +368,8 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
     };
     let (part, z) = read_part(outline, opts, &outline_opts)?;
     let stock = match &opts.stock {
-        StockSpec::Margin(margin) => {
-            if !(margin.is_finite() && *margin >= 0.0) {
-                return Err(Error::Job(format!("stock margin {margin}: must be ≥ 0 mm")));
-            }
-            stock_around(&part, *margin)
-                .ok_or_else(|| Error::Job(format!("{file}: the outline has no points")))?
-        }
+        StockSpec::Margin(margin) => stock_around(&part, *margin)
+            .ok_or_else(|| Error::Job(format!("{file}: the outline has no points")))?,
         StockSpec::Outline(path) => {
             let stock = read_outline(path, &outline_opts).map_err(|e| Error::Job(e.to_string()))?;
             check_inside(&part, &stock, STOCK_GAP).map_err(|e| {
@@ -364,7 +385,10 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
             stock
         }
     };
+    check_coordinates(&part, &file)?;
+    check_coordinates(&stock, &file)?;
     let bounds = stock_bounds(&stock);
+    check_levels(&file, bounds, s, opts.max_levels)?;
     Ok(Prepared {
         file,
         part,
@@ -375,6 +399,58 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
         read_ms: ms(t),
         z,
     })
+}
+
+/// Refuses coordinates that are not finite or beyond [`MAX_COORDINATE_MM`] (an absurd
+/// `--scale` or SVG transform), naming the file.
+fn check_coordinates(shape: &Shape, file: &str) -> Result<()> {
+    let largest = shape
+        .contours
+        .iter()
+        .flat_map(|c| &c.vertices)
+        .map(|v| v.point.x.abs().max(v.point.y.abs()))
+        .fold(
+            0.0,
+            |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
+        );
+    if largest <= MAX_COORDINATE_MM {
+        return Ok(());
+    }
+    Err(Error::Job(format!(
+        "{file}: coordinates reach {largest:.3e} mm, beyond {MAX_COORDINATE_MM:.0e} mm (no \
+         machine is that large); check --scale and the file's units and transforms"
+    )))
+}
+
+/// Refuses a run whose offset levels — the stock's extent over the stepover, the passes each
+/// planner makes outward from the part — are estimated above `max_levels`, before any of them
+/// is computed (each is an offset of the whole part, so work and memory grow with them).
+fn check_levels(file: &str, bounds: (Point2, Point2), s: f64, max_levels: usize) -> Result<()> {
+    let extent = (bounds.1 - bounds.0).norm();
+    let levels = (extent / s).ceil() + 1.0;
+    if levels <= max_levels as f64 {
+        return Ok(());
+    }
+    Err(Error::TooLarge {
+        what: format!("{file}: a stock {extent:.4e} mm across at a stepover of {s} mm"),
+        estimate: format!("{levels:.3e} offset levels"),
+        limit: format!("{max_levels} levels"),
+        how_to_raise: "check --scale and the stepover, or raise the limit with --max-levels N"
+            .into(),
+    })
+}
+
+/// Refuses a path without a cutting pass: the stock leaves nothing to machine around the
+/// part (no program is written).
+fn check_something_to_cut(p: &Prepared, path: &CenterPath, name: &str) -> Result<()> {
+    if !path.passes().is_empty() {
+        return Ok(());
+    }
+    Err(Error::NothingToCut(format!(
+        "{}: the {name} path has no pass: no material of the stock lies outside the part \
+         (a stock margin of 0, or a stock outline that hugs the part?)",
+        p.file
+    )))
 }
 
 fn file_name(path: &Path) -> String {
@@ -501,6 +577,7 @@ pub fn contour_wavelet(
     let p = prepare(outline, opts)?;
     let plan = multires_paths(&p.part, &p.stock, &multires_options(&p, opts))
         .map_err(contour_error(&p.file))?;
+    check_something_to_cut(&p, &plan.path, "wavelet")?;
     let (figures, nc, _) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;
     Ok((nc, figures))
 }
@@ -524,6 +601,8 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
     )
     .map_err(contour_error(file))?;
     let t_parallel = ms(t);
+    check_something_to_cut(&p, &plan.path, "wavelet")?;
+    check_something_to_cut(&p, &base, "contour-parallel")?;
 
     let t = Instant::now();
     let (wf, wavelet_nc, region) = method_figures(&p, &plan.path, &opts.machine, "wavelet")?;

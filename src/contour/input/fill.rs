@@ -183,14 +183,32 @@ fn prepare(
     let area = contour.signed_area();
     let degenerate = contour.vertices.len() < 2
         || (contour.vertices.len() == 2 && contour.vertices.iter().all(|v| v.bulge == 0.0));
+    let segs: Vec<Segment> = contour.segments().collect();
     if degenerate || area.is_nan() || area.abs() <= 1e-12 * size * size {
+        // A contour that crosses itself (a bow-tie) can enclose as much area on the left as
+        // on the right: say where it crosses rather than "zero area".
+        if !degenerate {
+            let alone = Prepared {
+                label: c.label.clone(),
+                rule: c.rule,
+                vertices: contour.vertices.clone(),
+                segs: segs.clone(),
+                area,
+                bbox: [
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::INFINITY,
+                    f64::INFINITY,
+                ],
+            };
+            check_crossings(std::slice::from_ref(&alone), eps, size, file)?;
+        }
         return Err(OutlineError::ZeroArea {
             file: file.into(),
             what: c.label,
             detail: String::new(),
         });
     }
-    let segs: Vec<Segment> = contour.segments().collect();
     let mut bbox = [
         f64::INFINITY,
         f64::INFINITY,
@@ -884,6 +902,25 @@ mod tests {
             Vertex::line(10.0, 10.0),
         ];
         assert!(build(vec![raw(spike, "s", FillRule::NonZero)], "t").is_err());
+    }
+
+    /// Issue 17 item 13: a symmetric bow-tie has zero signed area, and was reported as
+    /// "zero area"; it crosses itself, and says where.
+    #[test]
+    fn symmetric_bowtie_is_reported_as_crossing_itself() {
+        let bowtie = vec![
+            Vertex::line(0.0, 0.0),
+            Vertex::line(10.0, 10.0),
+            Vertex::line(10.0, 0.0),
+            Vertex::line(0.0, 10.0),
+        ];
+        let e = build(vec![raw(bowtie, "bow", FillRule::NonZero)], "t")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bow and itself cross at (5.000000, 5.000000)"),
+            "{e}"
+        );
     }
 
     #[test]
