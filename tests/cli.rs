@@ -600,39 +600,47 @@ fn hostile_values_are_refused_with_clear_errors() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Issue 17 item 9: a part far smaller than the tool (the sample impeller scaled by 1e-6)
-/// gave an empty program with exit 0; nothing to cut is its own exit code, and no program is
-/// written.
+/// Issue 17 item 9: a part far smaller than the tool (the sample impeller scaled by 1e-3, or
+/// by 1e-6) gave an empty program with exit 0. Nothing to cut is its own exit code (4); a part
+/// that collapses below the weld tolerance is refused naming its size; neither writes a
+/// program.
 #[test]
 fn a_part_with_nothing_to_cut_is_exit_code_4() {
     let dir = temp_dir("tiny");
     std::fs::create_dir_all(&dir).unwrap();
     let source = std::fs::read_to_string(repo_file("data/impeller.obj")).unwrap();
-    let tiny: String = source
-        .lines()
-        .map(|l| match l.strip_prefix("v ") {
-            Some(rest) => {
-                let c: Vec<f64> = rest
-                    .split_whitespace()
-                    .map(|v| v.parse().unwrap())
-                    .collect();
-                format!("v {:e} {:e} {:e}\n", c[0] * 1e-6, c[1] * 1e-6, c[2] * 1e-6)
-            }
-            None => format!("{l}\n"),
-        })
-        .collect();
-    let part = dir.join("tiny.obj");
-    std::fs::write(&part, tiny).unwrap();
-    let out = dir.join("out");
-    let run = wavemill(&[
-        "plan",
-        part.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(run.status.code(), Some(4), "{}", stderr(&run));
-    assert!(stderr(&run).contains("nothing to cut"), "{}", stderr(&run));
-    assert!(!out.join("job.nc").exists());
+    for (scale, code, needle) in [(1e-3, 4, "nothing to cut"), (1e-6, 1, "check its units")] {
+        let tiny: String = source
+            .lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(rest) => {
+                    let c: Vec<f64> = rest
+                        .split_whitespace()
+                        .map(|v| v.parse().unwrap())
+                        .collect();
+                    format!(
+                        "v {:e} {:e} {:e}\n",
+                        c[0] * scale,
+                        c[1] * scale,
+                        c[2] * scale
+                    )
+                }
+                None => format!("{l}\n"),
+            })
+            .collect();
+        let part = dir.join("tiny.obj");
+        std::fs::write(&part, tiny).unwrap();
+        let out = dir.join("out");
+        let run = wavemill(&[
+            "plan",
+            part.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(run.status.code(), Some(code), "{scale}: {}", stderr(&run));
+        assert!(stderr(&run).contains(needle), "{scale}: {}", stderr(&run));
+        assert!(!out.join("job.nc").exists());
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

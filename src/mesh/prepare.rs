@@ -269,7 +269,12 @@ pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport
         triangles.push(*t);
     }
     if triangles.is_empty() {
-        return Err("every triangle has zero area".into());
+        return Err(format!(
+            "every triangle has zero area once vertices closer than {} mm are merged (the part \
+             is {:.3e} mm across: check its units)",
+            options.weld_tolerance,
+            raw.aabb().diagonal()
+        ));
     }
     // Drop vertices no face uses, keeping order.
     let mut new_index = vec![u32::MAX; welded.positions.len()];
