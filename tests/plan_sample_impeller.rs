@@ -4,7 +4,8 @@
 mod common;
 
 use common::plan_checks::{
-    passes_never_step_backwards, posted_program_keeps_the_ball_within_the_tolerance,
+    a_real_control_reads_the_program_as_the_tests_do, passes_never_step_backwards,
+    posted_program_keeps_the_ball_within_the_tolerance,
 };
 use common::{Oracle, parse_cl, repo_file, surface_samples};
 use nalgebra::Point3;
@@ -150,6 +151,7 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
 
     passes_never_step_backwards(&rows, r);
     posted_program_keeps_the_ball_within_the_tolerance(&out, &job, &oracle);
+    a_real_control_reads_the_program_as_the_tests_do(&out.gcode);
 
     // --- Report consistency --------------------------------------------------------------
     assert!(report.clearance.min_cutter_clearance >= -1e-6);

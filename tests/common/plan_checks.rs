@@ -107,3 +107,80 @@ pub fn posted_program_keeps_the_ball_within_the_tolerance(
     assert!(posted.min_rapid_clearance_mm >= job.safety.shank_margin);
     assert!(posted.problems.is_empty(), "{:?}", posted.problems);
 }
+
+/// LinuxCNC's interpreter (`rs274 -g`, Debian's `linuxcnc-uspace`) reads `gcode` into the
+/// canonical motions a control would execute; those must be the blocks the tests' reader (and
+/// so the back-simulation above) saw: the same kind of move to the same position in every
+/// axis. Skipped, saying so, where `rs274` is not installed.
+pub fn a_real_control_reads_the_program_as_the_tests_do(gcode: &str) {
+    let Ok(rs274) = which("rs274") else {
+        eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("wavemill-rs274-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (program, canon) = (dir.join("job.nc"), dir.join("job.canon"));
+    std::fs::write(&program, gcode).unwrap();
+    let run = std::process::Command::new(rs274)
+        .arg("-g")
+        .arg(&program)
+        .arg(&canon)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run rs274");
+    assert!(
+        run.status.success(),
+        "rs274: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(&canon).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    // STRAIGHT_TRAVERSE(x, y, z, a, b, c) / STRAIGHT_FEED(...), in program coordinates.
+    let motions: Vec<(bool, [f64; 5])> = text
+        .lines()
+        .filter_map(|l| {
+            let (rapid, rest) = if let Some(i) = l.find("STRAIGHT_TRAVERSE(") {
+                (true, &l[i + 18..])
+            } else if let Some(i) = l.find("STRAIGHT_FEED(") {
+                (false, &l[i + 14..])
+            } else {
+                return None;
+            };
+            let v: Vec<f64> = rest
+                .trim_end_matches(')')
+                .split(',')
+                .map(|x| x.trim().parse().unwrap())
+                .collect();
+            Some((rapid, [v[0], v[1], v[2], v[3], v[5]]))
+        })
+        .collect();
+    let blocks = read_ac_program(gcode);
+    assert!(
+        motions.len() >= blocks.len() && blocks.len() > 100,
+        "{} canonical motions, {} blocks",
+        motions.len(),
+        blocks.len()
+    );
+    for (block, (rapid, axes)) in blocks.iter().zip(&motions[motions.len() - blocks.len()..]) {
+        assert_eq!(block.rapid, *rapid, "line {}", block.line);
+        for k in 0..5 {
+            assert!(
+                (block.axes[k] - axes[k]).abs() < 1e-9,
+                "line {}: {:?} vs the control's {axes:?}",
+                block.line,
+                block.axes
+            );
+        }
+    }
+}
+
+/// `name` on the PATH.
+fn which(name: &str) -> Result<std::path::PathBuf, ()> {
+    std::env::var_os("PATH")
+        .and_then(|paths| {
+            std::env::split_paths(&paths)
+                .map(|p| p.join(name))
+                .find(|p| p.is_file())
+        })
+        .ok_or(())
+}
