@@ -49,7 +49,11 @@ impl ToleranceBudget {
         let chord = CHORD_SHARE * total;
         let verification = VERIFICATION_SHARE * total;
         let linearisation = total - chord - rounding - 2.0 * verification;
-        if !(linearisation >= MIN_LINEARISATION_SHARE * total) {
+        // NaN compares as unordered and is refused too.
+        if linearisation
+            .partial_cmp(&(MIN_LINEARISATION_SHARE * total))
+            .is_none_or(|o| o.is_lt())
+        {
             return Err(format!(
                 "strategy.tolerance {total} mm is too small for the program's resolution: \
                  rounding {} linear / {} angular decimals alone moves the ball centre by up to \
