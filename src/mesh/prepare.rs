@@ -10,7 +10,7 @@
 use serde::Serialize;
 
 use super::Mesh;
-use super::pieces::{Piece, StrayPieceRule, pieces_of, split_stray_pieces};
+use super::pieces::{Piece, StrayPieceRule, describe_stray, pieces_of, split_stray_pieces};
 use super::topology::{self, Topology};
 use super::weld::weld;
 use crate::geom::{Point3, triangle_area, triangle_normal};
@@ -186,17 +186,16 @@ impl MeshReport {
             p.push(format!("{} separate pieces", self.components));
         }
         if self.stray_piece_count > 0 {
-            let listed: Vec<&Piece> = self.pieces.iter().filter(|q| q.stray).collect();
-            let triangles: usize = listed.iter().map(|q| q.triangles).sum();
-            let area: f64 = listed.iter().map(|q| q.area).sum();
+            let listed: Vec<Piece> = self.pieces.iter().filter(|q| q.stray).cloned().collect();
             let shown = if listed.len() < self.stray_piece_count {
                 format!(" ({} listed)", listed.len())
             } else {
                 String::new()
             };
+            let what = describe_stray(&listed).unwrap_or_default();
             p.push(format!(
-                "{} stray pieces{shown}, tiny against the largest piece ({triangles} triangles, \
-                 {area:.4} mm² in all): planning leaves them out",
+                "{} stray pieces{shown}, tiny against the largest piece{what}: planning leaves \
+                 them out",
                 self.stray_piece_count
             ));
         }
