@@ -308,7 +308,7 @@ fn a_far_stray_triangle_leaves_the_compressor_whole() {
     assert_eq!(info.status.code(), Some(0), "{text}");
     assert!(text.contains("triangles        25279"), "{text}");
     assert!(
-        text.contains("1 stray pieces") && text.contains("[1000000.0000, 1000000.0000"),
+        text.contains("1 stray piece,") && text.contains("[1000000.0000, 1000000.0000"),
         "{text}"
     );
     let _ = std::fs::remove_file(&tmp);

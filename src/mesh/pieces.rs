@@ -161,10 +161,15 @@ pub fn split_stray_pieces(mesh: &Mesh, rule: &StrayPieceRule) -> PieceSplit {
 /// many, how much, and where the largest of them is, so that a user can find it in CAD.
 pub fn set_aside_warning(stray: &[Piece]) -> Option<String> {
     Some(format!(
-        "{} stray pieces set aside, tiny against the largest piece{}",
-        stray.len(),
+        "{} set aside, tiny against the largest piece{}",
+        count_stray(stray.len()),
         describe_stray(stray)?
     ))
+}
+
+/// "1 stray piece", "2 stray pieces".
+pub(crate) fn count_stray(n: usize) -> String {
+    format!("{n} stray piece{}", if n == 1 { "" } else { "s" })
 }
 
 /// " (N triangles, A mm² in all; the largest, a mm², lies in [..] .. [..] mm)" for pieces
@@ -219,7 +224,7 @@ mod tests {
         assert_eq!(s.bounding_box_max, [1e6 + 1.0, 1.0, 0.0]);
         let w = set_aside_warning(&split.stray).unwrap();
         assert!(
-            w.contains("1 stray pieces") && w.contains("1000000.0000"),
+            w.contains("1 stray piece set aside") && w.contains("1000000.0000"),
             "{w}"
         );
         assert_eq!(set_aside_warning(&[]), None);
