@@ -74,7 +74,7 @@ fn a_block_with_a_far_stray_triangle_is_planned_and_the_triangle_reported() {
     assert!(
         part.warnings
             .iter()
-            .any(|w| w.contains("1 stray pieces set aside")),
+            .any(|w| w.contains("1 stray piece set aside")),
         "{:?}",
         part.warnings
     );

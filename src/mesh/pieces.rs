@@ -160,16 +160,29 @@ pub fn split_stray_pieces(mesh: &Mesh, rule: &StrayPieceRule) -> PieceSplit {
 /// One line for a report's warnings about pieces set aside (`None` if there are none): how
 /// many, how much, and where the largest of them is, so that a user can find it in CAD.
 pub fn set_aside_warning(stray: &[Piece]) -> Option<String> {
+    Some(format!(
+        "{} set aside, tiny against the largest piece{}",
+        count_stray(stray.len()),
+        describe_stray(stray)?
+    ))
+}
+
+/// "1 stray piece", "2 stray pieces".
+pub(crate) fn count_stray(n: usize) -> String {
+    format!("{n} stray piece{}", if n == 1 { "" } else { "s" })
+}
+
+/// " (N triangles, A mm² in all; the largest, a mm², lies in [..] .. [..] mm)" for pieces
+/// listed largest first; `None` for none.
+pub(crate) fn describe_stray(stray: &[Piece]) -> Option<String> {
     let largest = stray.first()?;
     let triangles: usize = stray.iter().map(|p| p.triangles).sum();
     let area: f64 = stray.iter().map(|p| p.area).sum();
     let [x0, y0, z0] = largest.bounding_box_min;
     let [x1, y1, z1] = largest.bounding_box_max;
     Some(format!(
-        "{} stray pieces set aside, tiny against the largest piece ({triangles} triangles, \
-         {area:.4} mm² in all; the largest, {:.4} mm², lies in [{x0:.4}, {y0:.4}, {z0:.4}] .. \
-         [{x1:.4}, {y1:.4}, {z1:.4}] mm)",
-        stray.len(),
+        " ({triangles} triangles, {area:.4} mm² in all; the largest, {:.4} mm², lies in \
+         [{x0:.4}, {y0:.4}, {z0:.4}] .. [{x1:.4}, {y1:.4}, {z1:.4}] mm)",
         largest.area
     ))
 }
@@ -211,7 +224,7 @@ mod tests {
         assert_eq!(s.bounding_box_max, [1e6 + 1.0, 1.0, 0.0]);
         let w = set_aside_warning(&split.stray).unwrap();
         assert!(
-            w.contains("1 stray pieces") && w.contains("1000000.0000"),
+            w.contains("1 stray piece set aside") && w.contains("1000000.0000"),
             "{w}"
         );
         assert_eq!(set_aside_warning(&[]), None);

@@ -10,7 +10,9 @@
 use serde::Serialize;
 
 use super::Mesh;
-use super::pieces::{Piece, StrayPieceRule, pieces_of, split_stray_pieces};
+use super::pieces::{
+    Piece, StrayPieceRule, count_stray, describe_stray, pieces_of, split_stray_pieces,
+};
 use super::topology::{self, Topology};
 use super::weld::weld;
 use crate::geom::{Point3, triangle_area, triangle_normal};
@@ -186,18 +188,16 @@ impl MeshReport {
             p.push(format!("{} separate pieces", self.components));
         }
         if self.stray_piece_count > 0 {
-            let listed: Vec<&Piece> = self.pieces.iter().filter(|q| q.stray).collect();
-            let triangles: usize = listed.iter().map(|q| q.triangles).sum();
-            let area: f64 = listed.iter().map(|q| q.area).sum();
+            let listed: Vec<Piece> = self.pieces.iter().filter(|q| q.stray).cloned().collect();
             let shown = if listed.len() < self.stray_piece_count {
                 format!(" ({} listed)", listed.len())
             } else {
                 String::new()
             };
+            let what = describe_stray(&listed).unwrap_or_default();
             p.push(format!(
-                "{} stray pieces{shown}, tiny against the largest piece ({triangles} triangles, \
-                 {area:.4} mm² in all): planning leaves them out",
-                self.stray_piece_count
+                "{}{shown}, tiny against the largest piece{what}: left out of planning",
+                count_stray(self.stray_piece_count)
             ));
         }
         p
@@ -440,7 +440,7 @@ mod tests {
         assert_eq!(r.components, 2);
         assert_eq!(r.stray_piece_count, 1);
         assert!(!r.watertight, "the stray triangle is open");
-        assert!(r.problems().iter().any(|p| p.contains("1 stray pieces")));
+        assert!(r.problems().iter().any(|p| p.contains("1 stray piece,")));
         assert_eq!(r.pieces.len(), 2);
         assert!(!r.pieces[0].stray && r.pieces[1].stray);
         assert_eq!(r.pieces[0].triangles, alone.triangles.len());
