@@ -432,7 +432,7 @@ fn check_levels(file: &str, bounds: (Point2, Point2), s: f64, max_levels: usize)
         return Ok(());
     }
     Err(Error::TooLarge {
-        what: format!("{file}: a stock {extent:.4e} mm across at a stepover of {s} mm"),
+        what: format!("{file}: a stock {extent:.4e} mm across at a stepover of {s:.4} mm"),
         estimate: format!("{levels:.3e} offset levels"),
         limit: format!("{max_levels} levels"),
         how_to_raise: "check --scale and the stepover, or raise the limit with --max-levels N"

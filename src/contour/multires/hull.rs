@@ -14,6 +14,13 @@
 //!   air the roughing passes cut), and convex;
 //! * [`hull_offset`] — the legs moved out by δ, joined by arcs of radius δ centred on the hull
 //!   vertices: exactly the hull grown by δ.
+//!
+//! The search tests each candidate change on what it touches — the turns at its ends and the
+//! growth of its one or two new points, an O(log n) query ([`GrowthOracle`]) — against counts
+//! kept for the rest of the polygon, so it decides exactly as the whole-polygon tests would;
+//! above [`ONE_AT_A_TIME_LEGS`] legs it makes independent changes in rounds (see
+//! [`loose_hull_counted`]). A dense circle's hull of 3,000 legs took 37–71 s when every
+//! candidate was tested vertex by vertex against every leg (issue 17 item 12).
 
 use crate::contour::bvh::SegmentBvh;
 use crate::contour::geometry::{Contour, Point2, Segment, Shape, Vector2, Vertex};
@@ -180,6 +187,14 @@ impl<'a> GrowthOracle<'a> {
     }
 }
 
+/// Growth `g` is not within `max_growth` (a NaN bound allows nothing, as `g <= max` would).
+fn beyond(g: f64, max_growth: f64) -> bool {
+    !matches!(
+        g.partial_cmp(&max_growth),
+        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+    )
+}
+
 /// Legs of the polygon up to which [`loose_hull`] makes one change at a time (the seed's
 /// greedy order exactly); larger polygons are first reduced in rounds (see
 /// [`loose_hull_counted`]).
@@ -259,7 +274,7 @@ impl Loosening<'_> {
             .count();
         let new_far = inserted
             .iter()
-            .filter(|&&p| !(self.oracle.of(p) <= self.max_growth))
+            .filter(|&&p| beyond(self.oracle.of(p), self.max_growth))
             .count();
         let too_far_count = (self.too_far_count + new_far).checked_sub(old_far)?;
         if too_far_count > 0 {
@@ -333,7 +348,7 @@ pub fn loose_hull_counted(
     let n = hull.len();
     let too_far: Vec<bool> = hull
         .iter()
-        .map(|&p| !(oracle.of(p) <= max_growth))
+        .map(|&p| beyond(oracle.of(p), max_growth))
         .collect();
     let bad_turns = (0..n)
         .filter(|&i| !turns_left(hull[(i + n - 1) % n], hull[i], hull[(i + 1) % n]))
