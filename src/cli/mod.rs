@@ -486,6 +486,7 @@ fn contour(args: &ContourArgs) -> Result<()> {
     };
     options.timings = !args.no_timings;
     options.max_levels = args.max_levels;
+    job::check_output_dir(&args.out, &job::OutputKind::CONTOUR)?;
     let figures_line = |name: &str, f: &job::MethodFigures| {
         say!(
             "{name:>16}: {:9.1} mm cut, {:6} blocks, {:7.2} min, uncut {:8.2} mm², clearance − r {:+.6} mm, spacing ≤ {:.3} mm, engagement mean {:.2} / max {:.2} mm",
@@ -501,11 +502,11 @@ fn contour(args: &ContourArgs) -> Result<()> {
     };
     if !args.compare {
         let (nc, figures) = job::contour_wavelet(&args.outline, &options)?;
-        std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
-            path: args.out.display().to_string(),
-            source,
-        })?;
-        job::write_atomically(&args.out.join("wavelet.nc"), nc.as_bytes())?;
+        job::write_output_set(
+            &args.out,
+            &job::OutputKind::CONTOUR,
+            &[("wavelet.nc".to_string(), nc.into_bytes())],
+        )?;
         figures_line("wavelet", &figures);
         say!("-> {}", args.out.join("wavelet.nc").display());
         return Ok(());

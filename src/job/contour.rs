@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::output::write_atomically;
+use super::output::{OutputKind, write_output_set};
 use crate::contour::geometry::{Contour, Vertex};
 use crate::contour::geometry::{Point2, Shape};
 use crate::contour::material::{engagement, report_cell};
@@ -658,17 +658,23 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
     })
 }
 
-/// Writes the five outputs of [`contour_compare`] into `dir` (created if missing).
+/// Writes the five outputs of [`contour_compare`] into `dir` as one set, replacing an earlier
+/// run's (see [`super::output`]).
 pub fn write_contour_outputs(dir: &Path, c: &ContourComparison) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.display().to_string(),
-        source,
-    })?;
-    write_atomically(&dir.join("wavelet.nc"), c.wavelet_nc.as_bytes())?;
-    write_atomically(&dir.join("contour_parallel.nc"), c.parallel_nc.as_bytes())?;
-    write_atomically(&dir.join("compare.json"), c.json().as_bytes())?;
-    write_atomically(&dir.join("paths.svg"), c.svg.as_bytes())?;
-    write_atomically(&dir.join("paths.png"), &c.png)
+    write_output_set(
+        dir,
+        &OutputKind::CONTOUR,
+        &[
+            ("wavelet.nc".to_string(), c.wavelet_nc.clone().into_bytes()),
+            (
+                "contour_parallel.nc".to_string(),
+                c.parallel_nc.clone().into_bytes(),
+            ),
+            ("compare.json".to_string(), c.json().into_bytes()),
+            ("paths.svg".to_string(), c.svg.clone().into_bytes()),
+            ("paths.png".to_string(), c.png.clone()),
+        ],
+    )
 }
 
 fn stock_bounds(stock: &Shape) -> (Point2, Point2) {
