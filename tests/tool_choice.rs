@@ -173,14 +173,15 @@ fn tools_cli_writes_the_same_proposal_for_any_thread_count_and_names_bad_librari
     );
     assert!(!out_dir.exists());
 
-    // The 5-axis planner drives a ball: other cutters are refused by name.
+    // The 5-axis planner drives a ball: other cutters are refused by name, as a bad
+    // command-line value (exit 2).
     let flat = Command::new(env!("CARGO_BIN_EXE_wavemill"))
         .args(["access", "data/impeller.glb", "--tool", "flat:6", "--out"])
         .arg(base.join("flat"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .unwrap();
-    assert_eq!(flat.status.code(), Some(1));
+    assert_eq!(flat.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&flat.stderr).contains("ball-end"));
     let _ = std::fs::remove_dir_all(&base);
 }
