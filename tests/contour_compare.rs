@@ -323,17 +323,7 @@ fn impeller_section_end_to_end() {
 fn stock_given_as_an_outline() {
     let dir = std::env::temp_dir().join(format!("wavemill-contour-stock-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let svg = |name: &str, body: &str| {
-        let path = dir.join(name);
-        std::fs::write(
-            &path,
-            format!(
-                r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 200 200">{body}</svg>"#
-            ),
-        )
-        .expect("write svg");
-        path
-    };
+    let svg = |name: &str, body: &str| write_svg(&dir, name, "0 0 200 200", body);
     let part = svg(
         "part.svg",
         r#"<rect x="85" y="90" width="30" height="20"/>"#,
@@ -385,15 +375,10 @@ fn hardening_errors_exit_with_their_codes() {
     let dir = std::env::temp_dir().join(format!("wavemill-contour-hard-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let svg = |name: &str, body: &str| {
-        let path = dir.join(name);
-        std::fs::write(
-            &path,
-            format!(
-                r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">{body}</svg>"#
-            ),
-        )
-        .expect("write svg");
-        path.to_str().expect("utf-8 path").to_string()
+        write_svg(&dir, name, "0 0 100 100", body)
+            .to_str()
+            .expect("utf-8 path")
+            .to_string()
     };
     let rect = svg(
         "rect.svg",
@@ -519,4 +504,15 @@ fn dense_star_and_circle_outlines_plan_verified_paths() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Writes an SVG file `name` in `dir` with the given view box and body; returns its path.
+fn write_svg(dir: &std::path::Path, name: &str, view_box: &str, body: &str) -> std::path::PathBuf {
+    let path = dir.join(name);
+    std::fs::write(
+        &path,
+        format!(r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="{view_box}">{body}</svg>"#),
+    )
+    .expect("write svg");
+    path
 }

@@ -293,10 +293,31 @@ impl SurfaceDistance {
         }
         let r2 = radius * radius;
         let segment_box = Aabb::from_points([a, b]);
+        let mut found = false;
+        self.visit_leaves(
+            |b| b.distance_squared_to_box(&segment_box) < r2,
+            |[p, q, r]| {
+                found = segment_triangle_distance_squared(a, b, &p, &q, &r) < r2;
+                found
+            },
+        );
+        found
+    }
+
+    /// Depth-first over the tree: the corners of every triangle in a leaf whose box passes
+    /// `enter` go to `visit`, until `visit` answers `true` (stop).
+    fn visit_leaves(
+        &self,
+        enter: impl Fn(&Aabb) -> bool,
+        mut visit: impl FnMut([Point3; 3]) -> bool,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
         let mut stack = vec![0u32];
         while let Some(ni) = stack.pop() {
             let node = &self.nodes[ni as usize];
-            if node.aabb.distance_squared_to_box(&segment_box) >= r2 {
+            if !enter(&node.aabb) {
                 continue;
             }
             if node.count == 0 {
@@ -305,13 +326,11 @@ impl SurfaceDistance {
                 continue;
             }
             for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                let [p, q, r] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
-                if segment_triangle_distance_squared(a, b, &p, &q, &r) < r2 {
-                    return true;
+                if visit(self.triangles[t as usize].map(|i| self.positions[i as usize])) {
+                    return;
                 }
             }
         }
-        false
     }
 
     /// Queues an inner node's children with their box distances, the nearer last so that it
@@ -358,9 +377,6 @@ impl SurfaceDistance {
     /// How many triangles the ray `origin + s·direction`, s > 0, crosses (Möller–Trumbore in
     /// f64). Its parity tells inside from outside for any closed surface, manifold or not.
     pub fn ray_crossings(&self, origin: &Point3, direction: &Vector3) -> usize {
-        if self.nodes.is_empty() {
-            return 0;
-        }
         let inverse = direction.map(|d| 1.0 / d);
         let hits_box = |b: &Aabb| {
             let (mut near, mut far) = (0.0f64, f64::INFINITY);
@@ -373,25 +389,11 @@ impl SurfaceDistance {
             near <= far
         };
         let mut count = 0;
-        let mut stack = vec![0u32];
-        while let Some(ni) = stack.pop() {
-            let node = &self.nodes[ni as usize];
-            if !hits_box(&node.aabb) {
-                continue;
-            }
-            if node.count == 0 {
-                stack.push(node.left);
-                stack.push(node.right);
-                continue;
-            }
-            for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
-                let (e1, e2) = (b - a, c - a);
-                let p = direction.cross(&e2);
-                let det = e1.dot(&p);
-                if det == 0.0 {
-                    continue;
-                }
+        self.visit_leaves(hits_box, |[a, b, c]| {
+            let (e1, e2) = (b - a, c - a);
+            let p = direction.cross(&e2);
+            let det = e1.dot(&p);
+            if det != 0.0 {
                 let s = origin - a;
                 let u = s.dot(&p) / det;
                 let q = s.cross(&e1);
@@ -400,7 +402,8 @@ impl SurfaceDistance {
                     count += 1;
                 }
             }
-        }
+            false
+        });
         count
     }
 
