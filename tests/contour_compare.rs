@@ -437,6 +437,47 @@ fn hardening_errors_exit_with_their_codes() {
         started.elapsed().as_secs() < 20,
         "refused only after planning"
     );
+    // All corners: a 2,000-point star keeps every vertex after thinning, and is refused
+    // before any offset when the limit is below that; a dense straight-edged rectangle
+    // thins to its 4 corners and passes the same limit.
+    let star_points: Vec<String> = (0..2000)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 2000.0;
+            let r = if k % 2 == 0 { 45.0 } else { 30.0 };
+            format!("{:.6},{:.6}", 50.0 + r * a.cos(), 50.0 + r * a.sin())
+        })
+        .collect();
+    let star = svg(
+        "star.svg",
+        &format!(r#"<polygon points="{}"/>"#, star_points.join(" ")),
+    );
+    let (code, err) = run(&star, &["--max-outline-vertices", "1000"]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("star.svg")
+            && err.contains("2000 vertices")
+            && err.contains("--max-outline-vertices"),
+        "{err}"
+    );
+    assert!(!out.join("wavelet.nc").exists());
+    let dense_rect_points: Vec<String> = (0..4000)
+        .map(|k| {
+            let t = (k % 1000) as f64 * 0.03;
+            let (x, y) = match k / 1000 {
+                0 => (10.0 + t, 10.0),
+                1 => (40.0, 10.0 + t),
+                2 => (40.0 - t, 40.0),
+                _ => (10.0, 40.0 - t),
+            };
+            format!("{x:.6},{y:.6}")
+        })
+        .collect();
+    let dense_rect = svg(
+        "dense-rect.svg",
+        &format!(r#"<polygon points="{}"/>"#, dense_rect_points.join(" ")),
+    );
+    let (code, err) = run(&dense_rect, &["--max-outline-vertices", "1000"]);
+    assert_eq!(code, Some(0), "{err}");
     let (code, err) = run(&rect, &["--stock", "margin:0"]);
     assert_eq!(code, Some(4), "{err}");
     assert!(
@@ -458,35 +499,37 @@ fn hardening_errors_exit_with_their_codes() {
 }
 
 /// Issue 17 item 12: dense outlines — a 2,000-point star (1,000 narrow spikes between radii
-/// 30 and 50 mm, each 0.16 mm wide at its base) and a 2,000-point polygon circle — plan in
-/// a debug build in seconds and give verified paths (no overcut).
+/// 30 and 50 mm, each 0.16 mm wide at its base), a 2,000-point polygon circle and a
+/// 100,000-point smooth 5-lobe star (the offset engine returned 1,248 loops for it, some
+/// crossing the part: "cuts 3 mm into the part", exit 3) — plan in a debug build in seconds
+/// and give verified paths (no overcut). With `--compare`, a 10,000-point smooth star: the
+/// baseline's finishing offset came 3.2e-5 mm inside r (exit 3).
 #[test]
 fn dense_star_and_circle_outlines_plan_verified_paths() {
     let dir = std::env::temp_dir().join(format!("wavemill-contour-dense-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let polygon = |name: &str, radius: &dyn Fn(usize) -> f64| {
-        let n = 2000;
+    let polygon = |name: &str, n: usize, radius: &dyn Fn(usize, f64) -> f64| {
         let points: Vec<String> = (0..n)
             .map(|k| {
                 let a = k as f64 * std::f64::consts::TAU / n as f64;
-                let r = radius(k);
+                let r = radius(k, a);
                 format!("{:.6},{:.6}", r * a.cos(), r * a.sin())
             })
             .collect();
-        let path = dir.join(name);
-        std::fs::write(
-            &path,
-            format!(
-                r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="-60 -60 120 120"><polygon points="{}"/></svg>"#,
-                points.join(" ")
-            ),
+        write_svg(
+            &dir,
+            name,
+            "-60 -60 120 120",
+            &format!(r#"<polygon points="{}"/>"#, points.join(" ")),
         )
-        .expect("write svg");
-        path
     };
-    let star = polygon("star.svg", &|k| if k % 2 == 0 { 50.0 } else { 30.0 });
-    let circle = polygon("circle.svg", &|_| 50.0);
-    for part in [star, circle] {
+    let smooth_star = |_: usize, a: f64| 35.0 * (1.0 + 0.3 * (5.0 * a).cos());
+    let star = polygon("star.svg", 2000, &|k, _| {
+        if k % 2 == 0 { 50.0 } else { 30.0 }
+    });
+    let circle = polygon("circle.svg", 2000, &|_, _| 50.0);
+    let dense_smooth = polygon("smooth-100k.svg", 100_000, &smooth_star);
+    for part in [star, circle, dense_smooth] {
         let mut opts = ContourJobOptions::new(6.0, 10.0);
         opts.timings = false;
         // The wavelet path alone (the baseline's figures cost more than the plan here); it is
@@ -502,6 +545,13 @@ fn dense_star_and_circle_outlines_plan_verified_paths() {
             "{}",
             part.display()
         );
+    }
+    let smooth = polygon("smooth-10k.svg", 10_000, &smooth_star);
+    let mut opts = ContourJobOptions::new(6.0, 10.0);
+    opts.timings = false;
+    let c = contour_compare(&smooth, &opts).expect("10k smooth star, both methods");
+    for figures in [&c.report.wavelet, &c.report.contour_parallel] {
+        assert!(figures.min_clearance_minus_r_mm >= -1e-6);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -166,6 +166,10 @@ pub struct ContourArgs {
     /// the stepover; each level offsets the whole part), before planning anything.
     #[arg(long, default_value_t = job::DEFAULT_MAX_LEVELS)]
     pub max_levels: usize,
+    /// Refuse a part whose outline keeps more vertices than this after thinning within
+    /// 0.1 µm (the offset engine's work grows with their square), before planning anything.
+    #[arg(long, default_value_t = job::DEFAULT_MAX_OUTLINE_VERTICES)]
+    pub max_outline_vertices: usize,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -486,6 +490,7 @@ fn contour(args: &ContourArgs) -> Result<()> {
     };
     options.timings = !args.no_timings;
     options.max_levels = args.max_levels;
+    options.max_outline_vertices = args.max_outline_vertices;
     job::check_output_dir(&args.out, &job::OutputKind::CONTOUR)?;
     let figures_line = |name: &str, f: &job::MethodFigures| {
         say!(

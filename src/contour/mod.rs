@@ -44,6 +44,7 @@ pub mod multires;
 pub mod parallel;
 pub mod region;
 pub mod segops;
+pub mod simplify;
 pub mod toolpath;
 pub mod verify;
 pub mod wavelet;

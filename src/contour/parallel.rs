@@ -55,13 +55,14 @@
 //! tool retracts, rapids and plunges ([`Link::Rapid`]).
 
 use crate::contour::bvh::SegmentBvh;
-use crate::contour::cavc::{offset_region, validate_shape};
+use crate::contour::cavc::{offset_region, offset_region_cleared, validate_shape};
 use crate::contour::error::{ContourError, Result, require_positive};
 use crate::contour::geometry::{Contour, Point2, Segment, Shape, Vertex};
 use crate::contour::region::RegionIndex;
 use crate::contour::segops::{
     bbox, intersections, point_at, point_distance, segment_distance, sub_segment,
 };
+use crate::contour::simplify::{OUTLINE_THINNING_TOL, thin_shape};
 use crate::contour::toolpath::{CenterPath, CutDirection, Link, Pass};
 
 /// The stock is grown by r − `CLIP_EPS` for clipping: a level lying exactly r from the stock
@@ -116,6 +117,9 @@ pub(crate) struct Setup {
     pub(crate) stock_index: RegionIndex,
     pub(crate) part_index: RegionIndex,
     pub(crate) clip_index: RegionIndex,
+    /// The part as the offset engine sees it: thinned within [`OUTLINE_THINNING_TOL`]; paths
+    /// are judged against `part_index`, the part as given.
+    pub(crate) offset_part: Shape,
 }
 
 /// How far beyond the stock the passes are kept: r − [`CLIP_EPS`] (a centre farther than r from
@@ -162,6 +166,7 @@ pub(crate) fn setup(
         stock_index: RegionIndex::new(stock),
         part_index,
         clip_index,
+        offset_part: thin_shape(part, OUTLINE_THINNING_TOL),
     })
 }
 
@@ -172,6 +177,7 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
     let s = opts.stepover;
     let setup = setup(part, stock, r, s, opts.max_feed_link)?;
     let (part_index, clip_index) = (&setup.part_index, &setup.clip_index);
+    let offset_part = &setup.offset_part;
 
     // Far bound of the stock from the part: every stock point is within `reach` of the part's
     // first vertex, hence of the part.
@@ -196,8 +202,15 @@ pub fn contour_parallel(part: &Shape, stock: &Shape, opts: &ParallelOptions) -> 
 
     let mut pieces: Vec<Piece> = Vec::new();
     for k in 0..=k_max {
-        let level = r + k as f64 * s;
-        let loops = offset_region(part, level, "part")?;
+        // The finishing level is measured and moved out by any shortfall of the offset
+        // engine (see `offset_region_cleared`); the others may come inside their nominal
+        // distance by as much without touching the part.
+        let (loops, level) = if k == 0 {
+            offset_region_cleared(offset_part, part_index.boundary(), r, "part")?
+        } else {
+            let level = r + k as f64 * s;
+            (offset_region(offset_part, level, "part")?, level)
+        };
         let mut found = false;
         for l in &loops {
             for pass in clip_loop(l, &[(clip_index, true)], level)? {

@@ -24,6 +24,7 @@ use crate::contour::geometry::{Contour, Vertex};
 use crate::contour::geometry::{Point2, Shape};
 use crate::contour::material::{engagement, report_cell};
 use crate::contour::region::{RegionIndex, check_inside};
+use crate::contour::simplify::{OUTLINE_THINNING_TOL, thin_shape};
 use crate::contour::{
     CenterPath, ContourError, CutDirection, MachineParams, MultiresOptions, MultiresReport,
     OutlineOptions, ParallelOptions, Program, clearance, contour_parallel, mesh_section,
@@ -47,6 +48,13 @@ const MAX_COORDINATE_MM: f64 = 1e9;
 /// Default of [`ContourJobOptions::max_levels`]: 10,000 offset levels reach 24 m of stock
 /// at a 2.4 mm stepover; the test outlines need fewer than 100.
 pub const DEFAULT_MAX_LEVELS: usize = 10_000;
+
+/// Default of [`ContourJobOptions::max_outline_vertices`]. The offset engine's work grows
+/// with about the square of the part's vertices left after thinning where the outline is
+/// all corners (measured on stars of narrow spikes, release build: 10,000 vertices 4.8 s and
+/// 0.35 GB, 20,000 21 s and 1.1 GB, 40,000 over 120 s and 4.3 GB); smooth outlines thin to a
+/// few thousand (a 100,000-point smooth star: 1.6 s).
+pub const DEFAULT_MAX_OUTLINE_VERTICES: usize = 25_000;
 
 /// The stock the region to machine is cut from.
 #[derive(Clone, Debug, PartialEq)]
@@ -96,6 +104,9 @@ pub struct ContourJobOptions {
     /// Largest number of offset levels (stock extent over stepover) a run may plan; a larger
     /// estimate is refused before any planning with [`Error::TooLarge`].
     pub max_levels: usize,
+    /// Largest number of part vertices left after thinning (the offset engine's input); a
+    /// larger part is refused before any planning with [`Error::TooLarge`].
+    pub max_outline_vertices: usize,
 }
 
 impl ContourJobOptions {
@@ -114,6 +125,7 @@ impl ContourJobOptions {
             machine: MachineParams::default(),
             timings: true,
             max_levels: DEFAULT_MAX_LEVELS,
+            max_outline_vertices: DEFAULT_MAX_OUTLINE_VERTICES,
         }
     }
 }
@@ -389,6 +401,7 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
     check_coordinates(&stock, &file)?;
     let bounds = stock_bounds(&stock);
     check_levels(&file, bounds, s, opts.max_levels)?;
+    check_outline_vertices(&file, &part, opts.max_outline_vertices)?;
     Ok(Prepared {
         file,
         part,
@@ -436,6 +449,27 @@ fn check_levels(file: &str, bounds: (Point2, Point2), s: f64, max_levels: usize)
         estimate: format!("{levels:.3e} offset levels"),
         limit: format!("{max_levels} levels"),
         how_to_raise: "check --scale and the stepover, or raise the limit with --max-levels N"
+            .into(),
+    })
+}
+
+/// Refuses a part whose outline, thinned as the offset engine will see it, keeps more than
+/// `limit` vertices (see [`DEFAULT_MAX_OUTLINE_VERTICES`]), before any offset is computed.
+fn check_outline_vertices(file: &str, part: &Shape, limit: usize) -> Result<()> {
+    let thinned = thin_shape(part, OUTLINE_THINNING_TOL);
+    let vertices: usize = thinned.contours.iter().map(|c| c.vertices.len()).sum();
+    if vertices <= limit {
+        return Ok(());
+    }
+    let given: usize = part.contours.iter().map(|c| c.vertices.len()).sum();
+    Err(Error::TooLarge {
+        what: format!(
+            "{file}: a part outline of {given} vertices, {vertices} of them corners the offset \
+             engine must keep (within {OUTLINE_THINNING_TOL} mm)"
+        ),
+        estimate: format!("{vertices} vertices (offset work grows with their square)"),
+        limit: format!("{limit} vertices"),
+        how_to_raise: "simplify the outline, or raise the limit with --max-outline-vertices N"
             .into(),
     })
 }

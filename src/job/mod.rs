@@ -30,9 +30,9 @@ pub use config::{
     ToolSection, unit_direction,
 };
 pub use contour::{
-    CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS, MethodFigures,
-    StockSpec, contour_compare, contour_wavelet, parse_flat_tool, parse_stock,
-    write_contour_outputs,
+    CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,
+    DEFAULT_MAX_OUTLINE_VERTICES, MethodFigures, StockSpec, contour_compare, contour_wavelet,
+    parse_flat_tool, parse_stock, write_contour_outputs,
 };
 pub use levels::{LevelSummary, LevelsReport, levels};
 pub use offsets::{OffsetsOutput, OffsetsReport, ShapeSummary, offset_specs, offsets, shape_glb};

@@ -4,7 +4,8 @@
 //!
 //! # The passes
 //!
-//! * **Level 0** is the exact offset of the part at r (the finishing pass; "the wavelet method
+//! * **Level 0** is the exact offset of the part at r, measured and moved out by any shortfall
+//!   of the offset engine (the finishing pass; "the wavelet method
 //!   results in exact offsets close to the object boundary", §3.8).
 //! * **Levels k ≥ 1 inside the loose hull**: the exact offset O_k at ℓ_k = r + k·s is
 //!   approximated by [`smooth::approximate_loop`] — corners by multi-scale curvature (§3.1),
@@ -78,7 +79,7 @@ pub mod sample;
 pub mod smooth;
 
 use crate::contour::bvh::SegmentBvh;
-use crate::contour::cavc::offset_region;
+use crate::contour::cavc::{offset_region, offset_region_cleared};
 use crate::contour::error::{ContourError, Result};
 use crate::contour::geometry::{Contour, Point2, Shape};
 use crate::contour::parallel::{CLIP_EPS, Piece, clip_loop, order_pieces, setup};
@@ -236,7 +237,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
     // Band of the adaptive curves: the default band, which keeps their own spacing within r.
     let adaptive_band = tol.min((0.5 * (r - s)).max(0.0));
     let ctx = LevelContext {
-        part,
+        offset_part: &setup.offset_part,
         r,
         s,
         opts,
@@ -254,10 +255,12 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         // Level 0 is the whole finishing pass, exact and clipped to the stock only: material
         // within r of the part is swept by the level-r point beyond it, which may lie
         // outside H.
-        let (level_pieces, e) = if k == 0 {
-            ctx.level_passes(level, 0.0, false, &mut report)?
+        let (level_pieces, e, level) = if k == 0 {
+            let (passes, cleared) = ctx.finishing_passes(&mut report)?;
+            (passes, 0.0, cleared)
         } else {
-            ctx.level_passes(level, tol, true, &mut report)?
+            let (passes, e) = ctx.level_passes(level, tol, true, &mut report)?;
+            (passes, e, level)
         };
         // A missing level counts as exact: the adaptive curves still close the gap from the
         // last level to where it would have been.
@@ -299,7 +302,7 @@ pub fn multires_paths(part: &Shape, stock: &Shape, opts: &MultiresOptions) -> Re
         .flat_map(|c| c.vertices.iter().map(|v| v.point))
         .collect();
     let finish_zone = RegionIndex::new(&Shape {
-        contours: offset_region(part, r + DUPLICATE_TOL, "part")?,
+        contours: offset_region(&setup.offset_part, r + DUPLICATE_TOL, "part")?,
     });
     let base = ring + 1;
     let mut m = 0;
@@ -371,7 +374,8 @@ fn adaptive_levels(from: f64, to: f64, limit: f64, band: f64) -> Vec<f64> {
 
 /// What computing the passes of one level needs.
 struct LevelContext<'a> {
-    part: &'a Shape,
+    /// The part as the offset engine sees it (thinned, see `Setup::offset_part`).
+    offset_part: &'a Shape,
     r: f64,
     s: f64,
     opts: &'a MultiresOptions,
@@ -391,9 +395,37 @@ impl LevelContext<'_> {
         to_hull: bool,
         report: &mut MultiresReport,
     ) -> Result<(Vec<Pass>, f64)> {
+        self.passes_from(
+            offset_region(self.offset_part, level, "part")?,
+            level,
+            band,
+            to_hull,
+            report,
+        )
+    }
+
+    /// The finishing passes: the part's offset loops at r, moved out by any shortfall of the
+    /// offset engine so that none comes nearer the part than r (see
+    /// [`offset_region_cleared`]), clipped to the stock only; and the distance used.
+    fn finishing_passes(&self, report: &mut MultiresReport) -> Result<(Vec<Pass>, f64)> {
+        let (loops, level) =
+            offset_region_cleared(self.offset_part, self.part_index.boundary(), self.r, "part")?;
+        let (passes, _) = self.passes_from(loops, level, 0.0, false, report)?;
+        Ok((passes, level))
+    }
+
+    /// [`Self::level_passes`] on given exact offset loops at `level`.
+    fn passes_from(
+        &self,
+        loops: Vec<Contour>,
+        level: f64,
+        band: f64,
+        to_hull: bool,
+        report: &mut MultiresReport,
+    ) -> Result<(Vec<Pass>, f64)> {
         let mut passes = Vec::new();
         let mut e_max: f64 = 0.0;
-        for exact in offset_region(self.part, level, "part")? {
+        for exact in loops {
             let (used, e) = if band <= 0.0 {
                 (exact.clone(), 0.0)
             } else {
