@@ -9,10 +9,10 @@ mod common;
 use common::{repo_file, surface_samples};
 use nalgebra::{Point3, Unit, Vector3};
 use wavemill::collide::{Collision, F32_SLACK, Margins, PartCollider, PreparedTool};
+use wavemill::geom::ToolPose;
 use wavemill::geom::orthonormal_frame;
 use wavemill::job;
 use wavemill::mesh::{PrepareOptions, prepare};
-use wavemill::path::ToolPose;
 use wavemill::tool::{Body, BodyRole, Cutter, Neck, Section, ToolAssembly};
 
 /// Distance from the point at axial height `h` and radius `rho` to a solid frustum in the

@@ -171,7 +171,7 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         .toolpath
         .moves
         .windows(2)
-        .filter(|w| w[1].kind == wavemill::path::MoveKind::Cut)
+        .filter(|w| w[1].kind == wavemill::geom::MoveKind::Cut)
         .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
         .sum();
     assert!((report.cutting_length_mm - cut_length).abs() < 1e-6 * cut_length.max(1.0));

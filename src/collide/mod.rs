@@ -1,6 +1,7 @@
 //! Collision and clearance between the tool and the part.
 //!
-//! * [`distance`]: exact f64 closest points and signed distance (the gouge guarantee);
+//! * the exact f64 closest points and signed distance it measures with (the gouge guarantee)
+//!   are [`crate::mesh::distance`], below every stage that needs them;
 //! * `tool_bodies`: the tool assembly as parry3d shapes, tested against the part with
 //!   BVH-accelerated `intersection_test` and `closest_points` (f32, with margins that cover
 //!   f32 error).
@@ -8,10 +9,8 @@
 //! This is one of the two modules where glam types exist (parry3d speaks glam); nothing glam
 //! leaves it.
 
-pub mod distance;
 pub(crate) mod tool_bodies;
 
-pub use distance::{Closest, SurfaceDistance};
 pub use tool_bodies::{
     BodyClearance, Collision, F32_SLACK, Margins, PartCollider, PreparedTool, Table,
 };

@@ -10,10 +10,10 @@ use parry3d::math::Pose;
 use parry3d::query::{self, ClosestPoints};
 use parry3d::shape::{Capsule, ConvexPolyhedron, Cylinder, RoundCylinder, Shape, TriMesh};
 
-use super::distance::SurfaceDistance;
+use crate::geom::ToolPose;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
-use crate::path::ToolPose;
+use crate::mesh::SurfaceDistance;
 use crate::tool::{Body, BodyRole, Cutter, ToolAssembly};
 
 /// mm. Larger than f32 rounding of coordinates within ±1000 mm of the part centre (~1e-4 mm).

@@ -1,13 +1,16 @@
-//! Numeric types and small geometric primitives shared by every stage.
+//! Numeric types, small geometric primitives and the toolpath data (poses, moves) shared by
+//! every stage.
 //!
 //! The planner's own geometry is f64 `nalgebra`. Crates that speak `glam` (parry3d, obvhs) are
 //! converted to inside `collide` and `access` only, so no glam type appears here or in any other
 //! stage's public API.
 
 mod aabb;
+mod toolpath;
 mod triangle;
 
 pub use aabb::Aabb;
+pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
 pub use triangle::{
     ClosestFeature, closest_point_on_segment, closest_point_on_triangle,
     closest_points_of_segments, segment_triangle_distance_squared, triangle_area, triangle_normal,

@@ -14,14 +14,12 @@ use super::semi_finish::{SemiFinishContext, semi_finishing};
 use crate::access::RayScene;
 use crate::collide::{Margins, PartCollider, PreparedTool, Table};
 use crate::error::{Error, Result};
-use crate::geom::{Point3, Vector3, positive_zero};
+use crate::geom::{Move, MoveKind, Point3, ToolPose, Toolpath, Vector3, positive_zero};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, PrepareOptions, prepare_without_stray_pieces, set_aside_warning};
 use crate::multires::Hierarchy;
 use crate::orient::{AxisChooser, AxisOptions, SmoothingOptions};
-use crate::path::{
-    self, FinishingContext, FinishingOptions, LinkOptions, MoveKind, ToolPose, Toolpath,
-};
+use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions};
 use crate::post::{
     self, GcodeOptions, LineariseOptions, MachineKinematics, ProgramHeader, TableTableAC,
 };
@@ -404,7 +402,7 @@ pub fn plan(
         moves: Vec::new(),
     };
     let mut operations = Vec::new();
-    let mut append = |moves: &[path::Move], stock_to_leave_mm: f64| {
+    let mut append = |moves: &[Move], stock_to_leave_mm: f64| {
         let start = toolpath.moves.len();
         toolpath.moves.extend_from_slice(moves);
         operations.push(Operation {
@@ -518,7 +516,7 @@ pub fn plan(
             .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
             .sum()
     };
-    let by_reason = unreachable_by_reason(&finishing.unreachable);
+    let by_reason = path::unreachable_by_reason(&finishing.unreachable);
     if !toolpath.moves.iter().any(|m| m.kind == MoveKind::Cut) {
         let reasons: Vec<String> = by_reason.iter().map(|(r, n)| format!("{r}: {n}")).collect();
         return Err(Error::NothingToCut(format!(
@@ -846,7 +844,7 @@ mod tests {
                 .fold(f64::INFINITY, f64::min)
         };
         for operation in &out.operations[..2] {
-            let cuts: Vec<&path::Move> = out.toolpath.moves[operation.moves.clone()]
+            let cuts: Vec<&Move> = out.toolpath.moves[operation.moves.clone()]
                 .iter()
                 .filter(|m| m.kind == MoveKind::Cut)
                 .collect();

@@ -4,9 +4,9 @@
 
 use crate::error::{Error, Result};
 use crate::geom::Point3;
+use crate::geom::{MoveKind, Toolpath};
 use crate::mesh::Mesh;
 use crate::mesh::io::GlbBuilder;
-use crate::path::{MoveKind, Toolpath};
 
 const PART: [f32; 4] = [0.72, 0.74, 0.78, 1.0];
 const CUT: [f32; 4] = [0.1, 0.75, 0.2, 1.0];

@@ -185,21 +185,3 @@ impl PlanReport {
         s
     }
 }
-
-/// Unreachable drive points counted by reason (the reasons' JSON names).
-pub(crate) fn unreachable_by_reason(
-    unreachable: &[(crate::geom::Point3, crate::path::Unreachable)],
-) -> std::collections::BTreeMap<String, usize> {
-    let mut by_reason = std::collections::BTreeMap::new();
-    for (_, why) in unreachable {
-        *by_reason
-            .entry(
-                serde_json::to_value(why)
-                    .ok()
-                    .and_then(|v| v.as_str().map(String::from))
-                    .unwrap_or_default(),
-            )
-            .or_insert(0) += 1;
-    }
-    by_reason
-}

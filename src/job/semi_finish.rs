@@ -16,13 +16,13 @@
 use serde::Serialize;
 
 use super::offsets::stock_shapes;
-use super::report::unreachable_by_reason;
 use crate::access::RayScene;
 use crate::collide::{PartCollider, PreparedTool, Table};
 use crate::error::{Error, Result};
+use crate::geom::{MoveKind, Toolpath};
 use crate::mesh::Mesh;
 use crate::multires::RemeshOptions;
-use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions, MoveKind, Toolpath};
+use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions};
 use crate::verify::verify;
 
 /// One semi-finishing operation in `report.json`: the shape it machined to and what the checks
@@ -168,7 +168,7 @@ pub(crate) fn semi_finishing(
             drive_planes: passes.planes,
             drive_points: passes.drive_points,
             unreachable: passes.unreachable.len(),
-            unreachable_by_reason: unreachable_by_reason(&passes.unreachable),
+            unreachable_by_reason: path::unreachable_by_reason(&passes.unreachable),
             segments: linking.segments,
             cutting_length_mm,
             min_clearance_to_shape_mm: on_shape

@@ -6,17 +6,25 @@
 //!   winding consistent and outward where the surface allows it;
 //! * [`pieces`] lists the connected pieces and tells stray debris (tiny against the largest
 //!   piece) from the part;
+//! * [`distance`]: exact f64 closest points and signed distance to the mesh (the gouge
+//!   guarantee every stage measures with);
+//! * [`section`]: the mesh cut by a plane, as ordered polylines;
 //! * [`prepare`] runs those in order and returns the clean [`Mesh`] with a [`MeshReport`];
 //!   [`prepare_without_stray_pieces`] also sets the stray pieces aside, for planning.
 //!
 //! Connectivity code never looks at positions except where a decision needs geometry (zero-area
 //! faces, the outward sign of a closed component): the same split spade and geometry-central make.
 
+pub mod distance;
 pub mod io;
 pub mod pieces;
 mod prepare;
+pub mod section;
 pub mod topology;
 pub mod weld;
+
+pub use distance::{Closest, SurfaceDistance};
+pub use section::{DrivePoint, SectionCurve, plane_section};
 
 pub use pieces::{Piece, PieceSplit, StrayPieceRule, set_aside_warning, split_stray_pieces};
 pub use prepare::{

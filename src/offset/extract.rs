@@ -437,8 +437,8 @@ fn outer_components(mesh: Mesh, topology: &Topology) -> Mesh {
 mod tests {
     use super::super::field::{Field, Term};
     use super::*;
-    use crate::collide::SurfaceDistance;
     use crate::geom::Vector3;
+    use crate::mesh::SurfaceDistance;
     use crate::mesh::fixtures::uv_sphere;
 
     /// The table against an independent count: walk the sign changes around the cube's faces

@@ -5,9 +5,9 @@
 
 use rayon::prelude::*;
 
-use crate::collide::{Closest, SurfaceDistance};
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
+use crate::mesh::{Closest, SurfaceDistance};
 
 /// Alternating projections onto the terms' level sets at a crease of the union (where two
 /// terms are both near zero) settle in one or two rounds; more buys nothing.

@@ -9,9 +9,9 @@
 
 use rayon::prelude::*;
 
-use crate::collide::SurfaceDistance;
 use crate::geom::Point3;
 use crate::mesh::Mesh;
+use crate::mesh::SurfaceDistance;
 
 /// At most this many part samples (the spacing grows to keep within it).
 const MAX_SAMPLES: f64 = 4.0e6;

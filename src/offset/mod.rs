@@ -58,9 +58,9 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::collide::SurfaceDistance;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
+use crate::mesh::SurfaceDistance;
 use crate::mesh::topology::Topology;
 
 pub use fit::local_fit;

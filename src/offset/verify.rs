@@ -17,9 +17,9 @@ use rayon::prelude::*;
 
 use super::PartQuery;
 use super::normal_offset::vertex_normals;
-use crate::collide::SurfaceDistance;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
+use crate::mesh::SurfaceDistance;
 
 /// A check passes within this (mm): ten times tighter than the 1e-6 mm the issue asks for, so
 /// that the reported figures keep their margin.

@@ -14,8 +14,8 @@ pub use smooth::{SmoothingOptions, SmoothingStats, smooth_axes};
 
 use crate::access::RayScene;
 use crate::collide::{Collision, PartCollider, PreparedTool};
+use crate::geom::ToolPose;
 use crate::geom::{Direction, Point3, Vector3, angle_between, orthonormal_frame};
-use crate::path::ToolPose;
 
 /// How axes are searched.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,9 +1,9 @@
 //! Placing a ball against the part: from a drive point to a ball centre that is at least the
 //! ball radius from every point of the part (exact f64).
 
-use super::section::DrivePoint;
-use crate::collide::SurfaceDistance;
 use crate::geom::Point3;
+use crate::mesh::DrivePoint;
+use crate::mesh::SurfaceDistance;
 
 /// How far beyond the radius the centre is placed, mm: keeps the exact check robust against the
 /// last bit of rounding without leaving measurable stock.

@@ -19,9 +19,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::CutSegment;
-use super::toolpath::{Move, MoveKind, ToolPose, Toolpath};
 use crate::collide::{PartCollider, PreparedTool};
 use crate::geom::Point3;
+use crate::geom::{Move, MoveKind, ToolPose, Toolpath};
 
 /// Where and how fast to link.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,22 +8,24 @@
 //! would bring the ball closer to the part than the tolerance, or the axis would turn too much,
 //! points are inserted; where that does not converge, the pass is split and linked.
 
+//!
+//! The data it produces ([`crate::geom::Toolpath`] of [`crate::geom::Move`]s between
+//! [`crate::geom::ToolPose`]s) and the plane sections it drives along
+//! ([`crate::mesh::section`]) live below it, where every stage can use them.
+
 mod contact;
 mod link;
-mod section;
-mod toolpath;
 
 pub use contact::place_ball;
 pub use link::{LinkOptions, LinkReport, link};
-pub use section::{DrivePoint, SectionCurve, plane_section};
-pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
 
 use rayon::prelude::*;
 
 use crate::access::RayScene;
 use crate::collide::{PartCollider, PreparedTool};
-use crate::geom::{Direction, Point3, Vector3, angle_between, slerp};
+use crate::geom::{Direction, Point3, ToolPose, Vector3, angle_between, slerp};
 use crate::mesh::Mesh;
+use crate::mesh::{DrivePoint, plane_section};
 use crate::orient::{
     AxisChooser, NoAxis, SmoothingOptions, SmoothingStats, axis_is_valid, smooth_axes,
 };
@@ -471,6 +473,24 @@ fn refine(
     left.push(m);
     left.extend(right);
     Some(left)
+}
+
+/// Unreachable drive points counted by reason (the reasons' JSON names).
+pub fn unreachable_by_reason(
+    unreachable: &[(Point3, Unreachable)],
+) -> std::collections::BTreeMap<String, usize> {
+    let mut by_reason = std::collections::BTreeMap::new();
+    for (_, why) in unreachable {
+        *by_reason
+            .entry(
+                serde_json::to_value(why)
+                    .ok()
+                    .and_then(|v| v.as_str().map(String::from))
+                    .unwrap_or_default(),
+            )
+            .or_insert(0) += 1;
+    }
+    by_reason
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 //! Feeds have 3. Never a negative zero. Deterministic.
 
 use super::format::fixed;
-use crate::path::{MoveKind, Toolpath};
+use crate::geom::{MoveKind, Toolpath};
 
 /// The exact CSV header line.
 pub const CL_CSV_HEADER: &str = "x,y,z,i,j,k,kind,feed,tool";

@@ -10,7 +10,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::kinematics::Joints;
-use crate::path::{Move, MoveKind};
+use crate::geom::{Move, MoveKind};
 
 /// Seconds per move kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 use super::format::{comment_text, fixed};
 use super::kinematics::{Joints, MachineKinematics, RotaryAxis};
 use super::{ProgramHeader, ProgramSink};
-use crate::path::{Move, MoveKind};
+use crate::geom::{Move, MoveKind};
 
 /// Options of [`GcodeWriter`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -47,7 +47,7 @@
 use nalgebra::{Matrix3, Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::path::ToolPose;
+use crate::geom::ToolPose;
 
 /// Horizontal component `√(k_x² + k_y²)` of the tool axis (part frame) at or below which the
 /// exact inverse treats the pose as singular and keeps the previous C. Choosing C freely there

@@ -34,7 +34,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use super::kinematics::{Joints, KinematicsError, MachineKinematics};
-use crate::path::{Move, MoveKind, ToolPose, Toolpath};
+use crate::geom::{Move, MoveKind, ToolPose, Toolpath};
 
 /// Interpolation parameters at which joint-space and part-frame motion are compared.
 pub const CHECK_PARAMETERS: [f64; 7] = [0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875];

@@ -37,7 +37,7 @@ pub use gcode::{GcodeOptions, GcodeWriter};
 pub use kinematics::{Joints, KinematicsError, MachineKinematics, RotaryAxis, TableTableAC};
 pub use linearise::{LineariseError, LineariseOptions, linearise, linearise_opt};
 
-use crate::path::{Move, Toolpath};
+use crate::geom::{Move, Toolpath};
 
 /// What goes at the top of a program.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -29,9 +29,9 @@ use serde::Serialize;
 
 use crate::access::RayScene;
 use crate::collide::{Collision, Margins, PartCollider, PreparedTool, Table};
+use crate::geom::ToolPose;
 use crate::geom::{Direction, Vector3, orthonormal_frame, triangle_area};
 use crate::mesh::Mesh;
-use crate::path::ToolPose;
 use crate::tool::{BodyRole, ToolLibrary};
 pub use curvature::{Curvature, ShapeClass, vertex_curvatures, vertex_neighbours};
 

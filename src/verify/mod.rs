@@ -24,7 +24,7 @@ use serde::Serialize;
 
 use crate::collide::{BodyClearance, PartCollider, PreparedTool};
 use crate::geom::Point3;
-use crate::path::{MoveKind, ToolPose, Toolpath};
+use crate::geom::{MoveKind, ToolPose, Toolpath};
 
 /// Clearances over all checked poses, mm. Body clearances are capped at `search`.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -1,7 +1,7 @@
 //! Z-sections of closed triangle meshes as outlines (issue #6, point 1): the part profile of a
 //! 2.5D job cut from a 3D part at one height.
 //!
-//! The plane z = Z is intersected with the mesh by [`crate::path::plane_section`]
+//! The plane z = Z is intersected with the mesh by [`crate::mesh::plane_section`]
 //! (one segment per crossed triangle, chained by shared edges). The loops become polygons in
 //! XY, collinear runs are simplified (Douglas–Peucker on the closed polygon) within the outline
 //! tolerance, and the region is built by the outline reader's own region builder under the
@@ -19,7 +19,7 @@ use super::{OutlineError, RawContour};
 use crate::contour::geometry::{Point2, Segment, Shape, Vertex};
 use crate::contour::segops::point_distance;
 use crate::mesh::Mesh;
-use crate::path::plane_section;
+use crate::mesh::plane_section;
 
 /// Relative size (of the mesh's bounding-box diagonal) under which a vertex counts as lying on
 /// the plane when looking for horizontal faces in it.

@@ -9,9 +9,9 @@
 
 use std::collections::HashMap;
 
-use crate::collide::SurfaceDistance;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
+use crate::mesh::SurfaceDistance;
 use crate::mesh::topology::edges;
 
 use super::feature_lines::FeatureSpans;

@@ -30,9 +30,9 @@
 //!
 //! The finest level is what the planner would machine; its fit is reported.
 
-use crate::collide::SurfaceDistance;
 use crate::geom::Point3;
 use crate::mesh::Mesh;
+use crate::mesh::SurfaceDistance;
 use crate::mesh::topology::edges;
 
 mod charts;

@@ -1,7 +1,7 @@
 //! CL CSV: exact header, one row per original move, values parse back.
 
 use super::{dir, toolpath};
-use crate::path::MoveKind::*;
+use crate::geom::MoveKind::*;
 use crate::post::{CL_CSV_HEADER, write_cl_csv};
 
 #[test]

@@ -1,7 +1,7 @@
 //! Time estimate from posted blocks.
 
 use super::pose;
-use crate::path::{Move, MoveKind};
+use crate::geom::{Move, MoveKind};
 use crate::post::{Joints, estimate_time};
 
 fn block(kind: MoveKind, feed: f64, j: Joints) -> (Move, Joints) {

@@ -4,7 +4,7 @@ use nalgebra::Vector3;
 use proptest::prelude::*;
 
 use super::{angle, dir, toolpath};
-use crate::path::{Move, MoveKind::*, Toolpath};
+use crate::geom::{Move, MoveKind::*, Toolpath};
 use crate::post::format::fixed;
 use crate::post::{
     GcodeOptions, GcodeWriter, Joints, LineariseOptions, MachineKinematics, ProgramHeader,

@@ -4,7 +4,7 @@ use nalgebra::{Rotation3, Vector3};
 use proptest::prelude::*;
 
 use super::{dir, forward_ref, pose};
-use crate::path::ToolPose;
+use crate::geom::ToolPose;
 use crate::post::{Joints, KinematicsError, MachineKinematics, RotaryAxis, TableTableAC};
 
 const EPS: f64 = 1e-9;

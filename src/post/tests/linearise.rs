@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use proptest::prelude::*;
 
 use super::{angle, dir, forward_ref, slerp_ref, toolpath};
-use crate::path::{Move, MoveKind::*, Toolpath};
+use crate::geom::{Move, MoveKind::*, Toolpath};
 use crate::post::{
     Joints, LineariseError, LineariseOptions, MachineKinematics, TableTableAC, linearise,
     linearise_opt,

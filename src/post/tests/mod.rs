@@ -8,7 +8,7 @@ mod linearise;
 
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 
-use crate::path::{Move, MoveKind, ToolPose, Toolpath};
+use crate::geom::{Move, MoveKind, ToolPose, Toolpath};
 use crate::post::Joints;
 
 /// A pose from a tip and a (not necessarily unit) axis.
