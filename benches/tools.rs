@@ -9,10 +9,10 @@ use std::path::PathBuf;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use wavemill::collide::{Margins, PartCollider, PreparedTool};
+use wavemill::geom::ToolPose;
 use wavemill::geom::{Point3, Vector3, closest_point_on_triangle};
 use wavemill::job;
 use wavemill::mesh::{Mesh, PrepareOptions, prepare};
-use wavemill::path::ToolPose;
 use wavemill::tool::{Cutter, Section, ToolAssembly, ToolLibrary};
 use wavemill::tool_choice::{ToolChoiceOptions, choose_tools};
 
