@@ -1,4 +1,5 @@
-//! The job file (TOML): part, units, tool, machine, strategy, feeds, safety margins.
+//! The job file (TOML): part, units, tool, machine, strategy, feeds, safety margins, and the
+//! operations (`[[operation]]`, see [`super::operation`]).
 //!
 //! Every field has a documented default, embedded here, so `wavemill plan PART` works without a
 //! job file; a job file only says what differs, and CLI flags override both. Unknown keys are
@@ -22,6 +23,10 @@ pub struct Job {
     pub feeds: FeedSection,
     pub safety: SafetySection,
     pub limits: LimitsSection,
+    /// The operations, in order (`[[operation]]` tables); empty: the ones today's
+    /// `[strategy]` keys describe (see [`Job::operations`]).
+    #[serde(rename = "operation", skip_serializing_if = "Vec::is_empty")]
+    pub operations: Vec<OperationSection>,
 }
 
 /// How much work a job may ask for before it is refused (with a message saying how to raise
@@ -474,8 +479,193 @@ impl Job {
                 "machine.c_limits must be [min, max] with min < max, got [{lo}, {hi}]"
             ));
         }
-        Ok(())
+        // The operation list: each operation's own numbers and the order rules.
+        self.operations().map(|_| ())
     }
+}
+
+// ---- Operations ---------------------------------------------------------------------------
+//
+// A job takes the part through a list of operations — today semi-finishing to stock-to-leave
+// shapes (DESIGN.md §3.4, seed 004 ch. 5 step 3) and ball-end finishing; roughing and
+// rest-roughing (issue 20) plug in as further kinds. Each has its own tool, stock to leave and
+// strategy options. In the job file they are `[[operation]]` tables; a job file without them
+// keeps meaning what it meant before: one semi-finishing operation per entry of
+// `strategy.semi_finish_allowances`, then finishing ([`Job::operations`]).
+
+/// What an operation does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OperationKind {
+    /// Ball-end passes over the stock-to-leave shape that holds the part at
+    /// `stock_to_leave` mm (seed 004 ch. 5 step 3).
+    SemiFinish,
+    /// Ball-end passes over the part itself (stock to leave 0).
+    Finish,
+}
+
+impl OperationKind {
+    /// The name used in the job file and in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            OperationKind::SemiFinish => "semi-finish",
+            OperationKind::Finish => "finish",
+        }
+    }
+}
+
+/// One `[[operation]]` table of a job file; what it leaves out comes from the job's
+/// `[tool]` and `[strategy]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OperationSection {
+    pub kind: OperationKind,
+    /// A name for messages and the report; default: the kind and its stock to leave.
+    pub name: Option<String>,
+    /// Material left on the part, mm: > 0 for semi-finishing, 0 (or left out) for finishing.
+    pub stock_to_leave: Option<f64>,
+    /// Scallop height target, mm; default `strategy.semi_finish_scallop_height` when
+    /// semi-finishing, `strategy.scallop_height` when finishing.
+    pub scallop_height: Option<f64>,
+    /// The operation's own tool; default the job's `[tool]`.
+    pub tool: Option<ToolSection>,
+}
+
+/// One operation, every option resolved.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Operation {
+    pub name: String,
+    pub kind: OperationKind,
+    pub tool: ToolSection,
+    /// Material left on the part, mm (0 when finishing).
+    pub stock_to_leave: f64,
+    /// Scallop height target, mm.
+    pub scallop_height: f64,
+}
+
+impl Job {
+    /// The job's operations in machining order: its `[[operation]]` tables, or, without them,
+    /// one semi-finishing operation per `strategy.semi_finish_allowances` entry and then
+    /// finishing. Checks what a list must satisfy: semi-finishing stocks to leave positive and
+    /// strictly decreasing, exactly one finishing operation and it comes last, one tool for
+    /// the whole program (the post writes no tool changes yet).
+    pub fn operations(&self) -> Result<Vec<Operation>, String> {
+        let default_name = |kind: OperationKind, stock: f64| match kind {
+            OperationKind::SemiFinish => format!("semi-finish to {stock} mm"),
+            OperationKind::Finish => "finish".to_string(),
+        };
+        let operations: Vec<Operation> = if self.operations.is_empty() {
+            let semi = self
+                .strategy
+                .semi_finish_allowances
+                .iter()
+                .map(|&a| Operation {
+                    name: default_name(OperationKind::SemiFinish, a),
+                    kind: OperationKind::SemiFinish,
+                    tool: self.tool.clone(),
+                    stock_to_leave: a,
+                    scallop_height: self.strategy.semi_finish_scallop_height,
+                });
+            semi.chain(std::iter::once(Operation {
+                name: default_name(OperationKind::Finish, 0.0),
+                kind: OperationKind::Finish,
+                tool: self.tool.clone(),
+                stock_to_leave: 0.0,
+                scallop_height: self.strategy.scallop_height,
+            }))
+            .collect()
+        } else {
+            if !self.strategy.semi_finish_allowances.is_empty() {
+                return Err(
+                    "strategy.semi_finish_allowances and [[operation]] tables both list \
+                     operations; write the semi-finishing as [[operation]] tables"
+                        .into(),
+                );
+            }
+            self.operations
+                .iter()
+                .map(|s| {
+                    let stock = s.stock_to_leave.unwrap_or(0.0);
+                    Operation {
+                        name: s
+                            .name
+                            .clone()
+                            .unwrap_or_else(|| default_name(s.kind, stock)),
+                        kind: s.kind,
+                        tool: s.tool.clone().unwrap_or_else(|| self.tool.clone()),
+                        stock_to_leave: stock,
+                        scallop_height: s.scallop_height.unwrap_or(match s.kind {
+                            OperationKind::SemiFinish => self.strategy.semi_finish_scallop_height,
+                            OperationKind::Finish => self.strategy.scallop_height,
+                        }),
+                    }
+                })
+                .collect()
+        };
+        check_operations(&operations, &self.tool)?;
+        Ok(operations)
+    }
+}
+
+/// The rules of [`Job::operations`], naming the operation (1-based, as listed) that breaks one.
+fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<(), String> {
+    let mut previous_stock = f64::INFINITY;
+    for (i, op) in operations.iter().enumerate() {
+        let at = format!("operation {} ({})", i + 1, op.name);
+        if !(op.scallop_height.is_finite() && op.scallop_height > 0.0) {
+            return Err(format!(
+                "{at}: scallop_height must be a positive number of mm, got {}",
+                op.scallop_height
+            ));
+        }
+        match op.kind {
+            OperationKind::SemiFinish => {
+                if !(op.stock_to_leave.is_finite() && op.stock_to_leave > 0.0) {
+                    return Err(format!(
+                        "{at}: semi-finishing needs stock_to_leave > 0 mm, got {}",
+                        op.stock_to_leave
+                    ));
+                }
+                if op.stock_to_leave >= previous_stock {
+                    return Err(format!(
+                        "{at}: stock_to_leave {} mm is not below the {previous_stock} mm the \
+                         operation before leaves",
+                        op.stock_to_leave
+                    ));
+                }
+                previous_stock = op.stock_to_leave;
+            }
+            OperationKind::Finish => {
+                if op.stock_to_leave != 0.0 {
+                    return Err(format!(
+                        "{at}: finishing leaves no stock; stock_to_leave must be 0, got {}",
+                        op.stock_to_leave
+                    ));
+                }
+                if i + 1 != operations.len() {
+                    return Err(format!(
+                        "{at}: finishing must be the last operation ({} follow it)",
+                        operations.len() - i - 1
+                    ));
+                }
+            }
+        }
+        if op.tool != *job_tool {
+            return Err(format!(
+                "{at}: uses another tool than [tool]; a program with tool changes is not \
+                 posted yet, so every operation runs the job's tool"
+            ));
+        }
+    }
+    if operations
+        .last()
+        .is_none_or(|op| op.kind != OperationKind::Finish)
+    {
+        return Err(
+            "the operations must end with one finishing operation (kind = \"finish\")".into(),
+        );
+    }
+    Ok(())
 }
 
 /// `v` scaled to unit length, or `None` when it is zero or not finite. Scaled by its largest

@@ -76,7 +76,7 @@ pub struct LevelsTimings {
 
 /// A part's remeshed hierarchy and its wavelet analysis: what `levels` describes and what
 /// `offsets` builds its shapes from.
-pub(crate) struct AnalysedHierarchy {
+pub struct AnalysedHierarchy {
     pub hierarchy: Hierarchy,
     pub wavelets: WaveletHierarchy,
     pub analysed: MultiresWavelets,
@@ -96,7 +96,7 @@ pub(crate) fn elapsed_ms(t: Instant) -> f64 {
 
 /// Remeshes `part` (already prepared: welded, manifold, oriented) to a hierarchy and analyses
 /// its finest level with lifting wavelets.
-pub(crate) fn analyse_hierarchy(
+pub fn analyse_hierarchy(
     part: &Mesh,
     options: &RemeshOptions,
     wavelet_options: &WaveletOptions,

@@ -13,12 +13,14 @@ mod contour;
 mod contour_picture;
 mod levels;
 mod offsets;
+mod operation;
 mod output;
 mod pipeline;
 mod preview;
 mod report;
 mod samples;
 mod semi_finish;
+mod setup;
 mod tools;
 
 pub use access::{
@@ -26,19 +28,28 @@ pub use access::{
 };
 pub use budget::ToleranceBudget;
 pub use config::{
-    FeedSection, Job, LimitsSection, MachineSection, PartSection, SafetySection, StrategySection,
-    ToolSection, unit_direction,
+    FeedSection, Job, LimitsSection, MachineSection, Operation, OperationKind, OperationSection,
+    PartSection, SafetySection, StrategySection, ToolSection, unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,
     DEFAULT_MAX_OUTLINE_VERTICES, MethodFigures, StockSpec, contour_compare, contour_wavelet,
     parse_flat_tool, parse_stock, write_contour_outputs,
 };
-pub use levels::{LevelSummary, LevelsReport, levels};
-pub use offsets::{OffsetsOutput, OffsetsReport, ShapeSummary, offset_specs, offsets, shape_glb};
+pub use levels::{AnalysedHierarchy, LevelSummary, LevelsReport, analyse_hierarchy, levels};
+pub use offsets::{
+    OffsetsOutput, OffsetsReport, ShapeSummary, level_specs, offset_specs, offsets, shape_glb,
+    stock_shapes,
+};
+pub use operation::InProcessStock;
 pub use output::{OutputKind, check_output_dir, write_atomically, write_output_set, write_outputs};
-pub use pipeline::{Observer, Operation, PlanOutput, Quiet, load_part, plan};
+pub use pipeline::{
+    Observer, OperationDetails, OperationSpan, OperationTarget, PlanOutput, PlannedOperation,
+    Quiet, drive_surface, join_operations, load_part, plan, plan_operation, post_program,
+    program_header, stock_to_leave_shapes,
+};
 pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use samples::{SamplePart, sample_files};
-pub use semi_finish::SemiFinishSummary;
+pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
+pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

@@ -64,7 +64,7 @@ pub struct OffsetsTimings {
 /// bound = exact L∞ deviation of that level's truncated surface from the finest level + the
 /// finest level's fit to the part (the larger of its Hausdorff distance and its largest local
 /// fit), and per vertex as local bounds |deviation at v| + the finest level's local fit at v.
-pub(crate) fn level_specs(
+pub fn level_specs(
     part: &Mesh,
     analysed: &AnalysedHierarchy,
     allowances: &[f64],
@@ -142,7 +142,7 @@ pub fn offset_specs(
 
 /// The verified stock-to-leave shapes of `part` for `allowances` (coarsest first), each with
 /// the hierarchy level it offsets: what `plan` semi-finishes to.
-pub(crate) fn stock_shapes(
+pub fn stock_shapes(
     part: &Mesh,
     remesh: &RemeshOptions,
     allowances: &[f64],

@@ -1,28 +1,39 @@
-//! The plan pipeline: prepare the part, build the collision structures, drive the finishing
-//! passes, link, verify, post, preview. Each stage is a plain function of the stage before;
-//! this file only wires them and times them.
+//! The plan runner: a job is a list of operations ([`super::operation`]) planned in order by
+//! [`plan`] through public stages, each a function from plain data to plain data, so a
+//! library user can run them one by one or replace one (`examples/plan_stages.rs`):
+//!
+//! 1. [`prepare_part`] — the part welded, repaired, upright, stray pieces set aside;
+//! 2. [`drive_surface`] — the finest level of its multiresolution hierarchy (DESIGN.md §3.2);
+//! 3. [`PlanSetup::new`] — collision structures, tool, machine, safe plane, tolerance budget;
+//! 4. [`stock_to_leave_shapes`] — the offset shapes semi-finishing machines to (§3.4);
+//! 5. [`plan_operation`] per operation, from the [`InProcessStock`] the ones before leave;
+//! 6. [`join_operations`] — one program;
+//! 7. [`crate::verify::verify`] of every pose and chord, [`post_program`] (linearised and
+//!    written for the machine), and [`crate::verify::check_posted`] of the program as
+//!    written; then the preview.
+//!
+//! This file wires and times them, and gathers the report.
 
 use std::borrow::Cow;
 use std::path::Path;
 use std::time::Instant;
 
 use super::budget::ToleranceBudget;
-use super::config::{Job, SurfaceSection};
+use super::config::{Job, Operation, OperationKind, SurfaceSection};
+use super::offsets::stock_shapes;
+use super::operation::InProcessStock;
 use super::preview::preview;
 use super::report::*;
-use super::semi_finish::{SemiFinishContext, semi_finishing};
-use crate::access::RayScene;
-use crate::collide::{Margins, PartCollider, PreparedTool, Table};
+use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
+use super::setup::{PlanSetup, PreparedPart, prepare_part};
 use crate::error::{Error, Result};
-use crate::geom::{Move, MoveKind, Point3, ToolPose, Toolpath, Vector3, positive_zero};
+use crate::geom::{Move, MoveKind, Toolpath, Vector3};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
-use crate::mesh::{Mesh, PrepareOptions, prepare_without_stray_pieces, set_aside_warning};
+use crate::mesh::{Mesh, set_aside_warning};
 use crate::multires::Hierarchy;
-use crate::orient::{AxisChooser, AxisOptions, SmoothingOptions};
-use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions};
-use crate::post::{
-    self, GcodeOptions, LineariseOptions, MachineKinematics, ProgramHeader, TableTableAC,
-};
+use crate::offset::OffsetShape;
+use crate::path::{self, Finishing, FinishingOptions, LinkReport};
+use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
 /// Hears about progress; the CLI shows it as progress bars, libraries can ignore it.
@@ -47,9 +58,9 @@ pub struct PlanOutput {
     /// The part as planned (welded, oriented).
     pub part: Mesh,
     pub toolpath: Toolpath,
-    /// The operations of `toolpath`, in order: semi-finishing to each stock-to-leave shape,
-    /// then finishing (stock to leave 0).
-    pub operations: Vec<Operation>,
+    /// Where each operation's moves are in `toolpath`, in order: semi-finishing to each
+    /// stock-to-leave shape, then finishing (stock to leave 0).
+    pub operations: Vec<OperationSpan>,
     pub gcode: String,
     pub cl_csv: String,
     pub report: PlanReport,
@@ -61,14 +72,14 @@ pub struct PlanOutput {
 
 /// One operation of a plan: the stock it leaves on the part and its moves in the toolpath.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Operation {
+pub struct OperationSpan {
     pub stock_to_leave_mm: f64,
     pub moves: std::ops::Range<usize>,
 }
 
 /// The surface the passes are driven on: the part when it already has subdivision
 /// connectivity (or remeshing is off), else its hierarchy's finest level (DESIGN.md §3.2).
-fn drive_surface<'a>(
+pub fn drive_surface<'a>(
     part: &'a Mesh,
     settings: &SurfaceSection,
 ) -> std::result::Result<(Cow<'a, Mesh>, SurfaceSummary), String> {
@@ -178,8 +189,150 @@ fn ms(since: Instant) -> f64 {
     (since.elapsed().as_secs_f64() * 1e3 * 10.0).round() / 10.0
 }
 
-/// Plans 5-axis ball-end finishing of `raw` (already in mm) for `job`. `part_name` names the
-/// part in errors, the report and the G-code header.
+/// One operation, planned: its moves and what planning it measured.
+pub struct PlannedOperation {
+    pub operation: Operation,
+    pub toolpath: Toolpath,
+    pub details: OperationDetails,
+    /// What the operation's own checks found wrong, if anything (the plan must not be run).
+    pub failure: Option<String>,
+}
+
+/// What planning an operation measured, by kind.
+pub enum OperationDetails {
+    SemiFinish(SemiFinishSummary),
+    Finish {
+        passes: Finishing,
+        linking: LinkReport,
+    },
+}
+
+/// What an operation machines: the stock-to-leave shape of a semi-finishing operation (with
+/// its hierarchy level), the drive surface of finishing.
+pub enum OperationTarget<'a> {
+    Shape {
+        level: usize,
+        shape: &'a OffsetShape,
+    },
+    DriveSurface(&'a Mesh),
+}
+
+/// Plans one operation on `target` from the material `stock` the operations before it leave;
+/// refuses an operation that would leave as much as is already there (it would cut nothing).
+pub fn plan_operation(
+    setup: &PlanSetup,
+    operation: &Operation,
+    target: OperationTarget,
+    stock: &InProcessStock,
+    advance: &(dyn Fn() + Sync),
+) -> Result<PlannedOperation> {
+    if let InProcessStock::AtLeast { stock_to_leave } = *stock
+        && operation.stock_to_leave >= stock_to_leave
+    {
+        return Err(Error::Job(format!(
+            "operation '{}' leaves {} mm where the operations before it already leave \
+             {stock_to_leave} mm: it would cut nothing",
+            operation.name, operation.stock_to_leave
+        )));
+    }
+    let planned = |toolpath, details, failure| PlannedOperation {
+        operation: operation.clone(),
+        toolpath,
+        details,
+        failure,
+    };
+    match (operation.kind, target) {
+        (OperationKind::SemiFinish, OperationTarget::Shape { level, shape }) => {
+            let semi =
+                semi_finish_operation(setup, level, shape, operation.scallop_height, advance)?;
+            Ok(planned(
+                semi.toolpath,
+                OperationDetails::SemiFinish(semi.summary),
+                semi.failure,
+            ))
+        }
+        (OperationKind::Finish, OperationTarget::DriveSurface(drive)) => {
+            let reachable = |axis: &Vector3| setup.reachable(axis);
+            let ctx = setup.finishing_context(&setup.collider, &setup.rays, &reachable);
+            let options = FinishingOptions {
+                scallop_height: operation.scallop_height,
+                ..setup.finishing.clone()
+            };
+            // Sections follow the drive surface; every pose is placed and checked against
+            // the part.
+            let passes = path::finishing_passes(drive, &ctx, &options, advance);
+            let (toolpath, linking) = path::link(
+                &passes.segments,
+                &setup.collider,
+                &setup.prepared_tool,
+                setup.tool.id,
+                &setup.link,
+            );
+            Ok(planned(
+                toolpath,
+                OperationDetails::Finish { passes, linking },
+                None,
+            ))
+        }
+        (kind, _) => Err(Error::Job(format!(
+            "operation '{}' ({}) was given the wrong surface to machine",
+            operation.name,
+            kind.name()
+        ))),
+    }
+}
+
+/// The stock-to-leave shapes of the semi-finishing `operations`, in their order, each with
+/// the hierarchy level it offsets. As `wavemill offsets` does: shape j offsets level j of a
+/// hierarchy with one level above the base per shape, so the finest allowance is not on the
+/// coarsest level.
+pub fn stock_to_leave_shapes(
+    part: &Mesh,
+    job: &Job,
+    operations: &[Operation],
+) -> Result<Vec<(usize, OffsetShape)>> {
+    let allowances: Vec<f64> = operations
+        .iter()
+        .filter(|op| op.kind == OperationKind::SemiFinish)
+        .map(|op| op.stock_to_leave)
+        .collect();
+    if allowances.is_empty() {
+        return Ok(Vec::new());
+    }
+    let remesh = crate::multires::RemeshOptions {
+        tolerance: 0.0,
+        base_triangles: job.surface.base_triangles,
+        base_max_error: None,
+        max_levels: allowances.len() as u32,
+        crease_angle_deg: job.surface.crease_angle_deg,
+        ..Default::default()
+    };
+    stock_shapes(part, &remesh, &allowances)
+}
+
+/// The operations' moves as one program, in order, and where each operation's moves are.
+/// Each operation starts and ends on the safe plane, as its segments do.
+pub fn join_operations(planned: &[PlannedOperation]) -> (Toolpath, Vec<OperationSpan>) {
+    let mut toolpath = Toolpath {
+        tool_id: planned.first().map_or(0, |p| p.toolpath.tool_id),
+        moves: Vec::new(),
+    };
+    let mut spans = Vec::with_capacity(planned.len());
+    for p in planned {
+        let start = toolpath.moves.len();
+        toolpath.moves.extend_from_slice(&p.toolpath.moves);
+        spans.push(OperationSpan {
+            stock_to_leave_mm: p.operation.stock_to_leave,
+            moves: start..toolpath.moves.len(),
+        });
+    }
+    (toolpath, spans)
+}
+
+/// Plans `job` on `raw` (already in mm): the stages in order — prepare the part, its drive
+/// surface, the cell ([`PlanSetup`]), the stock-to-leave shapes, each operation from the
+/// stock the ones before it leave, then the joined program verified, posted, read back and
+/// previewed. `part_name` names the part in errors, the report and the G-code header.
 pub fn plan(
     raw: &RawMesh,
     part_name: &str,
@@ -188,237 +341,94 @@ pub fn plan(
     observer: &dyn Observer,
 ) -> Result<PlanOutput> {
     job.validate().map_err(Error::Job)?;
+    let operations = job.operations().map_err(Error::Job)?;
     let started = Instant::now();
     let mut timings = StageTimings::default();
-    let mesh_error = |reason: String| Error::Mesh {
-        file: part_name.to_string(),
-        reason,
-    };
 
     let t = Instant::now();
     observer.stage("prepare part", 0);
-    let upright = match job.part.up {
-        Some(up) => turned_upright(
-            &raw.mesh,
-            &super::config::unit_direction(up).ok_or_else(|| {
-                Error::Job(format!("part.up must be a non-zero vector, got {up:?}"))
-            })?,
-        ),
-        None => raw.mesh.clone(),
-    };
-    // Debris (a lone far triangle, a sliver shell) is set aside and reported, not planned:
-    // it would make the part open or stretch every size taken from its box (issue 17 item 8).
-    let (part, mesh_report, stray_pieces) =
-        prepare_without_stray_pieces(&upright, &PrepareOptions::default()).map_err(mesh_error)?;
-    if !mesh_report.watertight {
-        return Err(mesh_error(format!(
-            "the part must be a closed, consistently oriented surface to tell inside from outside; found: {}",
-            mesh_report.problems().join("; ")
-        )));
-    }
+    let prepared = prepare_part(raw, part_name, job)?;
+    let part = &prepared.part;
     timings.prepare = ms(t);
-    check_drive_points(&mesh_report, job)?;
-    let lowest = part.aabb().min.z;
-    let table_z = job.machine.table_z.unwrap_or(lowest);
-    if table_z > lowest + job.strategy.tolerance {
-        return Err(Error::Job(format!(
-            "machine.table_z {table_z} mm is above the part's lowest point (z = {lowest:.4} mm \
-             after turning the part up): the part would stand inside the table"
-        )));
-    }
 
     let t = Instant::now();
     observer.stage("drive surface", 0);
-    let (drive, surface) = drive_surface(&part, &job.surface).map_err(mesh_error)?;
+    let (drive, surface) = drive_surface(part, &job.surface).map_err(|reason| Error::Mesh {
+        file: part_name.to_string(),
+        reason,
+    })?;
     timings.drive_surface = ms(t);
 
     let t = Instant::now();
     observer.stage("collision structures", 0);
-    let table = Table {
-        top_z: table_z,
-        margin: job.safety.table_margin,
-    };
-    let collider = PartCollider::new(&part)
-        .map_err(mesh_error)?
-        .with_table(table);
-    let rays = RayScene::new(&part);
+    let setup = PlanSetup::new(&prepared, job)?;
     timings.collision_structures = ms(t);
 
-    let tool = job.tool.assembly();
-    let margins = Margins {
-        shank: job.safety.shank_margin,
-        holder: job.safety.holder_margin,
-    };
-    let prepared = PreparedTool::new(&tool, &margins);
-    // Unless told otherwise, the part is clamped centred on the C axis, standing on the table
-    // at the pivot height: its footprint's centre and lowest point are the pivot.
-    let part_box = part.aabb();
-    let part_origin_in_table = job
-        .machine
-        .part_origin_in_table
-        .map(Vector3::from)
-        .unwrap_or_else(|| -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z))
-        .map(positive_zero);
-    let kinematics = machine(job, part_origin_in_table)?;
-    let pivot = Point3::from(-part_origin_in_table);
-    let reach = part
-        .positions
+    let t = Instant::now();
+    let semi_count = operations
         .iter()
-        .map(|p| (p - pivot).norm())
-        .fold(0.0, f64::max);
-    let safe_distance = job
-        .machine
-        .safe_distance
-        .unwrap_or(reach + job.machine.safe_margin);
-    if safe_distance <= reach {
-        return Err(Error::Job(format!(
-            "machine.safe_distance {safe_distance} mm is inside the part's reach from the pivot ({reach:.3} mm)"
-        )));
-    }
-    // Rounding is charged where the ball centre is farthest from the pivot: on the safe plane.
-    let gcode_options = GcodeOptions::default();
-    let budget = ToleranceBudget::split(
-        job.strategy.tolerance,
-        &gcode_options,
-        safe_distance + prepared.ball_radius,
-    )
-    .map_err(Error::Job)?;
-
-    let t = Instant::now();
-    let chooser = AxisChooser::new(AxisOptions {
-        lead_deg: job.strategy.lead_deg,
-        tilt_deg: job.strategy.tilt_deg,
-        max_deviation_deg: job.strategy.max_axis_deviation_deg,
-        ..AxisOptions::default()
-    });
-    let reachable = |axis: &Vector3| {
-        let pose = ToolPose {
-            tip: pivot,
-            axis: crate::geom::Direction::new_normalize(*axis),
-        };
-        kinematics.inverse(&pose, None).is_ok()
-    };
-    let ctx = FinishingContext {
-        part: &collider,
-        rays: &rays,
-        tool: &prepared,
-        chooser: &chooser,
-        reachable: &reachable,
-    };
-    let options = FinishingOptions {
-        drive_normal: Vector3::from(job.strategy.drive_normal),
-        scallop_height: job.strategy.scallop_height,
-        tolerance: budget.chord_mm,
-        max_step: job.strategy.max_step,
-        max_axis_turn_deg: job.strategy.max_axis_turn_deg,
-        axis_smoothing: (job.strategy.max_axis_change_deg_per_mm > 0.0).then_some(
-            SmoothingOptions {
-                max_turn_deg_per_mm: job.strategy.max_axis_change_deg_per_mm,
-                window_mm: job.strategy.axis_smoothing_window_mm,
-            },
-        ),
-    };
-    let link_options = LinkOptions {
-        pivot,
-        safe_distance,
-        clearance: job.feeds.clearance,
-        cut_feed: job.feeds.cut,
-        approach_feed: job.feeds.approach,
-        retract_feed: job.feeds.retract,
-        rapid_feed: job.machine.rapid_feed,
-        rapid_margin: job.safety.shank_margin,
-    };
-    let search = job.safety.holder_margin.max(job.safety.shank_margin) + 5.0;
-    timings.finishing_passes = ms(t);
-
-    let t = Instant::now();
-    let allowances = &job.strategy.semi_finish_allowances;
-    let semi = if allowances.is_empty() {
-        None
-    } else {
+        .filter(|op| op.kind == OperationKind::SemiFinish)
+        .count();
+    if semi_count > 0 {
         observer.stage("stock-to-leave shapes and semi-finishing", 0);
-        let semi_ctx = SemiFinishContext {
-            part: &part,
-            part_collider: &collider,
-            table,
-            tool: &prepared,
-            tool_id: tool.id,
-            chooser: &chooser,
-            reachable: &reachable,
-            finishing: &options,
-            link: &link_options,
-            shank_margin: margins.shank,
-            holder_margin: margins.holder,
-            search,
+    }
+    let shapes = stock_to_leave_shapes(part, job, &operations)?;
+    let mut shapes_left = shapes.iter();
+    let mut stock = InProcessStock::Blank;
+    let mut planned = Vec::with_capacity(operations.len());
+    let advance = || observer.advance();
+    for operation in &operations {
+        let target = match operation.kind {
+            OperationKind::SemiFinish => {
+                let (level, shape) = shapes_left.next().ok_or_else(|| {
+                    Error::Job(format!("no stock-to-leave shape for '{}'", operation.name))
+                })?;
+                OperationTarget::Shape {
+                    level: *level,
+                    shape,
+                }
+            }
+            OperationKind::Finish => {
+                timings.semi_finishing = ms(t);
+                let stepover = path::stepover_for_scallop(
+                    operation.tool.diameter / 2.0,
+                    operation.scallop_height,
+                );
+                let extent = part
+                    .aabb()
+                    .extent()
+                    .dot(&setup.finishing.drive_normal.normalize())
+                    .abs();
+                observer.stage(
+                    "finishing passes",
+                    (extent / stepover.max(1e-3)).ceil() as u64,
+                );
+                OperationTarget::DriveSurface(&drive)
+            }
         };
-        // As `wavemill offsets` does: shape j offsets level j of a hierarchy with one level
-        // above the base per allowance, so the finest allowance is not on the coarsest level.
-        let remesh = crate::multires::RemeshOptions {
-            tolerance: 0.0,
-            base_triangles: job.surface.base_triangles,
-            base_max_error: None,
-            max_levels: allowances.len() as u32,
-            crease_angle_deg: job.surface.crease_angle_deg,
-            ..Default::default()
-        };
-        Some(semi_finishing(
-            &semi_ctx,
-            &remesh,
-            allowances,
-            job.strategy.semi_finish_scallop_height,
-            &|| observer.advance(),
-        )?)
-    };
-    timings.semi_finishing = ms(t);
-
-    let t = Instant::now();
-    let stepover = path::stepover_for_scallop(job.tool.diameter / 2.0, options.scallop_height);
-    let extent = part
-        .aabb()
-        .extent()
-        .dot(&options.drive_normal.normalize())
-        .abs();
-    observer.stage(
-        "finishing passes",
-        (extent / stepover.max(1e-3)).ceil() as u64,
-    );
-    // Sections follow the drive surface; every pose is placed and checked against the part.
-    let finishing = path::finishing_passes(&drive, &ctx, &options, &|| observer.advance());
-    timings.finishing_passes += ms(t);
+        let t = Instant::now();
+        planned.push(plan_operation(&setup, operation, target, &stock, &advance)?);
+        match operation.kind {
+            OperationKind::SemiFinish => {}
+            OperationKind::Finish => timings.finishing_passes += ms(t),
+        }
+        stock = stock.after(operation);
+    }
 
     let t = Instant::now();
     observer.stage("linking", 0);
-    let (finishing_path, link_report) = path::link(
-        &finishing.segments,
-        &collider,
-        &prepared,
-        tool.id,
-        &link_options,
-    );
-    // One program: the semi-finishing operations, coarsest first, then finishing. Each
-    // operation starts and ends on the safe plane, as its segments do.
-    let mut toolpath = Toolpath {
-        tool_id: finishing_path.tool_id,
-        moves: Vec::new(),
-    };
-    let mut operations = Vec::new();
-    let mut append = |moves: &[Move], stock_to_leave_mm: f64| {
-        let start = toolpath.moves.len();
-        toolpath.moves.extend_from_slice(moves);
-        operations.push(Operation {
-            stock_to_leave_mm,
-            moves: start..toolpath.moves.len(),
-        });
-    };
-    for (operation, allowance) in semi.iter().flat_map(|s| &s.toolpaths).zip(allowances) {
-        append(&operation.moves, *allowance);
-    }
-    append(&finishing_path.moves, 0.0);
+    let (toolpath, spans) = join_operations(&planned);
     timings.linking = ms(t);
 
     let t = Instant::now();
     observer.stage("verification", 0);
-    let verification = verify(&toolpath, &collider, &prepared, search);
+    let budget = &setup.budget;
+    let verification = verify(
+        &toolpath,
+        &setup.collider,
+        &setup.prepared_tool,
+        setup.search,
+    );
     timings.verification = ms(t);
     let pose_failure = verification
         .passes(
@@ -431,50 +441,8 @@ pub fn plan(
 
     let t = Instant::now();
     observer.stage("post-processing", 0);
-    let mut header = ProgramHeader {
-        program_name: format!("wavemill finishing of {part_name}"),
-        part_name: part_name.to_string(),
-        tool_description: vec![tool.describe()],
-        tool_number: tool.id,
-        spindle_rpm: job.tool.spindle_rpm,
-        coolant: true,
-        comments: vec![
-            format!(
-                "ball-end finishing along parallel planes, scallop {} mm, tolerance {} mm",
-                job.strategy.scallop_height, job.strategy.tolerance
-            ),
-            format!("safe plane {safe_distance:.3} mm from the pivot along the tool axis"),
-        ],
-    };
-    if !allowances.is_empty() {
-        header.comments.insert(
-            0,
-            format!(
-                "first semi-finishing to stock-to-leave shapes of {} mm, scallop {} mm",
-                allowances
-                    .iter()
-                    .map(|a| a.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                job.strategy.semi_finish_scallop_height
-            ),
-        );
-    }
-    header.comments.push(format!(
-        "tolerance {} mm = chord {:.4} + linearisation {:.4} + rounding {:.4} + verification 2 x {:.4}",
-        budget.total_mm,
-        budget.chord_mm,
-        budget.linearisation_mm,
-        budget.rounding_mm,
-        budget.verification_mm
-    ));
-    let linearise = LineariseOptions::default()
-        .with_tolerance_mm(budget.linearisation_mm)
-        .with_control_point_mm(prepared.ball_radius);
-    let program = post::linearise_opt(&kinematics, &toolpath, &linearise)?;
-    let mut writer = post::GcodeWriter::new(&kinematics, gcode_options);
-    post::emit(&program, &header, &mut writer);
-    let gcode = writer.into_string();
+    let header = program_header(&prepared, job, &setup, &operations);
+    let (program, gcode) = post_program(&setup, &toolpath, &header)?;
     let cl_csv = post::write_cl_csv(&toolpath);
     let time = post::estimate_time(&program, job.machine.max_rotary_speed);
     timings.post = ms(t);
@@ -485,29 +453,39 @@ pub fn plan(
     let posted = check_posted(
         &gcode,
         &MachineModel::TableTableAc {
-            part_origin_in_table,
+            part_origin_in_table: setup.part_origin_in_table,
         },
-        &part,
+        part,
         &PostedOptions {
-            ball_radius: prepared.ball_radius,
+            ball_radius: setup.prepared_tool.ball_radius,
             feed_error_mm: budget.verification_mm,
             rapid_error_mm: (0.1 * rapid_margin).max(budget.verification_mm),
-            search_mm: search,
+            search_mm: setup.search,
         },
     );
     timings.back_simulation = ms(t);
     let verification_failure = pose_failure
-        .or_else(|| posted_failure(&posted, &budget, rapid_margin))
-        .or_else(|| semi.as_ref().and_then(|s| s.failure.clone()));
+        .or_else(|| posted_failure(&posted, budget, rapid_margin))
+        .or_else(|| planned.iter().find_map(|p| p.failure.clone()));
     let posted = posted.ok();
 
     let t = Instant::now();
     observer.stage("preview", 0);
-    let preview_glb = preview(&part, &toolpath, 5.0, 2.0 * job.tool.diameter / 2.0 + 8.0)?;
+    let preview_glb = preview(part, &toolpath, 5.0, 2.0 * job.tool.diameter / 2.0 + 8.0)?;
     timings.preview = ms(t);
     timings.total = ms(started);
     observer.finish();
 
+    let mut semi_summaries = Vec::new();
+    let mut finishing = None;
+    for p in planned {
+        match p.details {
+            OperationDetails::SemiFinish(summary) => semi_summaries.push(summary),
+            OperationDetails::Finish { passes, linking } => finishing = Some((passes, linking)),
+        }
+    }
+    let (finishing, link_report) =
+        finishing.ok_or_else(|| Error::Job("the operations must end with finishing".into()))?;
     let length = |kind: MoveKind| -> f64 {
         toolpath
             .moves
@@ -529,6 +507,10 @@ pub fn plan(
             }
         )));
     }
+    let finish = operations
+        .last()
+        .ok_or_else(|| Error::Job("a job needs at least one operation".into()))?;
+    let stepover = path::stepover_for_scallop(finish.tool.diameter / 2.0, finish.scallop_height);
     let report = PlanReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),
         part: PartSummary {
@@ -539,32 +521,32 @@ pub fn plan(
                 .warnings
                 .iter()
                 .cloned()
-                .chain(set_aside_warning(&stray_pieces))
+                .chain(set_aside_warning(&prepared.stray_pieces))
                 .collect(),
-            problems: mesh_report.problems(),
-            mesh: mesh_report,
-            stray_pieces,
+            problems: prepared.mesh_report.problems(),
+            mesh: prepared.mesh_report.clone(),
+            stray_pieces: prepared.stray_pieces.clone(),
         },
         tool: ToolSummary {
-            description: tool.describe(),
+            description: setup.tool.describe(),
             ball_radius_mm: job.tool.diameter / 2.0,
-            shank_margin_mm: margins.shank,
-            holder_margin_mm: margins.holder,
-            assembly: tool.clone(),
+            shank_margin_mm: setup.margins.shank,
+            holder_margin_mm: setup.margins.holder,
+            assembly: setup.tool.clone(),
         },
         machine: MachineSummary {
-            description: kinematics.description(),
-            pivot_in_part_frame: pivot.coords.into(),
-            safe_distance_mm: safe_distance,
-            table_z_mm: table_z,
+            description: setup.kinematics.description(),
+            pivot_in_part_frame: setup.pivot.coords.into(),
+            safe_distance_mm: setup.safe_distance,
+            table_z_mm: prepared.table_z,
             table_margin_mm: job.safety.table_margin,
         },
         surface,
         strategy: StrategySummary {
             kind: "parallel-plane ball-end finishing",
-            scallop_height_mm: options.scallop_height,
+            scallop_height_mm: finish.scallop_height,
             stepover_mm: stepover,
-            tolerance_mm: options.tolerance,
+            tolerance_mm: setup.finishing.tolerance,
             drive_planes: finishing.planes,
             drive_points: finishing.drive_points,
             refinement_poses: finishing.inserted_poses,
@@ -582,7 +564,7 @@ pub fn plan(
                 moves_over_bound: finishing.smoothing.moves_over_bound,
             },
         },
-        stock_to_leave: semi.map(|s| s.summaries).unwrap_or_default(),
+        stock_to_leave: semi_summaries,
         poses: pose_counts(&toolpath),
         cutting_length_mm: length(MoveKind::Cut),
         approach_length_mm: length(MoveKind::Approach),
@@ -592,7 +574,7 @@ pub fn plan(
             by_kind: time,
         },
         clearance: verification,
-        tolerance_budget: budget,
+        tolerance_budget: budget.clone(),
         posted,
         unreachable: UnreachableSummary {
             count: finishing.unreachable.len(),
@@ -609,15 +591,90 @@ pub fn plan(
         timings_ms: Some(timings),
     };
     Ok(PlanOutput {
-        part,
+        part: prepared.part,
         toolpath,
-        operations,
+        operations: spans,
         gcode,
         cl_csv,
         report,
         preview_glb,
         verification_failure,
     })
+}
+
+/// The post stage: `toolpath` linearised for `setup`'s machine within the budget's
+/// linearisation share (bounding the ball centre, not the tip), and the G-code written with
+/// `header`. Returns the machine blocks and the program text.
+pub fn post_program(
+    setup: &PlanSetup,
+    toolpath: &Toolpath,
+    header: &ProgramHeader,
+) -> Result<(Vec<(Move, Joints)>, String)> {
+    let linearise = LineariseOptions::default()
+        .with_tolerance_mm(setup.budget.linearisation_mm)
+        .with_control_point_mm(setup.prepared_tool.ball_radius);
+    let program = post::linearise_opt(&setup.kinematics, toolpath, &linearise)?;
+    let mut writer = post::GcodeWriter::new(&setup.kinematics, setup.gcode_options.clone());
+    post::emit(&program, header, &mut writer);
+    Ok((program, writer.into_string()))
+}
+
+/// The program header: what was planned, with which tool, and the tolerance budget.
+pub fn program_header(
+    prepared: &PreparedPart,
+    job: &Job,
+    setup: &PlanSetup,
+    operations: &[Operation],
+) -> ProgramHeader {
+    let budget = &setup.budget;
+    let mut header = ProgramHeader {
+        program_name: format!("wavemill finishing of {}", prepared.name),
+        part_name: prepared.name.clone(),
+        tool_description: vec![setup.tool.describe()],
+        tool_number: setup.tool.id,
+        spindle_rpm: job.tool.spindle_rpm,
+        coolant: true,
+        comments: vec![
+            format!(
+                "ball-end finishing along parallel planes, scallop {} mm, tolerance {} mm",
+                operations
+                    .iter()
+                    .rfind(|op| op.kind == OperationKind::Finish)
+                    .map_or(job.strategy.scallop_height, |op| op.scallop_height),
+                job.strategy.tolerance
+            ),
+            format!(
+                "safe plane {:.3} mm from the pivot along the tool axis",
+                setup.safe_distance
+            ),
+        ],
+    };
+    let semi: Vec<&Operation> = operations
+        .iter()
+        .filter(|op| op.kind == OperationKind::SemiFinish)
+        .collect();
+    if let Some(first) = semi.first() {
+        header.comments.insert(
+            0,
+            format!(
+                "first semi-finishing to stock-to-leave shapes of {} mm, scallop {} mm",
+                semi.iter()
+                    .map(|op| op.stock_to_leave.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                first.scallop_height
+            ),
+        );
+    }
+    header.comments.push(format!(
+        "tolerance {} mm = chord {:.4} + linearisation {:.4} + rounding {:.4} + verification 2 x {:.4}",
+        budget.total_mm,
+        budget.chord_mm,
+        budget.linearisation_mm,
+        budget.rounding_mm,
+        budget.verification_mm
+    ));
+    header
 }
 
 /// What the back-simulation of the posted program found wrong, if anything: a feed move
@@ -649,54 +706,6 @@ fn posted_failure(
     (!problems.is_empty()).then(|| problems.join("; "))
 }
 
-/// Refuses a job whose finishing passes are estimated to have more drive points than
-/// `limits.max_drive_points`, before any of the work. The planes are a stepover apart and each
-/// section is sampled at most `max_step` apart, so a surface of area A has at least about
-/// A / (stepover · max_step) drive points; the points where sections cross the drive surface's
-/// edges come on top (measured: 2.8× the estimate on the sample impeller, 4.4× on the real
-/// blower), so the estimate is a lower one and the limit is set with that in mind.
-fn check_drive_points(mesh: &crate::mesh::MeshReport, job: &Job) -> Result<()> {
-    let stepover = path::stepover_for_scallop(job.tool.diameter / 2.0, job.strategy.scallop_height);
-    let estimate = mesh.surface_area / (stepover * job.strategy.max_step);
-    let limit = job.limits.max_drive_points;
-    if estimate > limit as f64 {
-        return Err(Error::TooLarge {
-            what: format!(
-                "finishing {:.0} mm² at a {stepover:.4} mm stepover and {} mm steps",
-                mesh.surface_area, job.strategy.max_step
-            ),
-            estimate: format!("{:.3e} drive points", estimate),
-            limit: format!("{limit}"),
-            how_to_raise: "check the part's units and the scallop height, or raise \
-                           limits.max_drive_points"
-                .into(),
-        });
-    }
-    Ok(())
-}
-
-/// `mesh` turned so that the unit vector `up` points along +Z (the shortest rotation; 180° about X when `up`
-/// points down).
-fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
-    let rotation = nalgebra::Rotation3::rotation_between(up, &Vector3::z()).unwrap_or_else(|| {
-        nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
-    });
-    Mesh {
-        positions: mesh.positions.iter().map(|p| rotation * p).collect(),
-        triangles: mesh.triangles.clone(),
-    }
-}
-
-/// The machine the job describes, with the part clamped at `part_origin_in_table`.
-pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<TableTableAC> {
-    let m = &job.machine;
-    let kin = TableTableAC::new(part_origin_in_table)
-        .with_a_limits(m.a_limits[0], m.a_limits[1])
-        .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi)));
-    kin.validate()?;
-    Ok(kin)
-}
-
 fn pose_counts(path: &Toolpath) -> PoseCounts {
     let mut c = PoseCounts {
         total: path.moves.len(),
@@ -716,6 +725,7 @@ fn pose_counts(path: &Toolpath) -> PoseCounts {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::{Move, Point3};
     use crate::mesh::fixtures::cuboid;
 
     fn plan_block() -> PlanOutput {

@@ -15,14 +15,13 @@
 
 use serde::Serialize;
 
-use super::offsets::stock_shapes;
+use super::setup::PlanSetup;
 use crate::access::RayScene;
-use crate::collide::{PartCollider, PreparedTool, Table};
+use crate::collide::PartCollider;
 use crate::error::{Error, Result};
 use crate::geom::{MoveKind, Toolpath};
-use crate::mesh::Mesh;
-use crate::multires::RemeshOptions;
-use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions};
+use crate::offset::OffsetShape;
+use crate::path::{self, FinishingOptions};
 use crate::verify::verify;
 
 /// One semi-finishing operation in `report.json`: the shape it machined to and what the checks
@@ -54,129 +53,111 @@ pub struct SemiFinishSummary {
     pub min_stock_left_minus_allowance_mm: f64,
 }
 
-/// The operations, in machining order.
-pub(crate) struct SemiFinishing {
-    pub toolpaths: Vec<Toolpath>,
-    pub summaries: Vec<SemiFinishSummary>,
-    /// What the checks found wrong, if anything (the plan then must not be run).
+/// One semi-finishing operation, planned: its moves, what its checks measured, and what they
+/// found wrong, if anything (the plan then must not be run).
+pub struct SemiFinishPlan {
+    pub toolpath: Toolpath,
+    pub summary: SemiFinishSummary,
     pub failure: Option<String>,
 }
 
-/// What every operation shares with finishing.
-pub(crate) struct SemiFinishContext<'a> {
-    pub part: &'a Mesh,
-    pub part_collider: &'a PartCollider,
-    pub table: Table,
-    pub tool: &'a PreparedTool,
-    pub tool_id: u32,
-    pub chooser: &'a crate::orient::AxisChooser,
-    pub reachable: &'a (dyn Fn(&crate::geom::Vector3) -> bool + Sync),
-    pub finishing: &'a FinishingOptions,
-    pub link: &'a LinkOptions,
-    pub shank_margin: f64,
-    pub holder_margin: f64,
-    pub search: f64,
-}
-
-/// Builds the shapes for `allowances` (`remesh` sizes their hierarchy) and plans one
-/// semi-finishing operation per shape at `scallop_height`.
-pub(crate) fn semi_finishing(
-    ctx: &SemiFinishContext,
-    remesh: &RemeshOptions,
-    allowances: &[f64],
+/// Plans one semi-finishing operation at `scallop_height` over `shape` — level `level` of the
+/// part's hierarchy, offset to hold the part at the shape's allowance — with `setup`'s tool,
+/// axes, linking and margins, and checks it on the shape and, independently, on the part.
+pub fn semi_finish_operation(
+    setup: &PlanSetup,
+    level: usize,
+    shape: &OffsetShape,
     scallop_height: f64,
     advance: &(dyn Fn() + Sync),
-) -> Result<SemiFinishing> {
-    let shapes = stock_shapes(ctx.part, remesh, allowances)?;
-    let tolerance = ctx.finishing.tolerance;
-    let mut result = SemiFinishing {
-        toolpaths: Vec::with_capacity(shapes.len()),
-        summaries: Vec::with_capacity(shapes.len()),
-        failure: None,
-    };
-    for (level, shape) in &shapes {
-        let figures = &shape.report;
-        if !figures.verified {
-            result.failure.get_or_insert(format!(
-                "the stock-to-leave shape for {} mm did not verify",
-                figures.allowance_mm
-            ));
-        }
-        let collider = PartCollider::new(&shape.mesh)
-            .map_err(|e| {
-                Error::Job(format!(
-                    "stock-to-leave shape {} mm: {e}",
-                    figures.allowance_mm
-                ))
-            })?
-            .with_table(ctx.table);
-        let rays = RayScene::new(&shape.mesh);
-        let finishing_ctx = FinishingContext {
-            part: &collider,
-            rays: &rays,
-            tool: ctx.tool,
-            chooser: ctx.chooser,
-            reachable: ctx.reachable,
-        };
-        let options = FinishingOptions {
-            scallop_height,
-            ..ctx.finishing.clone()
-        };
-        let passes = path::finishing_passes(&shape.mesh, &finishing_ctx, &options, advance);
-        let (toolpath, linking) =
-            path::link(&passes.segments, &collider, ctx.tool, ctx.tool_id, ctx.link);
-        let on_shape = verify(&toolpath, &collider, ctx.tool, ctx.search);
-        if let Err(e) = on_shape.passes(
-            tolerance,
-            ctx.shank_margin,
-            ctx.holder_margin,
-            ctx.table.margin,
-        ) {
-            result.failure.get_or_insert(format!(
-                "semi-finishing to {} mm: {e}",
-                figures.allowance_mm
-            ));
-        }
-        let on_part = verify(&toolpath, ctx.part_collider, ctx.tool, ctx.search);
-        let stock_left = on_part
-            .min_cutter_clearance
-            .min(on_part.min_chord_clearance)
-            - figures.allowance_mm;
-        if stock_left < -tolerance {
-            result.failure.get_or_insert(format!(
-                "semi-finishing to {} mm leaves only {:.4} mm on the part",
-                figures.allowance_mm,
-                stock_left + figures.allowance_mm
-            ));
-        }
-        let cutting_length_mm = toolpath
-            .moves
-            .windows(2)
-            .filter(|w| w[1].kind == MoveKind::Cut)
-            .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
-            .sum();
-        result.summaries.push(SemiFinishSummary {
-            allowance_mm: figures.allowance_mm,
-            level: *level,
-            bound_mm: figures.bound_mm,
-            shape_triangles: figures.triangles,
-            shape_verified: figures.verified,
-            shape_min_clearance_minus_allowance_mm: figures.min_clearance_minus_allowance_mm,
-            shape_mean_excess_mm: figures.mean_excess_mm,
-            shape_max_excess_mm: figures.max_excess_mm,
-            scallop_height_mm: scallop_height,
-            drive_planes: passes.planes,
-            drive_points: passes.drive_points,
-            unreachable: passes.unreachable.len(),
-            unreachable_by_reason: path::unreachable_by_reason(&passes.unreachable),
-            segments: linking.segments,
-            cutting_length_mm,
-            min_clearance_to_shape_mm: on_shape
-                .min_cutter_clearance
-                .min(on_shape.min_chord_clearance),
-            min_stock_left_minus_allowance_mm: stock_left,
-        });
-        result.toolpaths.push(toolpath);
+) -> Result<SemiFinishPlan> {
+    let tolerance = setup.finishing.tolerance;
+    let figures = &shape.report;
+    let mut failure = None;
+    if !figures.verified {
+        failure.get_or_insert(format!(
+            "the stock-to-leave shape for {} mm did not verify",
+            figures.allowance_mm
+        ));
     }
-    Ok(result)
+    let collider = PartCollider::new(&shape.mesh)
+        .map_err(|e| {
+            Error::Job(format!(
+                "stock-to-leave shape {} mm: {e}",
+                figures.allowance_mm
+            ))
+        })?
+        .with_table(setup.table);
+    let rays = RayScene::new(&shape.mesh);
+    let reachable = |axis: &crate::geom::Vector3| setup.reachable(axis);
+    let finishing_ctx = setup.finishing_context(&collider, &rays, &reachable);
+    let options = FinishingOptions {
+        scallop_height,
+        ..setup.finishing.clone()
+    };
+    let tool = &setup.prepared_tool;
+    let passes = path::finishing_passes(&shape.mesh, &finishing_ctx, &options, advance);
+    let (toolpath, linking) = path::link(
+        &passes.segments,
+        &collider,
+        tool,
+        setup.tool.id,
+        &setup.link,
+    );
+    let on_shape = verify(&toolpath, &collider, tool, setup.search);
+    if let Err(e) = on_shape.passes(
+        tolerance,
+        setup.margins.shank,
+        setup.margins.holder,
+        setup.table.margin,
+    ) {
+        failure.get_or_insert(format!(
+            "semi-finishing to {} mm: {e}",
+            figures.allowance_mm
+        ));
+    }
+    let on_part = verify(&toolpath, &setup.collider, tool, setup.search);
+    let stock_left = on_part
+        .min_cutter_clearance
+        .min(on_part.min_chord_clearance)
+        - figures.allowance_mm;
+    if stock_left < -tolerance {
+        failure.get_or_insert(format!(
+            "semi-finishing to {} mm leaves only {:.4} mm on the part",
+            figures.allowance_mm,
+            stock_left + figures.allowance_mm
+        ));
+    }
+    let cutting_length_mm = toolpath
+        .moves
+        .windows(2)
+        .filter(|w| w[1].kind == MoveKind::Cut)
+        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+        .sum();
+    let summary = SemiFinishSummary {
+        allowance_mm: figures.allowance_mm,
+        level,
+        bound_mm: figures.bound_mm,
+        shape_triangles: figures.triangles,
+        shape_verified: figures.verified,
+        shape_min_clearance_minus_allowance_mm: figures.min_clearance_minus_allowance_mm,
+        shape_mean_excess_mm: figures.mean_excess_mm,
+        shape_max_excess_mm: figures.max_excess_mm,
+        scallop_height_mm: scallop_height,
+        drive_planes: passes.planes,
+        drive_points: passes.drive_points,
+        unreachable: passes.unreachable.len(),
+        unreachable_by_reason: path::unreachable_by_reason(&passes.unreachable),
+        segments: linking.segments,
+        cutting_length_mm,
+        min_clearance_to_shape_mm: on_shape
+            .min_cutter_clearance
+            .min(on_shape.min_chord_clearance),
+        min_stock_left_minus_allowance_mm: stock_left,
+    };
+    Ok(SemiFinishPlan {
+        toolpath,
+        summary,
+        failure,
+    })
 }

@@ -1,0 +1,141 @@
+//! The material between operations: what the runner passes from one operation to the next
+//! ([`InProcessStock`]). The operations themselves are read from the job file
+//! ([`super::config::Operation`], `[[operation]]` tables) and planned in order by
+//! [`super::pipeline::plan`].
+
+use super::config::Operation;
+
+/// The material on the part between operations, as far as the planner knows it.
+///
+/// A placeholder for the tri-dexel stock model (issue 19), which will replace these
+/// variants with the material itself; the runner already passes it from one operation to the
+/// next, so operations that need it (roughing from the blank, rest roughing) plug in without
+/// changing the runner.
+#[derive(Clone, Debug, PartialEq)]
+pub enum InProcessStock {
+    /// The blank as clamped: nothing is modelled about it yet.
+    Blank,
+    /// An earlier operation left at least this much on the whole part, mm (verified by its
+    /// own checks against the part).
+    AtLeast { stock_to_leave: f64 },
+}
+
+impl InProcessStock {
+    /// The stock after `operation` has been machined from `self`.
+    pub fn after(&self, operation: &Operation) -> InProcessStock {
+        InProcessStock::AtLeast {
+            stock_to_leave: operation.stock_to_leave,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::job::config::{Job, OperationKind};
+
+    fn job(toml_text: &str) -> Result<Vec<Operation>, String> {
+        Job::from_toml(toml_text, "job.toml")?.operations()
+    }
+
+    /// Today's keys still mean one semi-finishing operation per allowance, then finishing.
+    #[test]
+    fn a_job_without_operation_tables_reads_as_before() {
+        let ops = job("[strategy]\nsemi_finish_allowances = [1.0, 0.3]\nscallop_height = 0.02\n")
+            .expect("job");
+        let kinds: Vec<(OperationKind, f64, f64)> = ops
+            .iter()
+            .map(|o| (o.kind, o.stock_to_leave, o.scallop_height))
+            .collect();
+        assert_eq!(
+            kinds,
+            vec![
+                (OperationKind::SemiFinish, 1.0, 0.05),
+                (OperationKind::SemiFinish, 0.3, 0.05),
+                (OperationKind::Finish, 0.0, 0.02),
+            ]
+        );
+        assert_eq!(job("").expect("defaults").len(), 1);
+    }
+
+    /// The same plan written as `[[operation]]` tables resolves to the same operations.
+    #[test]
+    fn operation_tables_resolve_to_the_same_operations() {
+        let listed = job("[strategy]\nscallop_height = 0.02\n\
+             [[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 1.0\n\
+             [[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.3\n\
+             [[operation]]\nkind = \"finish\"\n")
+        .expect("job");
+        let legacy =
+            job("[strategy]\nsemi_finish_allowances = [1.0, 0.3]\nscallop_height = 0.02\n")
+                .expect("job");
+        assert_eq!(listed, legacy);
+    }
+
+    #[test]
+    fn broken_lists_are_refused_naming_the_operation() {
+        for (text, says) in [
+            (
+                "[[operation]]\nkind = \"semi-finish\"\n",
+                "operation 1 (semi-finish to 0 mm): semi-finishing needs stock_to_leave > 0",
+            ),
+            (
+                "[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.5\n[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.5\n[[operation]]\nkind = \"finish\"\n",
+                "operation 2 (semi-finish to 0.5 mm): stock_to_leave 0.5 mm is not below",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\n[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 1.0\n",
+                "operation 1 (finish): finishing must be the last",
+            ),
+            (
+                "[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 1.0\n",
+                "must end with one finishing operation",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\nstock_to_leave = 0.1\n",
+                "finishing leaves no stock",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\nscallop_height = -1\n",
+                "scallop_height must be a positive",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\n[operation.tool]\ndiameter = 3.0\n",
+                "uses another tool than [tool]",
+            ),
+            (
+                "[strategy]\nsemi_finish_allowances = [1.0]\n[[operation]]\nkind = \"finish\"\n",
+                "both list operations",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\n",
+                "unknown variant `rough`",
+            ),
+        ] {
+            let err = job(text).expect_err(text);
+            assert!(err.contains(says), "{text}: {err}");
+        }
+    }
+
+    #[test]
+    fn the_stock_after_an_operation_is_what_it_leaves() {
+        let ops = job("[strategy]\nsemi_finish_allowances = [0.4]\n").expect("job");
+        let mut stock = InProcessStock::Blank;
+        let mut seen = Vec::new();
+        for op in &ops {
+            stock = stock.after(op);
+            seen.push(stock.clone());
+        }
+        assert_eq!(
+            seen,
+            vec![
+                InProcessStock::AtLeast {
+                    stock_to_leave: 0.4
+                },
+                InProcessStock::AtLeast {
+                    stock_to_leave: 0.0
+                },
+            ]
+        );
+    }
+}

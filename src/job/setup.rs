@@ -1,0 +1,284 @@
+//! The first stages of a plan, shared by every operation: the part prepared for planning
+//! ([`prepare_part`]) and the cell it is machined in ([`PlanSetup`]) — its collision
+//! structures, the tool, the machine with the part clamped on it, the safe plane, and how the
+//! job's tolerance is split ([`ToleranceBudget`]).
+
+use super::budget::ToleranceBudget;
+use super::config::{Job, unit_direction};
+use crate::access::RayScene;
+use crate::collide::{Margins, PartCollider, PreparedTool, Table};
+use crate::error::{Error, Result};
+use crate::geom::{Direction, Point3, ToolPose, Vector3, positive_zero};
+use crate::mesh::io::RawMesh;
+use crate::mesh::{Mesh, MeshReport, Piece, PrepareOptions, prepare_without_stray_pieces};
+use crate::orient::{AxisChooser, AxisOptions, SmoothingOptions};
+use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions};
+use crate::post::{GcodeOptions, MachineKinematics, TableTableAC};
+use crate::tool::ToolAssembly;
+
+/// The part as it will be planned, and what preparing it found.
+pub struct PreparedPart {
+    /// The part's name in errors, the report and the program header.
+    pub name: String,
+    /// Welded, oriented, turned upright, stray pieces set aside.
+    pub part: Mesh,
+    pub mesh_report: MeshReport,
+    /// Debris set aside (a lone far triangle, a sliver shell), for the report.
+    pub stray_pieces: Vec<Piece>,
+    /// Height of the machine table's top in the part frame, mm.
+    pub table_z: f64,
+}
+
+/// Prepares `raw` for planning: turned so `part.up` points along +Z, welded and repaired,
+/// stray debris set aside (issue 17 item 8), and refused unless closed (inside and outside
+/// must be told apart) or when it would stand inside the table or ask for more drive points
+/// than `limits.max_drive_points`. `part_name` names the part in errors.
+pub fn prepare_part(raw: &RawMesh, part_name: &str, job: &Job) -> Result<PreparedPart> {
+    let mesh_error = |reason: String| Error::Mesh {
+        file: part_name.to_string(),
+        reason,
+    };
+    let upright = match job.part.up {
+        Some(up) => turned_upright(
+            &raw.mesh,
+            &unit_direction(up).ok_or_else(|| {
+                Error::Job(format!("part.up must be a non-zero vector, got {up:?}"))
+            })?,
+        ),
+        None => raw.mesh.clone(),
+    };
+    let (part, mesh_report, stray_pieces) =
+        prepare_without_stray_pieces(&upright, &PrepareOptions::default()).map_err(mesh_error)?;
+    if !mesh_report.watertight {
+        return Err(mesh_error(format!(
+            "the part must be a closed, consistently oriented surface to tell inside from outside; found: {}",
+            mesh_report.problems().join("; ")
+        )));
+    }
+    check_drive_points(&mesh_report, job)?;
+    let lowest = part.aabb().min.z;
+    let table_z = job.machine.table_z.unwrap_or(lowest);
+    if table_z > lowest + job.strategy.tolerance {
+        return Err(Error::Job(format!(
+            "machine.table_z {table_z} mm is above the part's lowest point (z = {lowest:.4} mm \
+             after turning the part up): the part would stand inside the table"
+        )));
+    }
+    Ok(PreparedPart {
+        name: part_name.to_string(),
+        part,
+        mesh_report,
+        stray_pieces,
+        table_z,
+    })
+}
+
+/// Everything the operations of a plan share.
+pub struct PlanSetup {
+    /// The part with the table, for exact distances and tool-body collisions.
+    pub collider: PartCollider,
+    /// The part for visibility rays.
+    pub rays: RayScene,
+    pub tool: ToolAssembly,
+    pub prepared_tool: PreparedTool,
+    pub margins: Margins,
+    pub table: Table,
+    pub kinematics: TableTableAC,
+    /// Where the part's frame origin sits in the table frame, mm.
+    pub part_origin_in_table: Vector3,
+    /// The machine's pivot in the part frame.
+    pub pivot: Point3,
+    /// Distance of the safe plane from the pivot along the tool axis, mm.
+    pub safe_distance: f64,
+    pub budget: ToleranceBudget,
+    pub gcode_options: GcodeOptions,
+    pub chooser: AxisChooser,
+    /// Finishing options at the job's scallop height; operations set their own.
+    pub finishing: FinishingOptions,
+    pub link: LinkOptions,
+    /// How far collision queries look beyond the margins, mm.
+    pub search: f64,
+}
+
+impl PlanSetup {
+    /// The cell for `part`: collision structures, the job's tool, the machine with the part
+    /// clamped (by default centred on the C axis, standing on the table at the pivot height),
+    /// the safe plane beyond the part's reach, and the tolerance budget.
+    pub fn new(part: &PreparedPart, job: &Job) -> Result<PlanSetup> {
+        let table = Table {
+            top_z: part.table_z,
+            margin: job.safety.table_margin,
+        };
+        let collider = PartCollider::new(&part.part)
+            .map_err(|reason| Error::Mesh {
+                file: part.name.clone(),
+                reason,
+            })?
+            .with_table(table);
+        let rays = RayScene::new(&part.part);
+        let tool = job.tool.assembly();
+        let margins = Margins {
+            shank: job.safety.shank_margin,
+            holder: job.safety.holder_margin,
+        };
+        let prepared_tool = PreparedTool::new(&tool, &margins);
+        let part_box = part.part.aabb();
+        let part_origin_in_table = job
+            .machine
+            .part_origin_in_table
+            .map(Vector3::from)
+            .unwrap_or_else(|| {
+                -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z)
+            })
+            .map(positive_zero);
+        let kinematics = machine(job, part_origin_in_table)?;
+        let pivot = Point3::from(-part_origin_in_table);
+        let reach = part
+            .part
+            .positions
+            .iter()
+            .map(|p| (p - pivot).norm())
+            .fold(0.0, f64::max);
+        let safe_distance = job
+            .machine
+            .safe_distance
+            .unwrap_or(reach + job.machine.safe_margin);
+        if safe_distance <= reach {
+            return Err(Error::Job(format!(
+                "machine.safe_distance {safe_distance} mm is inside the part's reach from the pivot ({reach:.3} mm)"
+            )));
+        }
+        // Rounding is charged where the ball centre is farthest from the pivot: on the safe
+        // plane.
+        let gcode_options = GcodeOptions::default();
+        let budget = ToleranceBudget::split(
+            job.strategy.tolerance,
+            &gcode_options,
+            safe_distance + prepared_tool.ball_radius,
+        )
+        .map_err(Error::Job)?;
+        let chooser = AxisChooser::new(AxisOptions {
+            lead_deg: job.strategy.lead_deg,
+            tilt_deg: job.strategy.tilt_deg,
+            max_deviation_deg: job.strategy.max_axis_deviation_deg,
+            ..AxisOptions::default()
+        });
+        let finishing = FinishingOptions {
+            drive_normal: Vector3::from(job.strategy.drive_normal),
+            scallop_height: job.strategy.scallop_height,
+            tolerance: budget.chord_mm,
+            max_step: job.strategy.max_step,
+            max_axis_turn_deg: job.strategy.max_axis_turn_deg,
+            axis_smoothing: (job.strategy.max_axis_change_deg_per_mm > 0.0).then_some(
+                SmoothingOptions {
+                    max_turn_deg_per_mm: job.strategy.max_axis_change_deg_per_mm,
+                    window_mm: job.strategy.axis_smoothing_window_mm,
+                },
+            ),
+        };
+        let link = LinkOptions {
+            pivot,
+            safe_distance,
+            clearance: job.feeds.clearance,
+            cut_feed: job.feeds.cut,
+            approach_feed: job.feeds.approach,
+            retract_feed: job.feeds.retract,
+            rapid_feed: job.machine.rapid_feed,
+            rapid_margin: job.safety.shank_margin,
+        };
+        let search = job.safety.holder_margin.max(job.safety.shank_margin) + 5.0;
+        Ok(PlanSetup {
+            collider,
+            rays,
+            tool,
+            prepared_tool,
+            margins,
+            table,
+            kinematics,
+            part_origin_in_table,
+            pivot,
+            safe_distance,
+            budget,
+            gcode_options,
+            chooser,
+            finishing,
+            link,
+            search,
+        })
+    }
+
+    /// Whether the machine can point the tool along `axis` (the inverse kinematics has a
+    /// solution within the axis limits).
+    pub fn reachable(&self, axis: &Vector3) -> bool {
+        let pose = ToolPose {
+            tip: self.pivot,
+            axis: Direction::new_normalize(*axis),
+        };
+        self.kinematics.inverse(&pose, None).is_ok()
+    }
+
+    /// The finishing context against `collider`/`rays` (the part, or a stock-to-leave
+    /// shape), with this setup's tool, axis chooser and machine.
+    pub fn finishing_context<'a>(
+        &'a self,
+        collider: &'a PartCollider,
+        rays: &'a RayScene,
+        reachable: &'a (dyn Fn(&Vector3) -> bool + Sync),
+    ) -> FinishingContext<'a> {
+        FinishingContext {
+            part: collider,
+            rays,
+            tool: &self.prepared_tool,
+            chooser: &self.chooser,
+            reachable,
+        }
+    }
+}
+
+/// Refuses a job whose finishing passes are estimated to have more drive points than
+/// `limits.max_drive_points`, before any of the work. The planes are a stepover apart and each
+/// section is sampled at most `max_step` apart, so a surface of area A has at least about
+/// A / (stepover · max_step) drive points; the points where sections cross the drive surface's
+/// edges come on top (measured: 2.8× the estimate on the sample impeller, 4.4× on the real
+/// blower), so the estimate is a lower one and the limit is set with that in mind.
+fn check_drive_points(mesh: &MeshReport, job: &Job) -> Result<()> {
+    let stepover = path::stepover_for_scallop(job.tool.diameter / 2.0, job.strategy.scallop_height);
+    let estimate = mesh.surface_area / (stepover * job.strategy.max_step);
+    let limit = job.limits.max_drive_points;
+    if estimate > limit as f64 {
+        return Err(Error::TooLarge {
+            what: format!(
+                "finishing {:.0} mm² at a {stepover:.4} mm stepover and {} mm steps",
+                mesh.surface_area, job.strategy.max_step
+            ),
+            estimate: format!("{:.3e} drive points", estimate),
+            limit: format!("{limit}"),
+            how_to_raise: "check the part's units and the scallop height, or raise \
+                           limits.max_drive_points"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
+/// `mesh` turned so that the unit vector `up` points along +Z (the shortest rotation; 180°
+/// about X when `up` points down).
+fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
+    let rotation = nalgebra::Rotation3::rotation_between(up, &Vector3::z()).unwrap_or_else(|| {
+        nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    });
+    Mesh {
+        positions: mesh.positions.iter().map(|p| rotation * p).collect(),
+        triangles: mesh.triangles.clone(),
+    }
+}
+
+/// The machine the job describes, with the part clamped at `part_origin_in_table`.
+pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<TableTableAC> {
+    let m = &job.machine;
+    let kin = TableTableAC::new(part_origin_in_table)
+        .with_a_limits(m.a_limits[0], m.a_limits[1])
+        .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi)));
+    kin.validate()?;
+    Ok(kin)
+}
