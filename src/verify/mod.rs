@@ -208,4 +208,74 @@ mod tests {
             assert!(e.contains(needle) && !e.contains(';'), "{needle}: {e}");
         }
     }
+
+    /// `verify` itself, on a 30 × 30 × 40 block standing on a table (top z = 0) with a D6 ball
+    /// mill (shank D6 from 12 mm, holder D30 from 30 mm), one path made to fail each check:
+    /// the clearance it reports is the closed-form one, and `passes` names that check.
+    #[test]
+    fn verify_measures_each_clearance_on_a_path_made_to_fail_it() {
+        use crate::collide::{Margins, Table};
+        use crate::geom::{Direction, Move, Vector3};
+        let part = PartCollider::new(&crate::mesh::fixtures::cuboid(30.0, 30.0, 40.0))
+            .expect("block")
+            .with_table(Table {
+                top_z: 0.0,
+                margin: 2.0,
+            });
+        let margins = Margins {
+            shank: 0.5,
+            holder: 2.0,
+        };
+        let tool = PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins);
+        let path = |poses: &[([f64; 3], [f64; 3])]| Toolpath {
+            tool_id: 1,
+            moves: poses
+                .iter()
+                .map(|&(tip, axis)| Move {
+                    pose: ToolPose {
+                        tip: Point3::from(tip),
+                        axis: Direction::new_normalize(Vector3::from(axis)),
+                    },
+                    kind: MoveKind::Cut,
+                    feed: 1000.0,
+                })
+                .collect(),
+        };
+        let check = |v: &Verification| v.passes(0.005, 0.5, 2.0, 2.0);
+        let up = [0.0, 0.0, 1.0];
+
+        // The ball 0.1 mm into the top face.
+        let v = verify(&path(&[([15.0, 15.0, 39.9], up)]), &part, &tool, 7.0);
+        assert!((v.min_cutter_clearance + 0.1).abs() < 1e-9, "{v:?}");
+        assert!(check(&v).unwrap_err().contains("gouges"));
+
+        // Two poses touching the top and the side face; the chord between the ball centres
+        // runs through the edge at its midpoint: clearance −r there.
+        let v = verify(
+            &path(&[
+                ([27.0, 15.0, 40.0], up),
+                ([30.0, 15.0, 37.0], [1.0, 0.0, 0.0]),
+            ]),
+            &part,
+            &tool,
+            7.0,
+        );
+        assert!(v.min_cutter_clearance.abs() < 1e-9, "{v:?}");
+        assert!((v.min_chord_clearance + 3.0).abs() < 1e-9, "{v:?}");
+        assert!(check(&v).unwrap_err().contains("straight move"));
+
+        // Beside the block, the tip 0.5 mm above the table.
+        let v = verify(&path(&[([60.0, 15.0, 0.5], up)]), &part, &tool, 7.0);
+        assert!((v.min_table_clearance - 0.5).abs() < 1e-9, "{v:?}");
+        assert!(check(&v).unwrap_err().contains("table"));
+
+        // Upright beside the wall, 0.2 mm off it: the ball and the flutes keep 0.2 mm, the
+        // shank 0.2 mm (below its 0.5 margin), the D30 holder reaches into the block.
+        let v = verify(&path(&[([33.2, 15.0, 5.0], up)]), &part, &tool, 7.0);
+        assert!((v.min_cutter_clearance - 0.2).abs() < 1e-9, "{v:?}");
+        assert!((v.min_shank_clearance - 0.2).abs() < 1e-3, "{v:?}");
+        assert!(v.min_holder_clearance <= 0.0, "{v:?}");
+        let e = check(&v).unwrap_err();
+        assert!(e.contains("shank") && e.contains("holder"), "{e}");
+    }
 }
