@@ -688,7 +688,9 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
         parallel_nc,
         report,
         svg: picture.svg(),
-        png: picture.png(1600),
+        png: picture
+            .png(1600)
+            .map_err(|e| Error::Job(format!("{file}: the paths picture: {e}")))?,
     })
 }
 

@@ -155,7 +155,7 @@ impl<'a> Picture<'a> {
     }
 
     /// PNG bytes, `width` pixels wide for the two panels together.
-    pub(crate) fn png(&self, width: usize) -> Vec<u8> {
+    pub(crate) fn png(&self, width: usize) -> Result<Vec<u8>, png::EncodingError> {
         let width = width.max(16);
         let scale = width as f64 / (2.0 * self.width());
         let height = ((self.height() * scale).ceil() as usize).max(8);
@@ -298,84 +298,37 @@ impl Raster {
         }
     }
 
-    fn encode(&self) -> Vec<u8> {
-        let mut raw = Vec::with_capacity((self.w * 3 + 1) * self.h);
-        for row in self.px.chunks(self.w * 3) {
-            raw.push(0);
-            raw.extend_from_slice(row);
-        }
-        let mut out = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
-        let mut ihdr = Vec::new();
-        ihdr.extend((self.w as u32).to_be_bytes());
-        ihdr.extend((self.h as u32).to_be_bytes());
-        ihdr.extend([8, 2, 0, 0, 0]);
-        chunk(&mut out, b"IHDR", &ihdr);
-        chunk(&mut out, b"IDAT", &zlib_stored(&raw));
-        chunk(&mut out, b"IEND", &[]);
-        out
+    /// The raster as an 8-bit RGB PNG (the `png` crate; deterministic for the same pixels).
+    fn encode(&self) -> Result<Vec<u8>, png::EncodingError> {
+        let mut out = Vec::new();
+        let mut encoder = png::Encoder::new(&mut out, self.w as u32, self.h as u32);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&self.px)?;
+        writer.finish()?;
+        Ok(out)
     }
-}
-
-fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
-    out.extend((data.len() as u32).to_be_bytes());
-    let start = out.len();
-    out.extend_from_slice(kind);
-    out.extend_from_slice(data);
-    let crc = crc32(&out[start..]);
-    out.extend(crc.to_be_bytes());
-}
-
-/// zlib stream of stored deflate blocks (RFC 1950/1951).
-fn zlib_stored(data: &[u8]) -> Vec<u8> {
-    let mut out = vec![0x78, 0x01];
-    let blocks: Vec<&[u8]> = data.chunks(65_535).collect();
-    for (i, b) in blocks.iter().enumerate() {
-        out.push(u8::from(i + 1 == blocks.len()));
-        let len = b.len() as u16;
-        out.extend(len.to_le_bytes());
-        out.extend((!len).to_le_bytes());
-        out.extend_from_slice(b);
-    }
-    if blocks.is_empty() {
-        out.extend([1, 0, 0, 0xff, 0xff]);
-    }
-    let (mut a, mut b) = (1u32, 0u32);
-    for &x in data {
-        a = (a + x as u32) % 65_521;
-        b = (b + a) % 65_521;
-    }
-    out.extend(((b << 16) | a).to_be_bytes());
-    out
-}
-
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = 0xffff_ffffu32;
-    for &x in data {
-        crc ^= x as u32;
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xedb8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// What is drawn is what a PNG reader reads back, pixel for pixel.
     #[test]
-    fn checksums_match_known_values() {
-        // CRC-32 of "123456789" is 0xCBF43926 (the standard check value).
-        assert_eq!(crc32(b"123456789"), 0xcbf4_3926);
-        // Adler-32 of "Wikipedia" is 0x11E60398.
-        let z = zlib_stored(b"Wikipedia");
-        assert_eq!(&z[z.len() - 4..], &0x11e6_0398u32.to_be_bytes());
-        assert_eq!(&z[..2], &[0x78, 0x01]);
-        // (0x7801 is a multiple of 31, as zlib requires.)
-        assert_eq!(0x7801 % 31, 0);
+    fn the_png_decodes_to_the_raster() {
+        let mut img = Raster::new(17, 9);
+        img.set(3.2, 4.7, PASS);
+        img.span(8, 1.0, 15.5, PART);
+        let bytes = img.encode().expect("encode");
+        let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
+            .read_info()
+            .expect("a PNG");
+        let mut pixels = vec![0; reader.output_buffer_size().expect("size")];
+        let info = reader.next_frame(&mut pixels).expect("one frame");
+        assert_eq!((info.width, info.height), (17, 9));
+        assert_eq!(info.color_type, png::ColorType::Rgb);
+        assert_eq!(&pixels[..info.buffer_size()], &img.px[..]);
     }
 }
