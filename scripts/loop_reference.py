@@ -19,7 +19,7 @@ Meshes (all closed, consistently oriented, counter-clockwise seen from outside):
 * torus       : genus-1 torus, 8 x 6 sections (96 triangles, all valence 6), perturbed.
 
 trimesh's subdivide_loop uses Loop's original weights, the same as wavemill's rules
-(MULTIRES_CONVENTIONS.md): odd = 3/8 (a + b) + 1/8 (c + d); even = (1 - n beta) v +
+(docs/multires-conventions.md): odd = 3/8 (a + b) + 1/8 (c + d); even = (1 - n beta) v +
 beta sum(neighbours), beta = (40 - (3 + 2 cos(2 pi / n))^2) / (64 n). trimesh has no creases,
 and its boundary vertex rule 3/4 v + 1/8 sum(...) sums every neighbour that is a boundary
 vertex, also across interior edges (weights then exceed 1, e.g. on a quad split in two), where

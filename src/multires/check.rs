@@ -1,5 +1,5 @@
 //! Invariant checker for the subdivision hierarchy: is a fine level exactly the 1-to-4 split
-//! of a coarse one, with the numbering of MULTIRES_CONVENTIONS.md? Called by tests (and meant
+//! of a coarse one, with the numbering of docs/multires-conventions.md? Called by tests (and meant
 //! for fuzzers and debug assertions in the later stages). Written independently of
 //! [`crate::multires::split()`]: it reads the numbering back out of the fine triangles.
 

@@ -3,7 +3,7 @@
 //! Level j+1 of the hierarchy is the 1-to-4 split of level j ([`split()`]) with Loop's rules
 //! for the positions (seed 004, §5 eq. 5.1; DESIGN.md §3.1), extended with creases, corners
 //! and boundaries ([`loop_subdivide`]). The numbering contract every multires file relies on
-//! (MULTIRES_CONVENTIONS.md):
+//! (docs/multires-conventions.md):
 //! * vertices `0..V_j` of level j+1 are level j's vertices ("even", same index);
 //! * vertex `V_j + k` is the "odd" vertex on edge k of level j, edges `[min, max]` sorted;
 //! * coarse triangle t = `[a, b, c]` becomes fine triangles `4t..4t+4`:

@@ -4,7 +4,7 @@
 //! Topology only: nothing in this file reads a position.
 //!
 //! ```text
-//!            c                 numbering (MULTIRES_CONVENTIONS.md):
+//!            c                 numbering (docs/multires-conventions.md):
 //!           / \                  t = [a, b, c] -> 4t+0 [a, ab, ca]
 //!         ca---bc                                 4t+1 [ab, b, bc]
 //!         / \ / \                                 4t+2 [ca, bc, c]

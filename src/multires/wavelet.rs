@@ -1,7 +1,7 @@
 //! Lifting-scheme wavelets on a Loop subdivision hierarchy (DESIGN.md §3.3–3.4; seed 004
 //! §2.3, eqs. 2.18–2.27).
 //!
-//! One level of a semi-regular hierarchy is split (MULTIRES_CONVENTIONS.md) into *even*
+//! One level of a semi-regular hierarchy is split (docs/multires-conventions.md) into *even*
 //! vertices `0..V_j` (the coarse vertices) and *odd* vertices `V_j + k` (one per coarse edge
 //! k). Seed 004 writes the two-channel filter bank as `V^{j+1} = P^j V^j + Q^j W^j`
 //! (synthesis, eq. 2.27) and `V^j = A^j V^{j+1}`, `W^j = B^j V^{j+1}` (analysis, eqs.

@@ -60,8 +60,9 @@
 //! corners and region splits, so there are no matching control points to interpolate — the
 //! fractional LEVEL is interpolated (the offset distance), not the control points. The count
 //! is per level (the worst loop of each level decides), not per non-smooth region, so a curve
-//! is a whole offset loop, which is safe but not minimal. Measured (README): a wider band makes
-//! the coarse passes no shorter than the extra curves cost, so the default band stays.
+//! is a whole offset loop, which is safe but not minimal. Measured (docs/contour-2.5d.md): a
+//! wider band makes the coarse passes no shorter than the extra curves cost, so the default
+//! band stays.
 //! The uncut area is measured by the `contour` command against the baseline's.
 //!
 //! # Pass spacing
