@@ -695,7 +695,7 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
 }
 
 /// Writes the five outputs of [`contour_compare`] into `dir` as one set, replacing an earlier
-/// run's (see [`super::output`]).
+/// run's (see `job::output`).
 pub fn write_contour_outputs(dir: &Path, c: &ContourComparison) -> Result<()> {
     write_output_set(
         dir,

@@ -16,9 +16,9 @@
 //!   vertices: exactly the hull grown by δ.
 //!
 //! The search tests each candidate change on what it touches — the turns at its ends and the
-//! growth of its one or two new points, an O(log n) query ([`GrowthOracle`]) — against counts
+//! growth of its one or two new points, an O(log n) query (`GrowthOracle`) — against counts
 //! kept for the rest of the polygon, so it decides exactly as the whole-polygon tests would;
-//! above [`ONE_AT_A_TIME_LEGS`] legs it makes independent changes in rounds (see
+//! above `ONE_AT_A_TIME_LEGS` legs it makes independent changes in rounds (see
 //! [`loose_hull_counted`]). A dense circle's hull of 3,000 legs took 37–71 s when every
 //! candidate was tested vertex by vertex against every leg (issue 17 item 12).
 
@@ -327,9 +327,9 @@ impl Loosening<'_> {
 
 /// The loose hull and the work it took (see [`LooseHullWork`]).
 ///
-/// Up to [`ONE_AT_A_TIME_LEGS`] legs this is the seed's greedy search: after each change the
+/// Up to `ONE_AT_A_TIME_LEGS` legs this is the seed's greedy search: after each change the
 /// runs are found again and the first candidate that passes, in the order of
-/// [`candidate_runs`], is made. Testing a candidate touches only its own legs and neighbours
+/// `candidate_runs`, is made. Testing a candidate touches only its own legs and neighbours
 /// (the polygon's bad turns and far vertices are counted, and the growth of a new point is an
 /// O(log n) query), so an iteration costs O(n log n) for sorting the runs. Above that size one
 /// change per iteration would make the search quadratic (a dense circle of 3,000 points has
