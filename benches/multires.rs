@@ -1,13 +1,17 @@
 //! Multiresolution benchmarks: Loop subdivision throughput (output triangles/s; compare with
-//! `scripts/time_trimesh_loop.py` on the same mesh) and lifting-wavelet analysis + synthesis at
-//! three sizes (linear scaling expected).
+//! `scripts/time_trimesh_loop.py` on the same mesh), the 1-to-4 split's connectivity alone,
+//! quadric simplification to a base mesh, and lifting-wavelet analysis + synthesis at three
+//! sizes (linear scaling expected).
 
 mod common;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use wavemill::job;
 use wavemill::mesh::{PrepareOptions, prepare};
-use wavemill::multires::{Creases, Hierarchy, RemeshOptions, WaveletHierarchy, loop_subdivide};
+use wavemill::multires::{
+    Creases, Hierarchy, RemeshOptions, SimplifyOptions, WaveletHierarchy, loop_subdivide, simplify,
+    split,
+};
 
 fn sample_blade() -> wavemill::mesh::Mesh {
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -25,6 +29,40 @@ fn subdivision(c: &mut Criterion) {
     g.bench_function("blade_2_levels_output_triangles", |b| {
         b.iter(|| loop_subdivide(&blade, &Creases::none(), 2).unwrap())
     });
+    g.finish();
+}
+
+/// The connectivity of one 1-to-4 split (numbering, DESIGN.md §3.1) of the sample blade after
+/// two levels (300k triangles), without positions: the part of a subdivision step that the
+/// wavelet transform reuses.
+fn split_connectivity(c: &mut Criterion) {
+    let (fine, _) = loop_subdivide(&sample_blade(), &Creases::none(), 2).unwrap();
+    let mut g = c.benchmark_group("split");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(4 * fine.triangles.len() as u64));
+    g.bench_function("blade_300k_to_1.2M_triangles", |b| {
+        b.iter(|| split(&fine.triangles, fine.positions.len()))
+    });
+    g.finish();
+}
+
+/// Quadric simplification of the sample impeller (38.5k triangles) to the base sizes the
+/// remesher asks for.
+fn simplification(c: &mut Criterion) {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let raw = job::load_part(&root.join("data/impeller.glb"), "mm").unwrap();
+    let impeller = prepare(&raw.mesh, &PrepareOptions::default()).unwrap().0;
+    let mut g = c.benchmark_group("simplify");
+    g.sample_size(10);
+    for target in [2000usize, 8000] {
+        g.bench_with_input(
+            BenchmarkId::from_parameter(format!("impeller_to_{target}")),
+            &target,
+            |b, &target| {
+                b.iter(|| simplify(&impeller, &SimplifyOptions::with_target(target)).unwrap())
+            },
+        );
+    }
     g.finish();
 }
 
@@ -78,5 +116,12 @@ fn remeshing(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, subdivision, wavelets, remeshing);
+criterion_group!(
+    benches,
+    subdivision,
+    split_connectivity,
+    simplification,
+    wavelets,
+    remeshing
+);
 criterion_main!(benches);

@@ -792,32 +792,4 @@ mod tests {
         let c = detect_creases(&g, 10.0);
         assert_eq!(c.edges, vec![[1, 4], [4, 7]]);
     }
-
-    /// Throughput of one level producing ~1.3 M triangles. Run with
-    /// `cargo test --release -- --ignored --nocapture throughput`.
-    #[test]
-    #[ignore]
-    fn throughput() {
-        let (mesh, _) =
-            loop_subdivide(&test_meshes::irregular_closed(), &Creases::none(), 6).unwrap();
-        let mut best = f64::INFINITY;
-        let mut out = 0;
-        for _ in 0..5 {
-            let t = std::time::Instant::now();
-            let (fine, _) = loop_step(&mesh, &Creases::none()).unwrap();
-            best = best.min(t.elapsed().as_secs_f64());
-            out = fine.triangles.len();
-        }
-        let split_t = std::time::Instant::now();
-        let s = crate::multires::split(&mesh.triangles, mesh.positions.len());
-        let split_s = split_t.elapsed().as_secs_f64();
-        println!(
-            "loop_step: {} -> {out} triangles in {:.1} ms (best of 5): {:.1} M output triangles/s; split alone {:.1} ms",
-            mesh.triangles.len(),
-            best * 1e3,
-            out as f64 / best / 1e6,
-            split_s * 1e3
-        );
-        assert_eq!(s.triangles.len(), out);
-    }
 }

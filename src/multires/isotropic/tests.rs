@@ -646,28 +646,6 @@ fn huge_target_length_coarsens_but_keeps_topology() {
     }
 }
 
-#[test]
-#[ignore = "timing only: cargo test -- --ignored --nocapture"]
-fn timing_large_torus() {
-    let mesh = torus(200, 6);
-    let opts = IsotropicOptions::new(0.03);
-    let t0 = Instant::now();
-    let (out, _) = isotropic_remesh(
-        &mesh,
-        &Creases::default(),
-        &opts,
-        &torus_project,
-        &torus_project,
-    )
-    .expect("valid");
-    eprintln!(
-        "large torus: {} tris, min angle {:.2}°, {:?}",
-        out.triangles.len(),
-        min_angle(&out),
-        t0.elapsed()
-    );
-}
-
 /// Nearest point on a set of segments.
 fn nearest_on_segments(segs: &[(P, P)], p: &P) -> P {
     let mut best = (f64::INFINITY, *p);

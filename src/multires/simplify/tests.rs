@@ -371,45 +371,6 @@ fn shared_impeller_simplifies_keeping_genus_and_orientation() {
     assert_eq!(flipped, 0);
 }
 
-/// Diagnostic: `cargo test --release impeller_sweep -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn impeller_sweep() {
-    let bytes = std::fs::read(IMPELLER).unwrap();
-    let input = read_binary_stl(&bytes).unwrap();
-    let (mut lo, mut hi) = (
-        Vector3::repeat(f64::INFINITY),
-        Vector3::repeat(f64::NEG_INFINITY),
-    );
-    for p in &input.positions {
-        lo = lo.inf(&p.coords);
-        hi = hi.sup(&p.coords);
-    }
-    println!("bbox {lo:?} {hi:?}");
-    for target in [1000, 1500, 2000, 4000, 8000] {
-        let start = Instant::now();
-        let out = simplify(&input, &SimplifyOptions::with_target(target)).unwrap();
-        let ms = start.elapsed().as_secs_f64() * 1e3;
-        let mut worst = (0.0, 0usize);
-        for (k, p) in input.positions.iter().enumerate().step_by(2) {
-            let d = nearest_triangle(&out.mesh, p).1;
-            if d > worst.0 {
-                worst = (d, k);
-            }
-        }
-        let flipped = inverted_triangles(&input, &out.mesh, 0.01).len();
-        println!(
-            "target {target}: {} tris, {ms:.0} ms, err {:.3}, dev {:.3} at {} {:?}, flipped {flipped}, creases {}",
-            out.mesh.triangles.len(),
-            out.max_error,
-            worst.0,
-            worst.1,
-            input.positions[worst.1],
-            out.creases.edges.len()
-        );
-    }
-}
-
 #[test]
 fn tetrahedron_is_never_collapsed_even_without_geometric_checks() {
     let tetra = Mesh {
