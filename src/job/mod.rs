@@ -38,8 +38,8 @@ pub use contour::{
 };
 pub use levels::{AnalysedHierarchy, LevelSummary, LevelsReport, analyse_hierarchy, levels};
 pub use offsets::{
-    OffsetsOutput, OffsetsReport, ShapeSummary, level_specs, offset_specs, offsets, shape_glb,
-    stock_shapes,
+    MAX_SHAPE_LEVELS, OffsetsOutput, OffsetsReport, ShapeSummary, level_specs,
+    levels_for_allowances, offset_specs, offsets, shape_glb, stock_shapes,
 };
 pub use operation::InProcessStock;
 pub use output::{OutputKind, check_output_dir, write_atomically, write_output_set, write_outputs};

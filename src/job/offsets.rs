@@ -60,6 +60,35 @@ pub struct OffsetsTimings {
     pub offsets: f64,
 }
 
+/// Most hierarchy levels above the base that stock-to-leave shapes may ask for: each level
+/// multiplies the triangles by 4 (6 levels: 4096 times the base).
+pub const MAX_SHAPE_LEVELS: u32 = 6;
+
+/// Checks stock-to-leave `allowances` (mm, ≥ 0, each below the one before) and returns how many
+/// hierarchy levels above the base their shapes use: `max_levels` when given, else one per
+/// allowance after the first; at most [`MAX_SHAPE_LEVELS`].
+pub fn levels_for_allowances(allowances: &[f64], max_levels: Option<u32>) -> Result<u32> {
+    if let Some((i, a)) = allowances
+        .iter()
+        .enumerate()
+        .find(|&(i, &a)| !(a.is_finite() && a >= 0.0) || (i > 0 && a >= allowances[i - 1]))
+    {
+        return Err(Error::Usage(format!(
+            "allowance {} ({a}) must be a number of mm >= 0, smaller than the one before",
+            i + 1
+        )));
+    }
+    let levels = max_levels.unwrap_or(allowances.len().saturating_sub(1) as u32);
+    if levels > MAX_SHAPE_LEVELS {
+        return Err(Error::Usage(format!(
+            "{} allowances need {levels} levels above the base, at most {MAX_SHAPE_LEVELS} \
+             (each level multiplies the triangles by 4)",
+            allowances.len()
+        )));
+    }
+    Ok(levels)
+}
+
 /// The level surfaces and bounds for `allowances`: shape i offsets level min(i, finest), with
 /// bound = exact L∞ deviation of that level's truncated surface from the finest level + the
 /// finest level's fit to the part (the larger of its Hausdorff distance and its largest local
@@ -257,4 +286,24 @@ pub fn offsets(
         files,
         report,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn allowances_give_their_levels_or_say_what_is_wrong() {
+        assert_eq!(levels_for_allowances(&[1.0, 0.5, 0.0], None).unwrap(), 2);
+        assert_eq!(levels_for_allowances(&[0.3], Some(4)).unwrap(), 4);
+        for (allowances, max, says) in [
+            (&[0.5, 1.0][..], None, "allowance 2 (1)"),
+            (&[f64::NAN][..], None, "allowance 1 (NaN)"),
+            (&[-0.1][..], None, "allowance 1 (-0.1)"),
+            (&[1.0][..], Some(7), "need 7 levels above the base, at most 6"),
+        ] {
+            let e = levels_for_allowances(allowances, max).unwrap_err().to_string();
+            assert!(e.contains(says), "{allowances:?}: {e}");
+        }
+    }
 }

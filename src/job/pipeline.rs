@@ -574,7 +574,7 @@ pub fn plan(
             by_kind: time,
         },
         clearance: verification,
-        tolerance_budget: budget.clone(),
+        tolerance_budget: *budget,
         posted,
         unreachable: UnreachableSummary {
             count: finishing.unreachable.len(),

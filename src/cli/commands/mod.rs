@@ -1,0 +1,11 @@
+//! One file per subcommand: its arguments and a thin runner over the library.
+
+pub mod access;
+pub mod contour;
+pub mod info;
+pub mod levels;
+pub mod offsets;
+pub mod plan;
+pub mod sample;
+pub mod subdivide;
+pub mod tools;

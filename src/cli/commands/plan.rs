@@ -1,0 +1,159 @@
+//! `wavemill plan`: a job planned, verified and posted.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::cli::values::*;
+use crate::cli::{load, set_tool};
+use crate::error::{Error, Result};
+use crate::job::{self, Job};
+
+#[derive(Args, Debug)]
+pub struct PlanArgs {
+    /// Part mesh (.stl, .obj, .gltf, .glb); overrides the job file's part.
+    pub part: Option<PathBuf>,
+    /// Job file (TOML); without it the embedded defaults are used.
+    #[arg(long)]
+    pub job: Option<PathBuf>,
+    /// Cutter, e.g. `ball:6` (diameter in mm); overrides the job file.
+    #[arg(long, value_parser = ball_spec)]
+    pub tool: Option<String>,
+    /// Units of the part file: mm, m or in; overrides the job file.
+    #[arg(long, value_parser = units)]
+    pub units: Option<String>,
+    /// Direction in the part file that should point up the C axis, e.g. `0,1,0` for a part
+    /// modelled with its axis along Y; overrides the job file.
+    #[arg(long, value_parser = parse_vector)]
+    pub up: Option<[f64; 3]>,
+    /// Scallop height target, mm; overrides the job file.
+    #[arg(long, value_parser = positive)]
+    pub scallop: Option<f64>,
+    /// Tolerance of the posted program, mm: the ball centre stays within it of the part along
+    /// every move as the control interpolates it; overrides the job file.
+    #[arg(long, value_parser = positive)]
+    pub tolerance: Option<f64>,
+    /// Worker threads, 1 to 256 (default: all cores). Outputs are identical for any count.
+    #[arg(long, value_parser = threads)]
+    pub threads: Option<usize>,
+    /// Refuse a plan estimated to have more drive points than this (from the part's area, the
+    /// stepover and the step); overrides the job file's limits.max_drive_points.
+    #[arg(long)]
+    pub max_drive_points: Option<u64>,
+    /// Leave the run-dependent timings out of report.json (byte-identical reports).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Runs the command.
+pub fn run(args: &PlanArgs) -> Result<()> {
+    let mut job = match &args.job {
+        Some(path) => Job::load(path).map_err(Error::Job)?,
+        None => Job::default(),
+    };
+    // Flags override the job file; a value they make unusable is a usage error naming the flag.
+    let mut flags: Vec<(&str, &str)> = Vec::new();
+    if let Some(spec) = &args.tool {
+        set_tool(&mut job, spec)?;
+        flags.push(("tool.", "--tool"));
+        flags.push(("scallop_height", "--tool"));
+    }
+    if let Some(u) = &args.units {
+        job.part.units = Some(u.clone());
+    }
+    if let Some(up) = args.up {
+        job.part.up = Some(up);
+    }
+    if let Some(s) = args.scallop {
+        job.strategy.scallop_height = s;
+        flags.push(("strategy.scallop_height", "--scallop"));
+    }
+    if let Some(t) = args.tolerance {
+        job.strategy.tolerance = t;
+        flags.push(("strategy.tolerance", "--tolerance"));
+    }
+    if let Some(n) = args.max_drive_points {
+        job.limits.max_drive_points = n;
+        flags.push(("limits.max_drive_points", "--max-drive-points"));
+    }
+    if let Err(e) = job.validate() {
+        return Err(match flags.iter().find(|(key, _)| e.contains(key)) {
+            Some((_, flag)) => Error::Usage(format!("{flag}: {e}")),
+            None => Error::Job(e),
+        });
+    }
+    let part_path: PathBuf = match (&args.part, &job.part.path) {
+        (Some(p), _) => p.clone(),
+        (None, Some(p)) => p.clone(),
+        (None, None) => {
+            return Err(Error::Usage(
+                "no part: give PART or set part.path in the job file".into(),
+            ));
+        }
+    };
+    job::check_output_dir(&args.out, &job::OutputKind::PLAN)?;
+    let units = job.part.units.clone().unwrap_or_else(|| "mm".into());
+    let threads = args.threads.unwrap_or(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Job(format!("worker threads: {e}")))?;
+    let name = part_path.display().to_string();
+    let raw = load(&part_path, &units)?;
+    let observer = super::super::progress::Bars::new();
+    let output = pool
+        .install(|| job::plan(&raw, &name, &units, &job, &observer))
+        .map_err(|e| match e {
+            Error::TooLarge {
+                what,
+                estimate,
+                limit,
+                how_to_raise,
+            } => Error::TooLarge {
+                what,
+                estimate,
+                limit,
+                how_to_raise: format!("{how_to_raise} (--max-drive-points)"),
+            },
+            other => other,
+        })?;
+    job::write_outputs(&args.out, &output, !args.no_timings)?;
+    summarise(&output.report, &args.out);
+    Ok(())
+}
+
+pub(crate) fn summarise(r: &job::PlanReport, out: &Path) {
+    say!("planned {}:", r.part.file);
+    say!(
+        "  poses            {} cut, {} approach, {} retract, {} rapid ({} NC blocks)",
+        r.poses.cut,
+        r.poses.approach,
+        r.poses.retract,
+        r.poses.rapid,
+        r.nc_blocks
+    );
+    say!("  cutting length   {:.1} mm", r.cutting_length_mm);
+    say!(
+        "  estimated time   {:.1} min",
+        r.estimated_time.total_s / 60.0
+    );
+    say!(
+        "  clearance        cutter {:.6} mm, shank {:.3} mm, holder {:.3} mm (searched to {} mm)",
+        r.clearance.min_cutter_clearance,
+        r.clearance.min_shank_clearance,
+        r.clearance.min_holder_clearance,
+        r.clearance.search_distance
+    );
+    say!(
+        "  unreachable      {} of {} drive points",
+        r.unreachable.count,
+        r.strategy.drive_points
+    );
+    say!(
+        "  outputs          {}/{{job.nc, cl.csv, report.json, paths.glb}}",
+        out.display()
+    );
+}
