@@ -10,7 +10,10 @@ pub enum Error {
     /// The mesh was read but cannot be used as it is.
     #[error("{file}: {reason}")]
     Mesh { file: String, reason: String },
-    /// A job file or option is wrong.
+    /// A job file or option is wrong, naming the key, operation or file.
+    #[error(transparent)]
+    JobFile(#[from] JobError),
+    /// A job's input or options are wrong in a way no more specific variant covers.
     #[error("{0}")]
     Job(String),
     #[error("machine: {0}")]
@@ -62,3 +65,46 @@ impl Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// What is wrong with a job, naming the key, the operation or the file.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum JobError {
+    /// A key's value is out of its range or malformed.
+    #[error("{key} {reason}")]
+    Invalid { key: String, reason: String },
+    /// The `[tool]` is not a valid assembly.
+    #[error("{0}")]
+    Tool(String),
+    /// One operation of the list breaks a rule; `index` counts from 1, as listed.
+    #[error("operation {index} ({name}): {reason}")]
+    Operation {
+        index: usize,
+        name: String,
+        reason: String,
+    },
+    /// The list of operations as a whole breaks a rule.
+    #[error("{0}")]
+    Operations(String),
+    /// The job file cannot be read or is not a job file (TOML syntax, unknown keys, types).
+    #[error("{file}: {reason}")]
+    File { file: String, reason: String },
+    /// A job file whose content breaks a rule.
+    #[error("{file}: {error}")]
+    InFile {
+        file: String,
+        #[source]
+        error: Box<JobError>,
+    },
+}
+
+impl JobError {
+    /// The job-file key the error is about, if it is about one (`tool` for the tool).
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            JobError::Invalid { key, .. } => Some(key),
+            JobError::Tool(_) => Some("tool"),
+            JobError::InFile { error, .. } => error.key(),
+            _ => None,
+        }
+    }
+}

@@ -131,7 +131,7 @@ pub(crate) fn load_manifold_part(
     let (mesh, report) =
         prepare(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
             file: name.clone(),
-            reason,
+            reason: reason.to_string(),
         })?;
     if report.non_manifold_edges > 0 || report.non_manifold_vertices > 0 {
         return Err(Error::Mesh {

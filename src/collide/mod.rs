@@ -12,5 +12,5 @@
 pub(crate) mod tool_bodies;
 
 pub use tool_bodies::{
-    BodyClearance, Collision, F32_SLACK, Margins, PartCollider, PreparedTool, Table,
+    BodyClearance, ColliderError, Collision, F32_SLACK, Margins, PartCollider, PreparedTool, Table,
 };

@@ -54,6 +54,14 @@ pub struct Table {
     pub margin: f64,
 }
 
+/// Why the collision structures of a part cannot be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ColliderError {
+    /// parry3d refused the triangle mesh (its message).
+    #[error("collision mesh: {0}")]
+    Mesh(String),
+}
+
 /// The part (and the table it stands on), ready for tool queries.
 pub struct PartCollider {
     surface: SurfaceDistance,
@@ -64,7 +72,7 @@ pub struct PartCollider {
 
 impl PartCollider {
     /// Builds the exact f64 structure and the parry3d BVH. Fails only on a mesh parry refuses.
-    pub fn new(mesh: &Mesh) -> Result<Self, String> {
+    pub fn new(mesh: &Mesh) -> Result<Self, ColliderError> {
         let origin = mesh.aabb().center();
         let vertices: Vec<Vec3> = mesh
             .positions
@@ -72,7 +80,7 @@ impl PartCollider {
             .map(|p| to_f32(&(p - origin)))
             .collect();
         let trimesh = TriMesh::new(vertices, mesh.triangles.clone())
-            .map_err(|e| format!("collision mesh: {e:?}"))?;
+            .map_err(|e| ColliderError::Mesh(format!("{e:?}")))?;
         Ok(Self {
             surface: SurfaceDistance::new(mesh),
             trimesh,

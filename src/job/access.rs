@@ -152,7 +152,8 @@ pub fn access(
     let t = Instant::now();
     // As `plan` does: stray debris is left out of the maps and reported.
     let (part, _, stray_pieces) =
-        prepare_without_stray_pieces(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+        prepare_without_stray_pieces(&raw.mesh, &PrepareOptions::default())
+            .map_err(|e| mesh_error(e.to_string()))?;
     let prepare_ms = ms(t);
     let t = Instant::now();
     let scene = RayScene::new(&part);
@@ -285,7 +286,7 @@ fn query_points(
 ) -> Result<(String, QuerySummary)> {
     let visible = visibility_brute_force(scene, set, query, visibility)
         .map_err(|e| Error::Job(e.to_string()))?;
-    let collider = PartCollider::new(part).map_err(Error::Job)?;
+    let collider = PartCollider::new(part).map_err(|e| Error::Job(e.to_string()))?;
     let tool = job.tool.assembly();
     let prepared = PreparedTool::new(
         &tool,

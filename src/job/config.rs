@@ -9,7 +9,15 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::error::JobError;
 use crate::tool::{Cutter, Section, ToolAssembly};
+
+fn invalid(key: &str, reason: String) -> JobError {
+    JobError::Invalid {
+        key: key.to_string(),
+        reason,
+    }
+}
 
 /// A whole job.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -308,15 +316,24 @@ impl Default for SafetySection {
 
 impl Job {
     /// Parses a job file's text; `name` is used in error messages.
-    pub fn from_toml(text: &str, name: &str) -> Result<Job, String> {
-        let job: Job = toml::from_str(text).map_err(|e| format!("{name}: {e}"))?;
-        job.validate().map_err(|e| format!("{name}: {e}"))?;
+    pub fn from_toml(text: &str, name: &str) -> Result<Job, JobError> {
+        let job: Job = toml::from_str(text).map_err(|e| JobError::File {
+            file: name.to_string(),
+            reason: e.to_string(),
+        })?;
+        job.validate().map_err(|error| JobError::InFile {
+            file: name.to_string(),
+            error: Box::new(error),
+        })?;
         Ok(job)
     }
 
     /// Reads a job file; a relative part path becomes relative to the file's folder.
-    pub fn load(path: &Path) -> Result<Job, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    pub fn load(path: &Path) -> Result<Job, JobError> {
+        let text = std::fs::read_to_string(path).map_err(|e| JobError::File {
+            file: path.display().to_string(),
+            reason: e.to_string(),
+        })?;
         let mut job = Job::from_toml(&text, &path.display().to_string())?;
         if let Some(p) = &job.part.path
             && p.is_relative()
@@ -327,38 +344,47 @@ impl Job {
     }
 
     /// Checks every number is usable, naming the key that is not.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), JobError> {
         let positive = |key: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(format!("{key} must be a positive number, got {v}"))
+                Err(invalid(key, format!("must be a positive number, got {v}")))
             }
         };
         let non_negative = |key: &str, v: f64| {
             if v.is_finite() && v >= 0.0 {
                 Ok(())
             } else {
-                Err(format!("{key} must be zero or positive, got {v}"))
+                Err(invalid(key, format!("must be zero or positive, got {v}")))
             }
         };
-        self.tool.assembly().validate().map_err(|e| e.to_string())?;
+        self.tool
+            .assembly()
+            .validate()
+            .map_err(|e| JobError::Tool(e.to_string()))?;
         positive("surface.tolerance", self.surface.tolerance)?;
         if let Some(e) = self.surface.base_max_error {
             non_negative("surface.base_max_error", e)?;
         }
         if !(0.0..=180.0).contains(&self.surface.crease_angle_deg) {
-            return Err(format!(
-                "surface.crease_angle_deg must be between 0 and 180, got {}",
-                self.surface.crease_angle_deg
+            return Err(invalid(
+                "surface.crease_angle_deg",
+                format!(
+                    "must be between 0 and 180, got {}",
+                    self.surface.crease_angle_deg
+                ),
             ));
         }
         if self.surface.base_triangles < 4
             || self.surface.max_triangles < self.surface.base_triangles
         {
-            return Err(format!(
-                "surface.base_triangles must be at least 4 and at most surface.max_triangles, got {} and {}",
-                self.surface.base_triangles, self.surface.max_triangles
+            return Err(invalid(
+                "surface.base_triangles",
+                format!(
+                    "must be at least 4 and at most surface.max_triangles, got {} and {}",
+                    self.surface.base_triangles, self.surface.max_triangles
+                ),
             ));
         }
         positive("strategy.scallop_height", self.strategy.scallop_height)?;
@@ -371,8 +397,9 @@ impl Job {
         let allowances = &self.strategy.semi_finish_allowances;
         for (i, &a) in allowances.iter().enumerate() {
             if !(a.is_finite() && a > 0.0 && (i == 0 || a < allowances[i - 1])) {
-                return Err(format!(
-                    "strategy.semi_finish_allowances must be finite, > 0 mm and strictly decreasing; entry {i} is {a}"
+                return Err(invalid(
+                    "strategy.semi_finish_allowances",
+                    format!("must be finite, > 0 mm and strictly decreasing; entry {i} is {a}"),
                 ));
             }
         }
@@ -393,28 +420,36 @@ impl Job {
             self.strategy.axis_smoothing_window_mm,
         )?;
         if self.strategy.scallop_height >= self.tool.diameter / 2.0 {
-            return Err(format!(
-                "strategy.scallop_height {} must be smaller than the ball radius {}",
-                self.strategy.scallop_height,
-                self.tool.diameter / 2.0
+            return Err(invalid(
+                "strategy.scallop_height",
+                format!(
+                    "{} must be smaller than the ball radius {}",
+                    self.strategy.scallop_height,
+                    self.tool.diameter / 2.0
+                ),
             ));
         }
         if let Some(up) = self.part.up
             && unit_direction(up).is_none()
         {
-            return Err(format!("part.up must be a non-zero vector, got {up:?}"));
+            return Err(invalid(
+                "part.up",
+                format!("must be a non-zero vector, got {up:?}"),
+            ));
         }
         let n = self.strategy.drive_normal;
         if unit_direction(n).is_none() {
-            return Err(format!(
-                "strategy.drive_normal must be a non-zero vector, got {n:?}"
+            return Err(invalid(
+                "strategy.drive_normal",
+                format!("must be a non-zero vector, got {n:?}"),
             ));
         }
         if let Some(units) = &self.part.units
             && units.parse::<crate::mesh::io::Units>().is_err()
         {
-            return Err(format!(
-                "part.units must be \"mm\", \"m\" or \"in\", got \"{units}\""
+            return Err(invalid(
+                "part.units",
+                format!("must be \"mm\", \"m\" or \"in\", got \"{units}\""),
             ));
         }
         // A lead or tilt of 90° or more turns the axis into or behind the surface.
@@ -423,19 +458,26 @@ impl Job {
             ("strategy.tilt_deg", self.strategy.tilt_deg),
         ] {
             if !(v.is_finite() && v.abs() < 90.0) {
-                return Err(format!(
-                    "{key} must be a number of degrees between -90 and 90 (exclusive), got {v}"
+                return Err(invalid(
+                    key,
+                    format!("must be a number of degrees between -90 and 90 (exclusive), got {v}"),
                 ));
             }
         }
         if self.strategy.max_axis_deviation_deg > 180.0 {
-            return Err(format!(
-                "strategy.max_axis_deviation_deg must be at most 180, got {}",
-                self.strategy.max_axis_deviation_deg
+            return Err(invalid(
+                "strategy.max_axis_deviation_deg",
+                format!(
+                    "must be at most 180, got {}",
+                    self.strategy.max_axis_deviation_deg
+                ),
             ));
         }
         if self.limits.max_drive_points == 0 {
-            return Err("limits.max_drive_points must be at least 1".into());
+            return Err(invalid(
+                "limits.max_drive_points",
+                "must be at least 1".into(),
+            ));
         }
         for (key, v) in [
             ("feeds.cut", self.feeds.cut),
@@ -453,30 +495,40 @@ impl Job {
         if let Some(z) = self.machine.table_z
             && !z.is_finite()
         {
-            return Err(format!("machine.table_z must be a number, got {z}"));
+            return Err(invalid(
+                "machine.table_z",
+                format!("must be a number, got {z}"),
+            ));
         }
         non_negative("machine.safe_margin", self.machine.safe_margin)?;
         if let Some(d) = self.machine.safe_distance {
             positive("machine.safe_distance", d)?;
         }
         if self.machine.kinematics != "table-table-ac" {
-            return Err(format!(
-                "machine.kinematics `{}` is not supported (only table-table-ac)",
-                self.machine.kinematics
+            return Err(invalid(
+                "machine.kinematics",
+                format!(
+                    "`{}` is not supported (only table-table-ac)",
+                    self.machine.kinematics
+                ),
             ));
         }
         let [lo, hi] = self.machine.a_limits;
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-            return Err(format!(
-                "machine.a_limits must be [min, max] with min < max, got {:?}",
-                self.machine.a_limits
+            return Err(invalid(
+                "machine.a_limits",
+                format!(
+                    "must be [min, max] with min < max, got {:?}",
+                    self.machine.a_limits
+                ),
             ));
         }
         if let Some([lo, hi]) = self.machine.c_limits
             && !(lo.is_finite() && hi.is_finite() && lo < hi)
         {
-            return Err(format!(
-                "machine.c_limits must be [min, max] with min < max, got [{lo}, {hi}]"
+            return Err(invalid(
+                "machine.c_limits",
+                format!("must be [min, max] with min < max, got [{lo}, {hi}]"),
             ));
         }
         // The operation list: each operation's own numbers and the order rules.
@@ -549,7 +601,7 @@ impl Job {
     /// finishing. Checks what a list must satisfy: semi-finishing stocks to leave positive and
     /// strictly decreasing, exactly one finishing operation and it comes last, one tool for
     /// the whole program (the post writes no tool changes yet).
-    pub fn operations(&self) -> Result<Vec<Operation>, String> {
+    pub fn operations(&self) -> Result<Vec<Operation>, JobError> {
         let default_name = |kind: OperationKind, stock: f64| match kind {
             OperationKind::SemiFinish => format!("semi-finish to {stock} mm"),
             OperationKind::Finish => "finish".to_string(),
@@ -576,11 +628,11 @@ impl Job {
             .collect()
         } else {
             if !self.strategy.semi_finish_allowances.is_empty() {
-                return Err(
+                return Err(JobError::Operations(
                     "strategy.semi_finish_allowances and [[operation]] tables both list \
                      operations; write the semi-finishing as [[operation]] tables"
                         .into(),
-                );
+                ));
             }
             self.operations
                 .iter()
@@ -608,52 +660,57 @@ impl Job {
 }
 
 /// The rules of [`Job::operations`], naming the operation (1-based, as listed) that breaks one.
-fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<(), String> {
+fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<(), JobError> {
     let mut previous_stock = f64::INFINITY;
     for (i, op) in operations.iter().enumerate() {
-        let at = format!("operation {} ({})", i + 1, op.name);
+        let fail = |reason: String| JobError::Operation {
+            index: i + 1,
+            name: op.name.clone(),
+            reason,
+        };
         if !(op.scallop_height.is_finite() && op.scallop_height > 0.0) {
-            return Err(format!(
-                "{at}: scallop_height must be a positive number of mm, got {}",
+            return Err(fail(format!(
+                "scallop_height must be a positive number of mm, got {}",
                 op.scallop_height
-            ));
+            )));
         }
         match op.kind {
             OperationKind::SemiFinish => {
                 if !(op.stock_to_leave.is_finite() && op.stock_to_leave > 0.0) {
-                    return Err(format!(
-                        "{at}: semi-finishing needs stock_to_leave > 0 mm, got {}",
+                    return Err(fail(format!(
+                        "semi-finishing needs stock_to_leave > 0 mm, got {}",
                         op.stock_to_leave
-                    ));
+                    )));
                 }
                 if op.stock_to_leave >= previous_stock {
-                    return Err(format!(
-                        "{at}: stock_to_leave {} mm is not below the {previous_stock} mm the \
+                    return Err(fail(format!(
+                        "stock_to_leave {} mm is not below the {previous_stock} mm the \
                          operation before leaves",
                         op.stock_to_leave
-                    ));
+                    )));
                 }
                 previous_stock = op.stock_to_leave;
             }
             OperationKind::Finish => {
                 if op.stock_to_leave != 0.0 {
-                    return Err(format!(
-                        "{at}: finishing leaves no stock; stock_to_leave must be 0, got {}",
+                    return Err(fail(format!(
+                        "finishing leaves no stock; stock_to_leave must be 0, got {}",
                         op.stock_to_leave
-                    ));
+                    )));
                 }
                 if i + 1 != operations.len() {
-                    return Err(format!(
-                        "{at}: finishing must be the last operation ({} follow it)",
+                    return Err(fail(format!(
+                        "finishing must be the last operation ({} follow it)",
                         operations.len() - i - 1
-                    ));
+                    )));
                 }
             }
         }
         if op.tool != *job_tool {
-            return Err(format!(
-                "{at}: uses another tool than [tool]; a program with tool changes is not \
-                 posted yet, so every operation runs the job's tool"
+            return Err(fail(
+                "uses another tool than [tool]; a program with tool changes is not posted \
+                 yet, so every operation runs the job's tool"
+                    .into(),
             ));
         }
     }
@@ -661,9 +718,9 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
         .last()
         .is_none_or(|op| op.kind != OperationKind::Finish)
     {
-        return Err(
+        return Err(JobError::Operations(
             "the operations must end with one finishing operation (kind = \"finish\")".into(),
-        );
+        ));
     }
     Ok(())
 }
@@ -706,13 +763,24 @@ mod tests {
 
     #[test]
     fn mistakes_are_named() {
-        let e = Job::from_toml("[strategy]\nscallop_heigth = 0.02\n", "j.toml").unwrap_err();
+        let e = Job::from_toml("[strategy]\nscallop_heigth = 0.02\n", "j.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("j.toml") && e.contains("scallop_heigth"), "{e}");
         let e = Job::from_toml("[feeds]\ncut = -5\n", "j.toml").unwrap_err();
-        assert!(e.contains("feeds.cut"), "{e}");
-        let e = Job::from_toml("[machine]\na_limits = [30, -30]\n", "j.toml").unwrap_err();
+        assert_eq!(e.key(), Some("feeds.cut"));
+        let e = e.to_string();
+        assert!(
+            e.contains("j.toml: feeds.cut must be a positive number"),
+            "{e}"
+        );
+        let e = Job::from_toml("[machine]\na_limits = [30, -30]\n", "j.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("a_limits"), "{e}");
-        let e = Job::from_toml("[strategy]\nscallop_height = 5\n", "j.toml").unwrap_err();
+        let e = Job::from_toml("[strategy]\nscallop_height = 5\n", "j.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("ball radius"), "{e}");
     }
 
@@ -726,7 +794,9 @@ mod tests {
             "lead_deg = 720",
             "tilt_deg = -90",
         ] {
-            let e = Job::from_toml(&format!("[strategy]\n{text}\n"), "j.toml").unwrap_err();
+            let e = Job::from_toml(&format!("[strategy]\n{text}\n"), "j.toml")
+                .unwrap_err()
+                .to_string();
             let key = text.split(' ').next().unwrap();
             assert!(e.contains(&format!("strategy.{key}")), "{text}: {e}");
         }
@@ -736,7 +806,9 @@ mod tests {
     /// Issue 17 item 13: a bad unit in the job file is named by its key, not as `--units`.
     #[test]
     fn bad_units_in_the_job_file_name_the_key() {
-        let e = Job::from_toml("[part]\nunits = \"furlong\"\n", "j.toml").unwrap_err();
+        let e = Job::from_toml("[part]\nunits = \"furlong\"\n", "j.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("part.units") && e.contains("furlong"), "{e}");
         assert!(!e.contains("--units"), "{e}");
     }
@@ -752,7 +824,9 @@ mod tests {
         for bad in [[0.0; 3], [f64::NAN, 0.0, 1.0], [f64::INFINITY, 0.0, 0.0]] {
             assert!(unit_direction(bad).is_none(), "{bad:?}");
         }
-        let e = Job::from_toml("[part]\nup = [0, 0, 0]\n", "j.toml").unwrap_err();
+        let e = Job::from_toml("[part]\nup = [0, 0, 0]\n", "j.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("part.up"), "{e}");
     }
 

@@ -532,7 +532,7 @@ fn read_part(
     let (mesh, _) =
         prepare_mesh(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
             file: name.clone(),
-            reason,
+            reason: reason.to_string(),
         })?;
     let part = mesh_section(&mesh, z, outline_opts.tolerance, &name)
         .map_err(|e| Error::Job(e.to_string()))?;

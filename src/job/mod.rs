@@ -28,8 +28,8 @@ pub use access::{
 };
 pub use budget::ToleranceBudget;
 pub use config::{
-    FeedSection, Job, LimitsSection, MachineSection, Operation, OperationKind, OperationSection,
-    PartSection, SafetySection, StrategySection, ToolSection, unit_direction,
+    FeedSection, Job, JobError, LimitsSection, MachineSection, Operation, OperationKind,
+    OperationSection, PartSection, SafetySection, StrategySection, ToolSection, unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,

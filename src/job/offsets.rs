@@ -300,9 +300,15 @@ mod tests {
             (&[0.5, 1.0][..], None, "allowance 2 (1)"),
             (&[f64::NAN][..], None, "allowance 1 (NaN)"),
             (&[-0.1][..], None, "allowance 1 (-0.1)"),
-            (&[1.0][..], Some(7), "need 7 levels above the base, at most 6"),
+            (
+                &[1.0][..],
+                Some(7),
+                "need 7 levels above the base, at most 6",
+            ),
         ] {
-            let e = levels_for_allowances(allowances, max).unwrap_err().to_string();
+            let e = levels_for_allowances(allowances, max)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains(says), "{allowances:?}: {e}");
         }
     }

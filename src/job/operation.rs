@@ -35,7 +35,9 @@ mod tests {
     use crate::job::config::{Job, OperationKind};
 
     fn job(toml_text: &str) -> Result<Vec<Operation>, String> {
-        Job::from_toml(toml_text, "job.toml")?.operations()
+        Job::from_toml(toml_text, "job.toml")
+            .and_then(|job| job.operations())
+            .map_err(|e| e.to_string())
     }
 
     /// Today's keys still mean one semi-finishing operation per allowance, then finishing.

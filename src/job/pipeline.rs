@@ -340,8 +340,8 @@ pub fn plan(
     job: &Job,
     observer: &dyn Observer,
 ) -> Result<PlanOutput> {
-    job.validate().map_err(Error::Job)?;
-    let operations = job.operations().map_err(Error::Job)?;
+    job.validate()?;
+    let operations = job.operations()?;
     let started = Instant::now();
     let mut timings = StageTimings::default();
 
@@ -437,7 +437,8 @@ pub fn plan(
             job.safety.holder_margin,
             job.safety.table_margin,
         )
-        .err();
+        .err()
+        .map(|failure| failure.to_string());
 
     let t = Instant::now();
     observer.stage("post-processing", 0);

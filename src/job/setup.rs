@@ -48,7 +48,8 @@ pub fn prepare_part(raw: &RawMesh, part_name: &str, job: &Job) -> Result<Prepare
         None => raw.mesh.clone(),
     };
     let (part, mesh_report, stray_pieces) =
-        prepare_without_stray_pieces(&upright, &PrepareOptions::default()).map_err(mesh_error)?;
+        prepare_without_stray_pieces(&upright, &PrepareOptions::default())
+            .map_err(|e| mesh_error(e.to_string()))?;
     if !mesh_report.watertight {
         return Err(mesh_error(format!(
             "the part must be a closed, consistently oriented surface to tell inside from outside; found: {}",
@@ -110,9 +111,9 @@ impl PlanSetup {
             margin: job.safety.table_margin,
         };
         let collider = PartCollider::new(&part.part)
-            .map_err(|reason| Error::Mesh {
+            .map_err(|e| Error::Mesh {
                 file: part.name.clone(),
-                reason,
+                reason: e.to_string(),
             })?
             .with_table(table);
         let rays = RayScene::new(&part.part);

@@ -87,7 +87,8 @@ pub fn tools(
     };
     // As `plan` does: stray debris is left out of the choice and reported.
     let (part, report, stray_pieces) =
-        prepare_without_stray_pieces(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+        prepare_without_stray_pieces(&raw.mesh, &PrepareOptions::default())
+            .map_err(|e| mesh_error(e.to_string()))?;
     if report.non_manifold_edges > 0 || report.boundary_edges > 0 {
         return Err(mesh_error(format!(
             "tool choice needs a closed manifold part (inside and outside must be defined): {}",

@@ -28,7 +28,7 @@ pub use section::{DrivePoint, SectionCurve, plane_section};
 
 pub use pieces::{Piece, PieceSplit, StrayPieceRule, set_aside_warning, split_stray_pieces};
 pub use prepare::{
-    MAX_LISTED_PIECES, MeshReport, PrepareOptions, UnitsGuess, prepare,
+    MAX_LISTED_PIECES, MeshReport, PrepareError, PrepareOptions, UnitsGuess, prepare,
     prepare_without_stray_pieces,
 };
 

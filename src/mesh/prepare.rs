@@ -20,6 +20,26 @@ use crate::geom::{Point3, triangle_area, triangle_normal};
 /// Pieces listed in a [`MeshReport`] (the largest); `components` counts all of them.
 pub const MAX_LISTED_PIECES: usize = 100;
 
+/// Why a mesh cannot be prepared at all (topology problems are not errors: they are reported
+/// in [`MeshReport`] and the caller decides).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PrepareError {
+    /// The options are out of range.
+    #[error("{0}")]
+    Options(String),
+    /// Indices out of range or coordinates that are not finite.
+    #[error("{0}")]
+    BadMesh(String),
+    #[error("the file has no triangles")]
+    NoTriangles,
+    /// Welding merged every triangle away: the part is tiny against the weld tolerance.
+    #[error(
+        "every triangle has zero area once vertices closer than {weld_tolerance} mm are merged \
+         (the part is {diagonal:.3e} mm across: check its units)"
+    )]
+    AllZeroArea { weld_tolerance: f64, diagonal: f64 },
+}
+
 /// Tolerances for [`prepare`]. Lengths are in millimetres: meshes are prepared after reading,
 /// when they are already in mm. None depends on the part's overall size.
 #[derive(Clone, Copy, Debug)]
@@ -80,22 +100,22 @@ impl PrepareOptions {
         }
     }
 
-    fn validate(&self) -> Result<(), String> {
+    fn validate(&self) -> Result<(), PrepareError> {
         let fraction = self.stray_pieces.max_area_fraction;
         if !(self.weld_tolerance.is_finite() && self.weld_tolerance >= 0.0) {
-            Err(format!(
+            Err(PrepareError::Options(format!(
                 "weld tolerance {} mm: must be a finite length ≥ 0",
                 self.weld_tolerance
-            ))
+            )))
         } else if !(self.degenerate_ratio.is_finite() && self.degenerate_ratio >= 0.0) {
-            Err(format!(
+            Err(PrepareError::Options(format!(
                 "degenerate ratio {}: must be finite and ≥ 0",
                 self.degenerate_ratio
-            ))
+            )))
         } else if !(0.0..=1.0).contains(&fraction) {
-            Err(format!(
+            Err(PrepareError::Options(format!(
                 "stray piece area fraction {fraction}: must be between 0 and 1"
-            ))
+            )))
         } else {
             Ok(())
         }
@@ -232,11 +252,12 @@ impl UnitsGuess {
 /// orientable and turns closed components outward; lists the pieces and marks the stray ones.
 /// Never fails on topology: problems are reported, and the caller decides what it can work
 /// with.
-pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport), String> {
+pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport), PrepareError> {
     options.validate()?;
-    raw.check_indices_and_coordinates()?;
+    raw.check_indices_and_coordinates()
+        .map_err(PrepareError::BadMesh)?;
     if raw.triangles.is_empty() {
-        return Err("the file has no triangles".into());
+        return Err(PrepareError::NoTriangles);
     }
     let welded = weld(raw, options.weld_tolerance).mesh;
 
@@ -269,12 +290,10 @@ pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport
         triangles.push(*t);
     }
     if triangles.is_empty() {
-        return Err(format!(
-            "every triangle has zero area once vertices closer than {} mm are merged (the part \
-             is {:.3e} mm across: check its units)",
-            options.weld_tolerance,
-            raw.aabb().diagonal()
-        ));
+        return Err(PrepareError::AllZeroArea {
+            weld_tolerance: options.weld_tolerance,
+            diagonal: raw.aabb().diagonal(),
+        });
     }
     // Drop vertices no face uses, keeping order.
     let mut new_index = vec![u32::MAX; welded.positions.len()];
@@ -358,7 +377,7 @@ pub fn prepare(raw: &Mesh, options: &PrepareOptions) -> Result<(Mesh, MeshReport
 pub fn prepare_without_stray_pieces(
     raw: &Mesh,
     options: &PrepareOptions,
-) -> Result<(Mesh, MeshReport, Vec<Piece>), String> {
+) -> Result<(Mesh, MeshReport, Vec<Piece>), PrepareError> {
     let (whole, report) = prepare(raw, options)?;
     if report.stray_piece_count == 0 {
         return Ok((whole, report, Vec::new()));
@@ -500,15 +519,18 @@ mod tests {
     fn errors_name_the_problem() {
         let mut m = uv_sphere(1.0, 4, 6);
         m.positions[2].x = f64::NAN;
+        let e = prepare(&m, &PrepareOptions::default()).unwrap_err();
         assert!(
-            prepare(&m, &PrepareOptions::default())
-                .unwrap_err()
-                .contains("non-finite")
+            matches!(&e, PrepareError::BadMesh(m) if m.contains("non-finite")),
+            "{e}"
         );
-        assert!(
-            prepare(&Mesh::default(), &PrepareOptions::default())
-                .unwrap_err()
-                .contains("no triangles")
+        assert_eq!(
+            prepare(&Mesh::default(), &PrepareOptions::default()).unwrap_err(),
+            PrepareError::NoTriangles
         );
+        let tiny = crate::mesh::fixtures::cuboid(1e-6, 1e-6, 1e-6);
+        let e = prepare(&tiny, &PrepareOptions::default()).unwrap_err();
+        assert!(matches!(e, PrepareError::AllZeroArea { .. }), "{e}");
+        assert!(e.to_string().contains("check its units"), "{e}");
     }
 }

@@ -230,7 +230,7 @@ pub fn choose_tools(
     let curvatures = vertex_curvatures(part, &normals, &ring);
     let areas = vertex_areas(part);
 
-    let mut collider = PartCollider::new(part)?;
+    let mut collider = PartCollider::new(part).map_err(|e| e.to_string())?;
     if let Some(margin) = options.table_margin {
         collider = collider.with_table(Table {
             top_z: part.aabb().min.z,

@@ -47,54 +47,80 @@ pub struct Verification {
 }
 
 impl Verification {
-    /// Whether the path respects the tolerances and margins it was planned with.
+    /// Whether the path respects the tolerances and margins it was planned with; else every
+    /// check it fails.
     pub fn passes(
         &self,
         tolerance: f64,
         shank_margin: f64,
         holder_margin: f64,
         table_margin: f64,
-    ) -> Result<(), String> {
+    ) -> Result<(), VerificationFailure> {
         let mut problems = Vec::new();
         if self.min_cutter_clearance < -1e-6 {
-            problems.push(format!(
-                "ball gouges the part by {:.6} mm",
-                -self.min_cutter_clearance
-            ));
+            problems.push(Problem::Gouge {
+                depth: -self.min_cutter_clearance,
+            });
         }
         if self.min_chord_clearance < -tolerance - 1e-6 {
-            problems.push(format!(
-                "a straight move cuts {:.6} mm into the part (tolerance {tolerance})",
-                -self.min_chord_clearance
-            ));
+            problems.push(Problem::Chord {
+                depth: -self.min_chord_clearance,
+                tolerance,
+            });
         }
         if self.min_flutes_clearance < 0.0 {
-            problems.push("the flutes cut into the part above the ball".into());
+            problems.push(Problem::Flutes {
+                depth: -self.min_flutes_clearance,
+            });
         }
         if self.min_shank_clearance < shank_margin {
-            problems.push(format!(
-                "shank clearance {:.4} mm is below its margin {shank_margin}",
-                self.min_shank_clearance
-            ));
+            problems.push(Problem::Shank {
+                clearance: self.min_shank_clearance,
+                margin: shank_margin,
+            });
         }
         if self.min_holder_clearance < holder_margin {
-            problems.push(format!(
-                "holder clearance {:.4} mm is below its margin {holder_margin}",
-                self.min_holder_clearance
-            ));
+            problems.push(Problem::Holder {
+                clearance: self.min_holder_clearance,
+                margin: holder_margin,
+            });
         }
         if self.min_table_clearance < table_margin - 1e-9 {
-            problems.push(format!(
-                "the tool comes {:.4} mm from the table, below its margin {table_margin}",
-                self.min_table_clearance
-            ));
+            problems.push(Problem::Table {
+                clearance: self.min_table_clearance,
+                margin: table_margin,
+            });
         }
         if problems.is_empty() {
             Ok(())
         } else {
-            Err(problems.join("; "))
+            Err(VerificationFailure { problems })
         }
     }
+}
+
+/// A check of [`Verification::passes`] that a path fails, with its figures (mm).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Problem {
+    #[error("ball gouges the part by {depth:.6} mm")]
+    Gouge { depth: f64 },
+    #[error("a straight move cuts {depth:.6} mm into the part (tolerance {tolerance})")]
+    Chord { depth: f64, tolerance: f64 },
+    #[error("the flutes cut into the part above the ball")]
+    Flutes { depth: f64 },
+    #[error("shank clearance {clearance:.4} mm is below its margin {margin}")]
+    Shank { clearance: f64, margin: f64 },
+    #[error("holder clearance {clearance:.4} mm is below its margin {margin}")]
+    Holder { clearance: f64, margin: f64 },
+    #[error("the tool comes {clearance:.4} mm from the table, below its margin {margin}")]
+    Table { clearance: f64, margin: f64 },
+}
+
+/// Every check a path fails (at least one).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}", .problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
+pub struct VerificationFailure {
+    pub problems: Vec<Problem>,
 }
 
 /// Checks every cut and approach pose of `path`. Body clearances are searched up to
@@ -193,19 +219,56 @@ mod tests {
         let check = |v: &Verification| v.passes(0.005, 0.5, 2.0, 2.0);
         assert!(check(&clear()).is_ok());
         type Breaker = fn(&mut Verification);
-        let cases: [(Breaker, &str); 6] = [
-            (|v| v.min_cutter_clearance = -0.001, "gouges"),
-            (|v| v.min_chord_clearance = -0.006, "straight move"),
-            (|v| v.min_flutes_clearance = -0.01, "flutes"),
-            (|v| v.min_shank_clearance = 0.49, "shank"),
-            (|v| v.min_holder_clearance = 1.9, "holder"),
-            (|v| v.min_table_clearance = 1.5, "table"),
+        let cases: [(Breaker, Problem, &str); 6] = [
+            (
+                |v| v.min_cutter_clearance = -0.001,
+                Problem::Gouge { depth: 0.001 },
+                "gouges",
+            ),
+            (
+                |v| v.min_chord_clearance = -0.006,
+                Problem::Chord {
+                    depth: 0.006,
+                    tolerance: 0.005,
+                },
+                "straight move",
+            ),
+            (
+                |v| v.min_flutes_clearance = -0.01,
+                Problem::Flutes { depth: 0.01 },
+                "flutes",
+            ),
+            (
+                |v| v.min_shank_clearance = 0.49,
+                Problem::Shank {
+                    clearance: 0.49,
+                    margin: 0.5,
+                },
+                "shank",
+            ),
+            (
+                |v| v.min_holder_clearance = 1.9,
+                Problem::Holder {
+                    clearance: 1.9,
+                    margin: 2.0,
+                },
+                "holder",
+            ),
+            (
+                |v| v.min_table_clearance = 1.5,
+                Problem::Table {
+                    clearance: 1.5,
+                    margin: 2.0,
+                },
+                "table",
+            ),
         ];
-        for (break_it, needle) in cases {
+        for (break_it, problem, needle) in cases {
             let mut v = clear();
             break_it(&mut v);
             let e = check(&v).unwrap_err();
-            assert!(e.contains(needle) && !e.contains(';'), "{needle}: {e}");
+            assert_eq!(e.problems, vec![problem]);
+            assert!(e.to_string().contains(needle), "{needle}: {e}");
         }
     }
 
@@ -247,7 +310,10 @@ mod tests {
         // The ball 0.1 mm into the top face.
         let v = verify(&path(&[([15.0, 15.0, 39.9], up)]), &part, &tool, 7.0);
         assert!((v.min_cutter_clearance + 0.1).abs() < 1e-9, "{v:?}");
-        assert!(check(&v).unwrap_err().contains("gouges"));
+        assert!(matches!(
+            check(&v).unwrap_err().problems[..],
+            [Problem::Gouge { .. }]
+        ));
 
         // Two poses touching the top and the side face; the chord between the ball centres
         // runs through the edge at its midpoint: clearance −r there.
@@ -262,12 +328,21 @@ mod tests {
         );
         assert!(v.min_cutter_clearance.abs() < 1e-9, "{v:?}");
         assert!((v.min_chord_clearance + 3.0).abs() < 1e-9, "{v:?}");
-        assert!(check(&v).unwrap_err().contains("straight move"));
+        assert!(
+            check(&v)
+                .unwrap_err()
+                .problems
+                .iter()
+                .any(|p| matches!(p, Problem::Chord { .. }))
+        );
 
         // Beside the block, the tip 0.5 mm above the table.
         let v = verify(&path(&[([60.0, 15.0, 0.5], up)]), &part, &tool, 7.0);
         assert!((v.min_table_clearance - 0.5).abs() < 1e-9, "{v:?}");
-        assert!(check(&v).unwrap_err().contains("table"));
+        assert!(matches!(
+            check(&v).unwrap_err().problems[..],
+            [Problem::Table { .. }]
+        ));
 
         // Upright beside the wall, 0.2 mm off it: the ball and the flutes keep 0.2 mm, the
         // shank 0.2 mm (below its 0.5 margin), the D30 holder reaches into the block.
@@ -276,6 +351,12 @@ mod tests {
         assert!((v.min_shank_clearance - 0.2).abs() < 1e-3, "{v:?}");
         assert!(v.min_holder_clearance <= 0.0, "{v:?}");
         let e = check(&v).unwrap_err();
-        assert!(e.contains("shank") && e.contains("holder"), "{e}");
+        assert!(
+            matches!(
+                e.problems[..],
+                [Problem::Shank { .. }, Problem::Holder { .. }]
+            ),
+            "{e}"
+        );
     }
 }

@@ -28,7 +28,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     let (_, report) =
         prepare(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
             file: name.clone(),
-            reason,
+            reason: reason.to_string(),
         })?;
     if args.json {
         say!(

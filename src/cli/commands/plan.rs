@@ -51,7 +51,7 @@ pub struct PlanArgs {
 /// Runs the command.
 pub fn run(args: &PlanArgs) -> Result<()> {
     let mut job = match &args.job {
-        Some(path) => Job::load(path).map_err(Error::Job)?,
+        Some(path) => Job::load(path)?,
         None => Job::default(),
     };
     // Flags override the job file; a value they make unusable is a usage error naming the flag.
@@ -80,10 +80,13 @@ pub fn run(args: &PlanArgs) -> Result<()> {
         flags.push(("limits.max_drive_points", "--max-drive-points"));
     }
     if let Err(e) = job.validate() {
-        return Err(match flags.iter().find(|(key, _)| e.contains(key)) {
-            Some((_, flag)) => Error::Usage(format!("{flag}: {e}")),
-            None => Error::Job(e),
-        });
+        let key = e.key().unwrap_or_default();
+        return Err(
+            match flags.iter().find(|(prefix, _)| key.starts_with(prefix)) {
+                Some((_, flag)) => Error::Usage(format!("{flag}: {e}")),
+                None => Error::from(e),
+            },
+        );
     }
     let part_path: PathBuf = match (&args.part, &job.part.path) {
         (Some(p), _) => p.clone(),

@@ -54,7 +54,8 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
         file: name.clone(),
         reason,
     };
-    let (mesh, _) = prepare(&raw.mesh, &PrepareOptions::default()).map_err(mesh_error)?;
+    let (mesh, _) =
+        prepare(&raw.mesh, &PrepareOptions::default()).map_err(|e| mesh_error(e.to_string()))?;
     let triangles = mesh.triangles.len() as f64 * 4f64.powi(args.levels as i32);
     if triangles > args.max_triangles as f64 {
         return Err(Error::TooLarge {
