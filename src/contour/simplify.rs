@@ -11,7 +11,8 @@
 //! material on the finishing pass and never an overcut. Arcs are kept as they are, and so is
 //! every vertex of an outline without removable ones (the closed-form fixtures).
 
-use crate::contour::geometry::{Contour, Point2, Shape, Vertex};
+use crate::contour::geometry::{Contour, Point2, Segment, Shape, Vertex};
+use crate::contour::segops::point_distance;
 
 /// Largest distance of a removed vertex from the thinned outline, mm.
 pub const OUTLINE_THINNING_TOL: f64 = 1e-4;
@@ -84,15 +85,9 @@ fn thin_run(v: &[Vertex], start: usize, end: usize, tol: f64, keep: &mut [bool])
     }
 }
 
+/// Distance of `x` from the straight segment `p`–`q`.
 fn point_segment_distance(x: Point2, p: Point2, q: Point2) -> f64 {
-    let d = q - p;
-    let len2 = d.norm_squared();
-    let t = if len2 > 0.0 {
-        ((x - p).dot(&d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (x - (p + t * d)).norm()
+    point_distance(x, &Segment::Line { start: p, end: q }).0
 }
 
 #[cfg(test)]

@@ -129,8 +129,9 @@ impl ToolSection {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MachineSection {
-    /// Only "table-table-ac" so far.
-    pub kinematics: String,
+    /// The machine's kinematics: `"table-table-ac"` (the only kind so far; any other name is
+    /// refused when the file is read, listing the known ones).
+    pub kinematics: crate::post::KinematicsKind,
     /// Where the part frame's origin sits relative to the pivot (A and C axes' intersection), mm.
     pub part_origin_in_table: Option<[f64; 3]>,
     /// A axis travel, degrees.
@@ -154,7 +155,7 @@ pub struct MachineSection {
 impl Default for MachineSection {
     fn default() -> Self {
         Self {
-            kinematics: "table-table-ac".into(),
+            kinematics: crate::post::KinematicsKind::TableTableAc,
             part_origin_in_table: None,
             a_limits: [-120.0, 120.0],
             c_limits: None,
@@ -504,15 +505,6 @@ impl Job {
         if let Some(d) = self.machine.safe_distance {
             positive("machine.safe_distance", d)?;
         }
-        if self.machine.kinematics != "table-table-ac" {
-            return Err(invalid(
-                "machine.kinematics",
-                format!(
-                    "`{}` is not supported (only table-table-ac)",
-                    self.machine.kinematics
-                ),
-            ));
-        }
         let [lo, hi] = self.machine.a_limits;
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
             return Err(invalid(
@@ -782,6 +774,24 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("ball radius"), "{e}");
+    }
+
+    /// The machine's kinematics is a typed kind: a name the post does not know is refused
+    /// when the file is read, and the known one round-trips.
+    #[test]
+    fn machine_kinematics_is_a_known_kind() {
+        let e = Job::from_toml("[machine]\nkinematics = \"head-head\"\n", "j.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("head-head") && e.contains("table-table-ac"),
+            "{e}"
+        );
+        let job = Job::from_toml("[machine]\nkinematics = \"table-table-ac\"\n", "j.toml").unwrap();
+        assert_eq!(
+            job.machine.kinematics,
+            crate::post::KinematicsKind::TableTableAc
+        );
     }
 
     /// Issue 17 item 9: `lead_deg = nan` (or inf, or 720) gave an empty program with exit 0.

@@ -13,7 +13,7 @@ use crate::mesh::io::RawMesh;
 use crate::mesh::{Mesh, MeshReport, Piece, PrepareOptions, prepare_without_stray_pieces};
 use crate::orient::{AxisChooser, AxisOptions, SmoothingOptions};
 use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions};
-use crate::post::{GcodeOptions, MachineKinematics, TableTableAC};
+use crate::post::{GcodeOptions, KinematicsKind, MachineKinematics, TableTableAC};
 use crate::tool::ToolAssembly;
 
 /// The part as it will be planned, and what preparing it found.
@@ -277,9 +277,11 @@ fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
 /// The machine the job describes, with the part clamped at `part_origin_in_table`.
 pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<TableTableAC> {
     let m = &job.machine;
-    let kin = TableTableAC::new(part_origin_in_table)
-        .with_a_limits(m.a_limits[0], m.a_limits[1])
-        .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi)));
+    let kin = match m.kinematics {
+        KinematicsKind::TableTableAc => TableTableAC::new(part_origin_in_table)
+            .with_a_limits(m.a_limits[0], m.a_limits[1])
+            .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi))),
+    };
     kin.validate()?;
     Ok(kin)
 }

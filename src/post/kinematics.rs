@@ -49,6 +49,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::geom::ToolPose;
 
+/// The kinds of machine the post knows, as a job file names them (`machine.kinematics`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum KinematicsKind {
+    /// Tool along machine Z; a cradle tilts by A about X, the round table on it turns by C
+    /// ([`TableTableAC`]).
+    #[default]
+    TableTableAc,
+}
+
 /// Horizontal component `√(k_x² + k_y²)` of the tool axis (part frame) at or below which the
 /// exact inverse treats the pose as singular and keeps the previous C. Choosing C freely there
 /// moves the forward-kinematics axis by at most this much (radians), far below the 1e-9

@@ -34,7 +34,9 @@ use serde::{Deserialize, Serialize};
 pub use cl::{CL_CSV_HEADER, write_cl_csv};
 pub use estimate::{TimeEstimate, estimate_time};
 pub use gcode::{GcodeOptions, GcodeWriter};
-pub use kinematics::{Joints, KinematicsError, MachineKinematics, RotaryAxis, TableTableAC};
+pub use kinematics::{
+    Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, TableTableAC,
+};
 pub use linearise::{LineariseError, LineariseOptions, linearise, linearise_opt};
 
 use crate::geom::{Move, Toolpath};
