@@ -1,21 +1,91 @@
 //! The library's error type: every variant says which file or setting is at fault.
 
-use crate::mesh::io::MeshIoError;
-use crate::post::{KinematicsError, LineariseError};
+use crate::access::VisibilityError;
+use crate::collide::ColliderError;
+use crate::contour::{ContourError, OutlineError};
+use crate::mesh::io::{GlbError, MeshIoError};
+use crate::multires::{RemeshError, WaveletError};
+use crate::offset::OffsetError;
+use crate::post::{ContourPostError, KinematicsError, LineariseError};
+use crate::tool::ToolError;
+use crate::tool_choice::ToolChoiceError;
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
     MeshIo(#[from] MeshIoError),
-    /// The mesh was read but cannot be used as it is.
+    /// The part (a mesh or an outline) was read but cannot be used as it is.
     #[error("{file}: {reason}")]
     Mesh { file: String, reason: String },
     /// A job file or option is wrong, naming the key, operation or file.
     #[error(transparent)]
     JobFile(#[from] JobError),
-    /// A job's input or options are wrong in a way no more specific variant covers.
-    #[error("{0}")]
-    Job(String),
+    /// A data file other than a part or a job (query points, …) is malformed at `line`.
+    #[error("{file}: line {line}: {reason}")]
+    DataFile {
+        file: String,
+        line: usize,
+        reason: String,
+    },
+    /// A tool spec or tool library is wrong.
+    #[error(transparent)]
+    Tool(#[from] ToolError),
+    /// The part could not be remeshed into a subdivision hierarchy.
+    #[error("remeshing: {0}")]
+    Remesh(#[from] RemeshError),
+    /// The wavelet analysis of the hierarchy failed.
+    #[error("wavelets: {0}")]
+    Wavelets(#[from] WaveletError),
+    /// An offset shape could not be built; `what` says which.
+    #[error("{what}: {error}")]
+    Offset {
+        what: String,
+        #[source]
+        error: OffsetError,
+    },
+    /// A surface could not be made into a collision model; `what` says which.
+    #[error("{what}: {error}")]
+    Collider {
+        what: String,
+        #[source]
+        error: ColliderError,
+    },
+    /// Visibility maps could not be computed.
+    #[error("visibility: {0}")]
+    Visibility(#[from] VisibilityError),
+    /// Tool choice refused its input.
+    #[error("tool choice: {0}")]
+    ToolChoice(#[from] ToolChoiceError),
+    /// A GLB picture could not be built; `file` names it.
+    #[error("{file}: {error}")]
+    Glb {
+        file: String,
+        #[source]
+        error: GlbError,
+    },
+    /// The worker threads could not be started.
+    #[error("worker threads: {0}")]
+    Threads(#[from] rayon::ThreadPoolBuildError),
+    /// A broken internal invariant: a bug, not bad input.
+    #[error("internal error (please report): {0}")]
+    Internal(String),
+    /// An outline (SVG, DXF) cannot be read; the error names the file.
+    #[error(transparent)]
+    Outline(#[from] OutlineError),
+    /// The 2.5D planner refused an input or failed, naming the file it was working on.
+    #[error("{file}: {error}")]
+    Contour {
+        file: String,
+        #[source]
+        error: ContourError,
+    },
+    /// A 2.5D program cannot be posted, naming the file it was planned from.
+    #[error("{file}: cannot post the program: {error}")]
+    ContourPost {
+        file: String,
+        #[source]
+        error: ContourPostError,
+    },
     #[error("machine: {0}")]
     Kinematics(#[from] KinematicsError),
     #[error("post-processor: {0}")]
@@ -40,13 +110,17 @@ pub enum Error {
     /// written, and the message says why.
     #[error("nothing to cut: {0}")]
     NothingToCut(String),
-    /// The work the input asks for is estimated above a limit the user can raise.
-    #[error("{what} needs about {estimate}, above the limit of {limit}; {how_to_raise}")]
+    /// The work the input asks for is estimated above a limit the user can raise: `limit_key`
+    /// names the option or job-file key that sets it (the CLI names its flag instead).
+    #[error(
+        "{what} needs about {estimate}, above the limit of {limit}; {advice}, or raise {limit_key}"
+    )]
     TooLarge {
         what: String,
         estimate: String,
         limit: String,
-        how_to_raise: String,
+        advice: String,
+        limit_key: String,
     },
 }
 

@@ -113,6 +113,145 @@ fn assert_verified(r: &CompareReport, what: &str) {
     );
 }
 
+/// One motion of a 2.5D program: where it ends and, for an arc, its centre and sense.
+#[derive(Debug)]
+struct PlanarMotion {
+    rapid: bool,
+    end: [f64; 3],
+    arc: Option<([f64; 2], bool)>,
+}
+
+/// Reads the motions of a 2.5D program the way the post documents them (modal G0–G3, X Y Z,
+/// arc centres as I J from the start), sharing no code with the post; checks each arc's
+/// start and end radii agree within a grid unit.
+fn read_planar_program(text: &str) -> Vec<PlanarMotion> {
+    let (mut position, mut mode, mut out) = ([f64::NAN; 3], None::<u8>, Vec::new());
+    for line in text.lines() {
+        let code = line.split('(').next().unwrap_or("").trim();
+        if code.is_empty() || code == "%" {
+            continue;
+        }
+        let (mut end, mut moved, mut ij) = (position, false, [None::<f64>; 2]);
+        for word in code.split_whitespace() {
+            let (letter, number) = word.split_at(1);
+            let v: f64 = number
+                .parse()
+                .unwrap_or_else(|_| panic!("word {word} in {line}"));
+            match letter {
+                "G" if v <= 3.0 => mode = Some(v as u8),
+                "X" | "Y" | "Z" => {
+                    end["XYZ".find(letter).unwrap()] = v;
+                    moved = true;
+                }
+                "I" => ij[0] = Some(v),
+                "J" => ij[1] = Some(v),
+                _ => {}
+            }
+        }
+        if !moved {
+            continue;
+        }
+        let mode = mode.expect("a motion before any motion word");
+        let arc = (mode >= 2).then(|| {
+            let c = [
+                position[0] + ij[0].expect("I"),
+                position[1] + ij[1].expect("J"),
+            ];
+            let r0 = (position[0] - c[0]).hypot(position[1] - c[1]);
+            let r1 = (end[0] - c[0]).hypot(end[1] - c[1]);
+            assert!((r0 - r1).abs() <= 1e-4, "radii {r0} and {r1}: {line}");
+            (c, mode == 3)
+        });
+        out.push(PlanarMotion {
+            rapid: mode == 0,
+            end,
+            arc,
+        });
+        position = end;
+    }
+    out
+}
+
+/// LinuxCNC's interpreter (`rs274 -g`) reads a 2.5D program into the motions the tests'
+/// reader sees: the same kind, end, arc centre and sense, one for one. Skipped, saying so,
+/// where `rs274` is not installed.
+fn a_real_control_reads_the_contour_program(gcode: &str) {
+    let Ok(rs274) = common::plan_checks::which("rs274") else {
+        eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("wavemill-rs274-2d-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (program, canon) = (dir.join("contour.nc"), dir.join("contour.canon"));
+    std::fs::write(&program, gcode).unwrap();
+    let run = Command::new(rs274)
+        .arg("-g")
+        .arg(&program)
+        .arg(&canon)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run rs274");
+    assert!(
+        run.status.success(),
+        "rs274: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(&canon).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let numbers = |rest: &str| -> Vec<f64> {
+        rest.trim_end_matches(')')
+            .split(',')
+            .map(|x| x.trim().parse().unwrap())
+            .collect()
+    };
+    let mut canonical = Vec::new();
+    for l in text.lines() {
+        if let Some(i) = l.find("STRAIGHT_TRAVERSE(") {
+            let v = numbers(&l[i + 18..]);
+            canonical.push((true, [v[0], v[1], v[2]], None));
+        } else if let Some(i) = l.find("STRAIGHT_FEED(") {
+            let v = numbers(&l[i + 14..]);
+            canonical.push((false, [v[0], v[1], v[2]], None));
+        } else if let Some(i) = l.find("ARC_FEED(") {
+            // first_end, second_end, first_axis, second_axis, rotation, axis_end_point, …
+            let v = numbers(&l[i + 9..]);
+            canonical.push((false, [v[0], v[1], v[5]], Some(([v[2], v[3]], v[4] > 0.0))));
+        }
+    }
+    let read = read_planar_program(gcode);
+    assert!(read.len() > 20 && read.iter().any(|m| m.arc.is_some()));
+    assert_eq!(
+        canonical.len(),
+        read.len(),
+        "rs274 and the reader count different motions"
+    );
+    for (c, m) in canonical.iter().zip(&read) {
+        // An axis not yet commanded (NaN in the reader) is wherever the control was.
+        let near = |a: &[f64], b: &[f64]| {
+            a.iter()
+                .zip(b)
+                .all(|(x, y)| y.is_nan() || (x - y).abs() < 1e-9)
+        };
+        assert_eq!(c.0, m.rapid, "{m:?}");
+        assert!(
+            near(&c.1, &m.end),
+            "rs274 ends at {:?}, the reader at {m:?}",
+            c.1
+        );
+        match (&c.2, &m.arc) {
+            (None, None) => {}
+            (Some((cc, ccw)), Some((mc, mccw))) => {
+                assert!(
+                    near(cc, mc) && ccw == mccw,
+                    "rs274 arc {:?}, the reader's {m:?}",
+                    c.2
+                );
+            }
+            _ => panic!("rs274 and the reader disagree on an arc: {:?} / {m:?}", c.2),
+        }
+    }
+}
+
 #[test]
 fn mountain_sample_end_to_end_is_verified_and_deterministic() {
     let sample = common::repo_file("data/mountain.svg");
@@ -150,6 +289,10 @@ fn mountain_sample_end_to_end_is_verified_and_deterministic() {
         gcode.contains("G2") || gcode.contains("G3"),
         "no arcs in wavelet.nc"
     );
+    for f in ["wavelet.nc", "contour_parallel.nc"] {
+        let text = std::fs::read_to_string(a.join(f)).expect("nc");
+        a_real_control_reads_the_contour_program(&text);
+    }
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(a.join("compare.json")).expect("json"))
             .expect("compare.json parses");
@@ -218,7 +361,8 @@ fn bad_inputs_exit_with_their_codes_naming_the_problem() {
     ]);
     // A bad command-line value is a usage error (issue 17 item 13).
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--tool ball:6"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--tool") && err.contains("ball:6"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -296,10 +440,15 @@ fn impeller_section_end_to_end() {
 
     let o = run(&["--z", "10", "--band=-1"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--band -1: must be"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--band: band = -1: must be"));
+    // A mesh part without --z is an incomplete command line.
     let o = run(&[]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("impeller.glb: a mesh part needs --z"));
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--z: impeller.glb: z is needed for a mesh part"),
+        "{err}"
+    );
     let o = run(&["--z", "40"]);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
@@ -311,8 +460,12 @@ fn impeller_section_end_to_end() {
     let mut args = vec!["contour", sample.to_str().expect("utf-8 path"), "--z", "3"];
     args.extend(["--tool", "flat:6", "--stock", "margin:5", "--out", out]);
     let o = wavemill(&args);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("mountain.svg: --z 3 applies to mesh"));
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--z: mountain.svg: z = 3 applies to mesh"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -410,17 +563,22 @@ fn hardening_errors_exit_with_their_codes() {
             String::from_utf8_lossy(&o.stderr).into_owned(),
         )
     };
-    for (extra, names) in [
-        (&["--tool", "flat:x"][..], "--tool flat:x"),
-        (&["--stock", "margin:-1"][..], "--stock margin:-1"),
-        (&["--stock", "box:3"][..], "--stock box:3"),
-        (&["--stepover=-1"][..], "--stepover -1"),
-        (&["--scale", "0"][..], "--scale 0"),
-        (&["--scale", "inf"][..], "--scale inf"),
+    // A bad value names its flag and itself.
+    for (extra, flag, value) in [
+        (&["--tool", "flat:x"][..], "--tool", "flat:x"),
+        (&["--tool", "ball:6"][..], "--tool", "ball:6"),
+        (&["--stock", "margin:-1"][..], "--stock", "margin:-1"),
+        (&["--stock", "box:3"][..], "--stock", "box:3"),
+        (&["--stepover=-1"][..], "--stepover", "-1"),
+        (&["--scale", "0"][..], "--scale", "0"),
+        (&["--scale", "inf"][..], "--scale", "inf"),
     ] {
         let (code, err) = run(&rect, extra);
         assert_eq!(code, Some(2), "{extra:?}: {err}");
-        assert!(err.contains(names), "{extra:?}: {err}");
+        assert!(
+            err.contains(flag) && err.contains(value),
+            "{extra:?}: {err}"
+        );
     }
     let (code, err) = run(&huge, &[]);
     assert_eq!(code, Some(1), "{err}");

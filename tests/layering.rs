@@ -302,3 +302,49 @@ fn the_checker_sees_imports_and_cycles() {
         .insert("report".into());
     assert!(has_cycle(&graph).is_some());
 }
+
+/// Lines of `text` (a source file) whose code, comments and `#[cfg(test)]` items aside,
+/// holds a `--flag`: in code that can only be inside a string.
+fn flag_lines(text: &str) -> Vec<String> {
+    without_tests(&code_of(text))
+        .lines()
+        .filter(|line| {
+            let bytes = line.as_bytes();
+            (2..bytes.len()).any(|i| {
+                bytes[i - 2] == b'-'
+                    && bytes[i - 1] == b'-'
+                    && bytes[i].is_ascii_lowercase()
+                    && (i < 3 || bytes[i - 3] != b'-')
+            })
+        })
+        .map(|line| line.trim().to_string())
+        .collect()
+}
+
+/// The library speaks in its own option and job-file names; only the CLI knows its flags
+/// (`cli::name_flags` maps one to the other). A `--flag` in library code (comments and tests
+/// aside) is a message that will be wrong for a library caller.
+#[test]
+fn the_library_names_no_command_line_flag() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let mut found = Vec::new();
+    for file in &files {
+        let relative = file.strip_prefix(&src).expect("under src");
+        if relative.starts_with("cli") || relative == Path::new("main.rs") {
+            continue;
+        }
+        for line in flag_lines(&std::fs::read_to_string(file).expect("read")) {
+            found.push(format!("{}: {line}", relative.display()));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "flag names in the library:\n{}",
+        found.join("\n")
+    );
+    // The checker sees a flag in a string, and not in comments, tests or a `---` rule.
+    let sample = "/// run with --tool\nlet m = \"give --tool flat:6\";\n// --z\nlet r = \"---x\";\n#[cfg(test)]\nmod tests {\n    const F: &str = \"--units\";\n}\n";
+    assert_eq!(flag_lines(sample), ["let m = \"give --tool flat:6\";"]);
+}

@@ -171,6 +171,57 @@ pub(crate) fn ball_diameter(spec: &str) -> Result<f64> {
     }
 }
 
+/// The diameter of a `flat:D` spec; other cutters are refused by name (2.5D contours drive a
+/// flat end mill's centre).
+pub(crate) fn flat_diameter(spec: &str) -> Result<f64> {
+    match parse_cutter(spec).map_err(|e| Error::Usage(e.to_string()))? {
+        Cutter::Flat { diameter, .. } => Ok(diameter),
+        other => Err(Error::Usage(format!(
+            "tool `{spec}` is a {} cutter: this command drives a flat end mill (flat:D)",
+            other.kind()
+        ))),
+    }
+}
+
+/// Names the command-line flag in place of the library's option or job-file key: an option
+/// error whose key has a flag becomes a usage error (exit 2) naming the flag, and a limit the
+/// user can raise names the flag that raises it. `flags` maps key prefixes to flags.
+pub(crate) fn name_flags(error: Error, flags: &[(&str, &str)]) -> Error {
+    let flag_of = |key: &str| {
+        flags
+            .iter()
+            .find(|(prefix, _)| key.starts_with(prefix))
+            .map(|(_, flag)| *flag)
+    };
+    match error {
+        Error::JobFile(e) => match e.key().and_then(flag_of) {
+            Some(flag) => Error::Usage(format!("{flag}: {e}")),
+            None => Error::JobFile(e),
+        },
+        Error::TooLarge {
+            what,
+            estimate,
+            limit,
+            advice,
+            limit_key,
+        } => {
+            let limit_key = match flag_of(&limit_key) {
+                Some(flag) if limit_key.contains('.') => format!("{limit_key} or {flag}"),
+                Some(flag) => flag.to_string(),
+                None => limit_key,
+            };
+            Error::TooLarge {
+                what,
+                estimate,
+                limit,
+                advice,
+                limit_key,
+            }
+        }
+        other => other,
+    }
+}
+
 /// `--tool ball:D`: the job's ball diameter, with flutes and shank at least as long and wide.
 pub(crate) fn set_tool(job: &mut crate::job::Job, spec: &str) -> Result<()> {
     let diameter = ball_diameter(spec)?;

@@ -1,7 +1,9 @@
 //! Parsers of command-line values: each refuses a bad value with a message clap shows, and
 //! the exit code 2 of a bad command line.
 
-use super::ball_diameter;
+use std::path::PathBuf;
+
+use super::{ball_diameter, flat_diameter};
 use crate::job;
 
 /// Parses a direction `x,y,z`: three finite numbers, not all zero (any length: it is
@@ -86,4 +88,28 @@ pub(crate) fn ball_spec(text: &str) -> std::result::Result<String, String> {
     ball_diameter(text)
         .map(|_| text.to_string())
         .map_err(|e| e.to_string())
+}
+
+/// A flat end mill `flat:D`: its diameter, mm.
+pub(crate) fn flat_tool(text: &str) -> std::result::Result<f64, String> {
+    flat_diameter(text).map_err(|e| e.to_string())
+}
+
+/// A stock `margin:M` (M ≥ 0 mm) or `outline:FILE` (an SVG or DXF file).
+pub(crate) fn stock(text: &str) -> std::result::Result<job::StockSpec, String> {
+    let bad = || {
+        format!(
+            "`{text}`: expected margin:M with M ≥ 0 mm (e.g. margin:10) or outline:FILE with \
+             an .svg or .dxf file"
+        )
+    };
+    let (kind, value) = text.split_once(':').ok_or_else(bad)?;
+    match kind.trim() {
+        "margin" => match value.trim().parse::<f64>() {
+            Ok(m) if m.is_finite() && m >= 0.0 => Ok(job::StockSpec::Margin(m)),
+            _ => Err(bad()),
+        },
+        "outline" if !value.trim().is_empty() => Ok(job::StockSpec::Outline(PathBuf::from(value))),
+        _ => Err(bad()),
+    }
 }

@@ -3,7 +3,8 @@
 //! of a path against a part costs about O((n + m) log m) instead of O(n·m).
 
 use crate::contour::geometry::{Point2, Segment};
-use crate::contour::segops::{Aabb, bbox, point_distance, segment_distance};
+use crate::contour::segops::{bbox, point_distance, segment_distance};
+use crate::geom::Aabb2;
 
 const LEAF_SIZE: usize = 4;
 
@@ -15,7 +16,7 @@ enum Kind {
 
 #[derive(Clone, Debug)]
 struct Node {
-    bbox: Aabb,
+    bbox: Aabb2,
     kind: Kind,
 }
 
@@ -36,7 +37,7 @@ pub struct Nearest {
 #[derive(Clone, Debug)]
 pub struct SegmentBvh {
     segs: Vec<Segment>,
-    boxes: Vec<Aabb>,
+    boxes: Vec<Aabb2>,
     order: Vec<usize>,
     nodes: Vec<Node>,
 }
@@ -44,7 +45,7 @@ pub struct SegmentBvh {
 impl SegmentBvh {
     /// Builds the hierarchy (median split on the longer axis; deterministic).
     pub fn new(segs: Vec<Segment>) -> Self {
-        let boxes: Vec<Aabb> = segs.iter().map(bbox).collect();
+        let boxes: Vec<Aabb2> = segs.iter().map(bbox).collect();
         let mut order: Vec<usize> = (0..segs.len()).collect();
         let mut nodes = Vec::new();
         if !segs.is_empty() {
@@ -64,7 +65,7 @@ impl SegmentBvh {
     }
 
     /// Bounding box of everything, `None` when empty.
-    pub fn bounds(&self) -> Option<Aabb> {
+    pub fn bounds(&self) -> Option<Aabb2> {
         self.nodes.first().map(|n| n.bbox)
     }
 
@@ -87,7 +88,7 @@ impl SegmentBvh {
 
     fn search(
         &self,
-        lower: impl Fn(&Aabb) -> f64,
+        lower: impl Fn(&Aabb2) -> f64,
         exact: impl Fn(&Segment) -> (f64, Point2, Point2),
     ) -> Option<Nearest> {
         if self.nodes.is_empty() {
@@ -139,7 +140,7 @@ impl SegmentBvh {
 
     /// Calls `f` with the index of every segment whose bounding box is within `max_dist` of
     /// `query` (a superset of the segments within `max_dist`), in increasing index order.
-    pub fn candidates_near(&self, query: &Aabb, max_dist: f64) -> Vec<usize> {
+    pub fn candidates_near(&self, query: &Aabb2, max_dist: f64) -> Vec<usize> {
         let mut out = Vec::new();
         if self.nodes.is_empty() {
             return out;
@@ -170,7 +171,7 @@ impl SegmentBvh {
 }
 
 fn build(
-    boxes: &[Aabb],
+    boxes: &[Aabb2],
     order: &mut [usize],
     lo: usize,
     hi: usize,
@@ -191,7 +192,7 @@ fn build(
     if hi - lo <= LEAF_SIZE {
         return me;
     }
-    let mut cb = Aabb::point(boxes[order[lo]].center());
+    let mut cb = Aabb2::point(boxes[order[lo]].center());
     for &i in &order[lo + 1..hi] {
         cb.add(boxes[i].center());
     }

@@ -1,9 +1,6 @@
 //! Shared 2D geometry of the contour module: closed curves of lines and arcs.
 
-/// A point in the XY plane, mm.
-pub type Point2 = nalgebra::Point2<f64>;
-/// A vector in the XY plane, mm.
-pub type Vector2 = nalgebra::Vector2<f64>;
+pub use crate::geom::{Point2, Vector2};
 
 /// One vertex of a [`Contour`]: the segment to the next vertex is a line when `bulge == 0`,
 /// else a circular arc with `bulge = tan(sweep / 4)`, positive counter-clockwise.

@@ -23,8 +23,8 @@
 //! * [`toolpath`] — tool-centre paths: [`Pass`], [`Link`], [`CenterPath`];
 //! * [`verify`] — exact overcut (closed-form line/arc distances), uncut area (exact
 //!   x-intervals per scanline), path statistics;
-//! * [`gcode`] — G-code with G2/G3 arcs and the seed's machining-time model (length / feed +
-//!   NC blocks × dwell);
+//! * posting (G-code with G2/G3 arcs and the seed's machining-time model) is the post's:
+//!   `crate::post::contour`;
 //! * helpers: [`segops`] (exact segment geometry), [`bvh`] (segment BVH), [`region`]
 //!   (point-in-shape, scanline crossings, part-inside-stock check), [`cavc`] (the
 //!   cavalier_contours bridge).
@@ -36,7 +36,6 @@
 pub mod bvh;
 pub mod cavc;
 pub mod error;
-pub mod gcode;
 pub mod geometry;
 pub mod input;
 pub mod material;
@@ -50,7 +49,6 @@ pub mod verify;
 pub mod wavelet;
 
 pub use error::ContourError;
-pub use gcode::{MachineParams, Program, ProgramStats};
 pub use input::{OutlineError, OutlineOptions, mesh_section, read_outline};
 pub use multires::{MultiresOptions, MultiresPlan, MultiresReport, multires_paths};
 pub use parallel::{ParallelOptions, contour_parallel};

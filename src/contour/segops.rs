@@ -9,6 +9,7 @@
 //! perpendicular to it, for an arc that means radial. All such candidates are enumerated.
 
 use crate::contour::geometry::{Point2, Segment, Vector2};
+use crate::geom::Aabb2;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// Slack on parameters and angles, to accept points that round-off puts a hair outside.
@@ -113,63 +114,9 @@ pub fn split_arc(s: &Segment, max_sweep: f64) -> Vec<Segment> {
     }
 }
 
-/// Axis-aligned bounding box.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Aabb {
-    pub min: Point2,
-    pub max: Point2,
-}
-
-impl Aabb {
-    /// The box of one point.
-    pub fn point(p: Point2) -> Self {
-        Self { min: p, max: p }
-    }
-
-    /// Grows the box to contain `p`.
-    pub fn add(&mut self, p: Point2) {
-        self.min = Point2::new(self.min.x.min(p.x), self.min.y.min(p.y));
-        self.max = Point2::new(self.max.x.max(p.x), self.max.y.max(p.y));
-    }
-
-    /// Smallest box containing both.
-    pub fn union(&self, o: &Aabb) -> Aabb {
-        let mut b = *self;
-        b.add(o.min);
-        b.add(o.max);
-        b
-    }
-
-    /// The box grown by `d` on every side.
-    pub fn expanded(&self, d: f64) -> Aabb {
-        Aabb {
-            min: Point2::new(self.min.x - d, self.min.y - d),
-            max: Point2::new(self.max.x + d, self.max.y + d),
-        }
-    }
-
-    /// Euclidean distance between the boxes (0 when they overlap): a lower bound of the distance
-    /// between anything inside them.
-    pub fn distance(&self, o: &Aabb) -> f64 {
-        let dx = (o.min.x - self.max.x).max(self.min.x - o.max.x).max(0.0);
-        let dy = (o.min.y - self.max.y).max(self.min.y - o.max.y).max(0.0);
-        dx.hypot(dy)
-    }
-
-    /// Distance from a point to the box (0 inside).
-    pub fn point_distance(&self, p: Point2) -> f64 {
-        self.distance(&Aabb::point(p))
-    }
-
-    /// Centre of the box.
-    pub fn center(&self) -> Point2 {
-        nalgebra::center(&self.min, &self.max)
-    }
-}
-
 /// Exact bounding box of a segment (an arc's box includes the axis extremes it passes).
-pub fn bbox(s: &Segment) -> Aabb {
-    let mut b = Aabb::point(seg_start(s));
+pub fn bbox(s: &Segment) -> Aabb2 {
+    let mut b = Aabb2::point(seg_start(s));
     b.add(seg_end(s));
     if let Segment::Arc {
         start,

@@ -3,7 +3,7 @@
 //!
 //! These types are method-neutral: the contour-parallel baseline ([`crate::contour::parallel`]) and the
 //! multiresolution paths of seed 004 (chapters 3–4) both produce a [`CenterPath`], which is then
-//! verified ([`crate::contour::verify`]) and posted as G-code ([`crate::contour::gcode`]).
+//! verified ([`crate::contour::verify`]) and posted as G-code ([`crate::post::contour`]).
 
 use crate::contour::error::{ContourError, Result, require_positive};
 use crate::contour::geometry::{Point2, Segment, Vertex};

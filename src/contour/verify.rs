@@ -510,7 +510,7 @@ pub fn pass_spacing(
                     continue;
                 }
                 let mut best = f64::INFINITY;
-                for j in bvh.candidates_near(&crate::contour::segops::Aabb::point(x), reach) {
+                for j in bvh.candidates_near(&crate::geom::Aabb2::point(x), reach) {
                     let (lo, hi) = ranges[j];
                     if owner[j] == i || lo > dx - margin {
                         continue;

@@ -1,4 +1,4 @@
-use super::{Point3, Vector3};
+use super::{Point2, Point3, Vector3};
 
 /// An axis-aligned box. An empty box has `min > max` and grows to fit what is added.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,6 +77,60 @@ impl Aabb {
             d += e * e;
         }
         d
+    }
+}
+
+/// An axis-aligned box in the XY plane (the bounds of planar segments and regions).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb2 {
+    pub min: Point2,
+    pub max: Point2,
+}
+
+impl Aabb2 {
+    /// The box of one point.
+    pub fn point(p: Point2) -> Self {
+        Self { min: p, max: p }
+    }
+
+    /// Grows the box to contain `p`.
+    pub fn add(&mut self, p: Point2) {
+        self.min = Point2::new(self.min.x.min(p.x), self.min.y.min(p.y));
+        self.max = Point2::new(self.max.x.max(p.x), self.max.y.max(p.y));
+    }
+
+    /// Smallest box containing both.
+    pub fn union(&self, o: &Aabb2) -> Aabb2 {
+        let mut b = *self;
+        b.add(o.min);
+        b.add(o.max);
+        b
+    }
+
+    /// The box grown by `d` on every side.
+    pub fn expanded(&self, d: f64) -> Aabb2 {
+        Aabb2 {
+            min: Point2::new(self.min.x - d, self.min.y - d),
+            max: Point2::new(self.max.x + d, self.max.y + d),
+        }
+    }
+
+    /// Euclidean distance between the boxes (0 when they overlap): a lower bound of the distance
+    /// between anything inside them.
+    pub fn distance(&self, o: &Aabb2) -> f64 {
+        let dx = (o.min.x - self.max.x).max(self.min.x - o.max.x).max(0.0);
+        let dy = (o.min.y - self.max.y).max(self.min.y - o.max.y).max(0.0);
+        dx.hypot(dy)
+    }
+
+    /// Distance from a point to the box (0 inside).
+    pub fn point_distance(&self, p: Point2) -> f64 {
+        self.distance(&Aabb2::point(p))
+    }
+
+    /// Centre of the box.
+    pub fn center(&self) -> Point2 {
+        nalgebra::center(&self.min, &self.max)
     }
 }
 

@@ -9,13 +9,17 @@ mod aabb;
 mod toolpath;
 mod triangle;
 
-pub use aabb::Aabb;
+pub use aabb::{Aabb, Aabb2};
 pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
 pub use triangle::{
     ClosestFeature, closest_point_on_segment, closest_point_on_triangle,
     closest_points_of_segments, segment_triangle_distance_squared, triangle_area, triangle_normal,
 };
 
+/// A point in the XY plane, mm (planar outlines, 2.5D paths).
+pub type Point2 = nalgebra::Point2<f64>;
+/// A vector in the XY plane, mm.
+pub type Vector2 = nalgebra::Vector2<f64>;
 /// A point in millimetres.
 pub type Point3 = nalgebra::Point3<f64>;
 /// A vector in millimetres.

@@ -26,7 +26,7 @@ use crate::access::{
     visibility_brute_force, visibility_hierarchical,
 };
 use crate::collide::{Margins, PartCollider, PreparedTool};
-use crate::error::{Error, Result};
+use crate::error::{Error, JobError, Result};
 use crate::geom::{Vector3, positive_zero};
 use crate::mesh::io::{GlbBuilder, RawMesh};
 use crate::mesh::{Piece, PrepareOptions, prepare_without_stray_pieces};
@@ -143,8 +143,12 @@ pub fn access(
 ) -> Result<AccessOutput> {
     let started = Instant::now();
     let ms = |t: Instant| (t.elapsed().as_secs_f64() * 1e4).round() / 10.0;
-    let level = level_for_count(options.directions)
-        .map_err(|e| Error::Job(format!("--directions: {e}")))?;
+    let level = level_for_count(options.directions).map_err(|e| {
+        Error::JobFile(JobError::Invalid {
+            key: "directions".into(),
+            reason: e.to_string(),
+        })
+    })?;
     let mesh_error = |reason: String| Error::Mesh {
         file: part_name.to_string(),
         reason,
@@ -168,7 +172,7 @@ pub fn access(
                 .saturating_sub(1)
                 .min(VisibilityOptions::default().start_level),
         );
-    let visibility_error = |e: crate::access::VisibilityError| Error::Job(format!("{e}"));
+    let visibility_error = Error::Visibility;
     let (vertices, points) = vertex_points(&part);
     let t = Instant::now();
     let maps =
@@ -206,16 +210,15 @@ pub fn access(
     }
     let mut glb = GlbBuilder::new();
     glb.add_triangles("access", &part, [1.0, 1.0, 1.0, 1.0], Some(&colours))
-        .map_err(|e| Error::Job(format!("access.glb: {e}")))?;
+        .map_err(|error| Error::Glb {
+            file: "access.glb".into(),
+            error,
+        })?;
 
     let t = Instant::now();
     let (query_csv, query_summary) = match query {
         Some(q) => {
-            let (csv, summary) =
-                query_points(&part, &scene, &set, &visibility, job, q).map_err(|e| match e {
-                    Error::Job(m) => Error::Job(format!("query: {m}")),
-                    other => other,
-                })?;
+            let (csv, summary) = query_points(&part, &scene, &set, &visibility, job, q)?;
             (Some(csv), Some(summary))
         }
         None => (None, None),
@@ -284,9 +287,12 @@ fn query_points(
     job: &Job,
     query: &[SurfacePoint],
 ) -> Result<(String, QuerySummary)> {
-    let visible = visibility_brute_force(scene, set, query, visibility)
-        .map_err(|e| Error::Job(e.to_string()))?;
-    let collider = PartCollider::new(part).map_err(|e| Error::Job(e.to_string()))?;
+    let visible =
+        visibility_brute_force(scene, set, query, visibility).map_err(Error::Visibility)?;
+    let collider = PartCollider::new(part).map_err(|error| Error::Collider {
+        what: "the part".into(),
+        error,
+    })?;
     let tool = job.tool.assembly();
     let prepared = PreparedTool::new(
         &tool,
@@ -367,15 +373,22 @@ fn heat(f: f64) -> [f32; 4] {
 /// Reads query points: CSV with a header naming the columns `x,y,z,nx,ny,nz` (any order, other
 /// columns ignored). `file` names the source in errors.
 pub fn parse_query_csv(text: &str, file: &str) -> Result<Vec<SurfacePoint>> {
-    let bad = |line: usize, what: String| Error::Job(format!("{file}: line {line}: {what}"));
+    let bad = |line: usize, reason: String| Error::DataFile {
+        file: file.to_string(),
+        line,
+        reason,
+    };
     let mut lines = text
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty());
-    let (header_line, header) = lines
-        .next()
-        .ok_or_else(|| Error::Job(format!("{file}: empty; expected a header x,y,z,nx,ny,nz")))?;
+    let (header_line, header) = lines.next().ok_or_else(|| {
+        bad(
+            1,
+            "the file is empty; expected a header x,y,z,nx,ny,nz".into(),
+        )
+    })?;
     let names: Vec<String> = header
         .split(',')
         .map(|c| c.trim().to_ascii_lowercase())
@@ -453,7 +466,7 @@ mod tests {
         assert_eq!(p[1].normal, Vector3::y());
         let err = |text: &str| parse_query_csv(text, "q.csv").unwrap_err().to_string();
         assert!(err("x,y,z,nx,ny\n").contains("lacks column(s) nz"));
-        assert!(err("").contains("q.csv: empty"));
+        assert!(err("").contains("q.csv: line 1: the file is empty"));
         let e = err("x,y,z,nx,ny,nz\n1,2,3,0,0,1\n1,2,three,0,0,1\n");
         assert!(e.contains("line 3") && e.contains("three"), "{e}");
         assert!(err("x,y,z,nx,ny,nz\n1,2,3,0,0\n").contains("no value for column nz"));

@@ -20,6 +20,7 @@
 
 use serde::Serialize;
 
+use crate::error::JobError;
 use crate::post::GcodeOptions;
 
 /// The tolerance split (mm); `chord + linearisation + rounding + 2·verification = total`.
@@ -43,19 +44,22 @@ impl ToleranceBudget {
     /// Splits `total` for a program printed with `gcode`'s decimals, whose ball centre stays
     /// within `reach` mm of the rotary pivot. Refuses a tolerance the printed resolution
     /// cannot hold.
-    pub fn split(total: f64, gcode: &GcodeOptions, reach: f64) -> Result<Self, String> {
+    pub fn split(total: f64, gcode: &GcodeOptions, reach: f64) -> Result<Self, JobError> {
         let (linear, angular_deg) = gcode.rounding();
         let rounding = 3f64.sqrt() * linear + 2.0 * angular_deg.to_radians() * reach;
         let chord = CHORD_SHARE * total;
         let verification = VERIFICATION_SHARE * total;
         let linearisation = total - chord - rounding - 2.0 * verification;
         if linearisation.is_nan() || linearisation < MIN_LINEARISATION_SHARE * total {
-            return Err(format!(
-                "strategy.tolerance {total} mm is too small for the program's resolution: \
-                 rounding {} linear / {} angular decimals alone moves the ball centre by up to \
-                 {rounding:.6} mm at {reach:.1} mm from the pivot",
-                gcode.linear_decimals, gcode.angular_decimals
-            ));
+            return Err(JobError::Invalid {
+                key: "strategy.tolerance".into(),
+                reason: format!(
+                    "= {total} mm is too small for the program's resolution: rounding {} linear \
+                     / {} angular decimals alone moves the ball centre by up to {rounding:.6} mm \
+                     at {reach:.1} mm from the pivot",
+                    gcode.linear_decimals, gcode.angular_decimals
+                ),
+            });
         }
         Ok(ToleranceBudget {
             total_mm: total,
@@ -84,7 +88,8 @@ mod tests {
     #[test]
     fn a_tolerance_below_the_printed_resolution_is_refused() {
         let e = ToleranceBudget::split(0.0005, &GcodeOptions::default(), 100.0).unwrap_err();
-        assert!(e.contains("too small"), "{e}");
+        assert_eq!(e.key(), Some("strategy.tolerance"));
+        assert!(e.to_string().contains("too small"), "{e}");
         assert!(ToleranceBudget::split(f64::NAN, &GcodeOptions::default(), 100.0).is_err());
     }
 }

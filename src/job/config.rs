@@ -505,6 +505,15 @@ impl Job {
         if let Some(d) = self.machine.safe_distance {
             positive("machine.safe_distance", d)?;
         }
+        if !self.machine.kinematics.is_five_axis() {
+            return Err(invalid(
+                "machine.kinematics",
+                "names a machine that cannot tilt the tool; a job drives 5-axis poses and needs \
+                 one that can (table-table-ac); 2.5D programs for three axes come from \
+                 `wavemill contour`"
+                    .into(),
+            ));
+        }
         let [lo, hi] = self.machine.a_limits;
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
             return Err(invalid(

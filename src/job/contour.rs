@@ -26,12 +26,13 @@ use crate::contour::material::{engagement, report_cell};
 use crate::contour::region::{RegionIndex, check_inside};
 use crate::contour::simplify::{OUTLINE_THINNING_TOL, thin_shape};
 use crate::contour::{
-    CenterPath, ContourError, CutDirection, MachineParams, MultiresOptions, MultiresReport,
-    OutlineOptions, ParallelOptions, Program, clearance, contour_parallel, mesh_section,
-    multires_paths, pass_spacing, path_stats, read_outline, uncut_area,
+    CenterPath, ContourError, CutDirection, MultiresOptions, MultiresReport, OutlineOptions,
+    ParallelOptions, clearance, contour_parallel, mesh_section, multires_paths, pass_spacing,
+    path_stats, read_outline, uncut_area,
 };
-use crate::error::{Error, Result};
+use crate::error::{Error, JobError, Result};
 use crate::mesh::{PrepareOptions, prepare as prepare_mesh};
+use crate::post::{ContourProgram, GcodeOptions, PlanarParams};
 
 /// Extensions (lower case) of the part files read as meshes and cut at `--z`; every other
 /// file is read as an SVG/DXF outline.
@@ -98,7 +99,7 @@ pub struct ContourJobOptions {
     /// Which way the roughing passes may run (both methods).
     pub direction: CutDirection,
     /// Machine parameters and the time model.
-    pub machine: MachineParams,
+    pub machine: PlanarParams,
     /// Keep the run-dependent `timings_ms` in `compare.json`.
     pub timings: bool,
     /// Largest number of offset levels (stock extent over stepover) a run may plan; a larger
@@ -122,48 +123,11 @@ impl ContourJobOptions {
             band: None,
             scale: 1.0,
             direction: CutDirection::default(),
-            machine: MachineParams::default(),
+            machine: PlanarParams::default(),
             timings: true,
             max_levels: DEFAULT_MAX_LEVELS,
             max_outline_vertices: DEFAULT_MAX_OUTLINE_VERTICES,
         }
-    }
-}
-
-/// Parses `flat:D` (D in mm > 0) into the tool diameter.
-pub fn parse_flat_tool(spec: &str) -> Result<f64> {
-    let bad = || {
-        Error::Usage(format!(
-            "--tool {spec}: expected flat:D with D > 0 mm (e.g. flat:6)"
-        ))
-    };
-    let (kind, d) = spec.split_once(':').ok_or_else(bad)?;
-    let d: f64 = d.trim().parse().map_err(|_| bad())?;
-    if kind.trim() != "flat" || !(d.is_finite() && d > 0.0) {
-        return Err(bad());
-    }
-    Ok(d)
-}
-
-/// Parses `margin:M` (M in mm ≥ 0) or `outline:FILE` (an SVG or DXF file) into the stock.
-pub fn parse_stock(spec: &str) -> Result<StockSpec> {
-    let bad = || {
-        Error::Usage(format!(
-            "--stock {spec}: expected margin:M with M ≥ 0 mm (e.g. margin:10) or \
-             outline:FILE with an .svg or .dxf file"
-        ))
-    };
-    let (kind, value) = spec.split_once(':').ok_or_else(bad)?;
-    match kind.trim() {
-        "margin" => {
-            let m: f64 = value.trim().parse().map_err(|_| bad())?;
-            if !(m.is_finite() && m >= 0.0) {
-                return Err(bad());
-            }
-            Ok(StockSpec::Margin(m))
-        }
-        "outline" if !value.trim().is_empty() => Ok(StockSpec::Outline(PathBuf::from(value))),
-        _ => Err(bad()),
     }
 }
 
@@ -325,7 +289,29 @@ fn ms(t: Instant) -> f64 {
 }
 
 fn contour_error(file: &str) -> impl Fn(ContourError) -> Error + '_ {
-    move |e| Error::Job(format!("{file}: {e}"))
+    move |error| Error::Contour {
+        file: file.to_string(),
+        error,
+    }
+}
+
+/// An option out of its range, named as the options struct names it (the CLI names its flag).
+fn invalid_option(key: &str, reason: String) -> Error {
+    Error::JobFile(JobError::Invalid {
+        key: key.to_string(),
+        reason,
+    })
+}
+
+/// An option that does not fit the file it applies to.
+fn invalid_for_file(file: &str, key: &str, reason: String) -> Error {
+    Error::JobFile(JobError::InFile {
+        file: file.to_string(),
+        error: Box::new(JobError::Invalid {
+            key: key.to_string(),
+            reason,
+        }),
+    })
 }
 
 /// The inputs of a run, read and checked.
@@ -345,33 +331,42 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
     let file = outline.display().to_string();
     let d = opts.tool_diameter;
     if !(d.is_finite() && d > 0.0) {
-        return Err(Error::Usage(format!("tool diameter {d}: must be > 0 mm")));
+        return Err(invalid_option(
+            "tool_diameter",
+            format!("= {d}: must be > 0 mm"),
+        ));
     }
     let s = opts.stepover.unwrap_or(0.4 * d);
     if !(s.is_finite() && s > 0.0 && s <= d) {
-        return Err(Error::Usage(format!(
-            "--stepover {s}: must satisfy 0 < stepover ≤ tool diameter {d}"
-        )));
+        return Err(invalid_option(
+            "stepover",
+            format!("= {s}: must satisfy 0 < stepover ≤ tool diameter {d}"),
+        ));
     }
     if let Some(b) = opts.band
         && !(b.is_finite() && b >= 0.0)
     {
-        return Err(Error::Usage(format!(
-            "--band {b}: must be a finite number of mm ≥ 0"
-        )));
+        return Err(invalid_option(
+            "band",
+            format!("= {b}: must be a finite number of mm ≥ 0"),
+        ));
     }
     if !(opts.scale.is_finite() && opts.scale > 0.0) {
-        return Err(Error::Usage(format!(
-            "--scale {}: must be a positive finite number (mm per outline unit)",
-            opts.scale
-        )));
+        return Err(invalid_option(
+            "scale",
+            format!(
+                "= {}: must be a positive finite number (mm per outline unit)",
+                opts.scale
+            ),
+        ));
     }
     if let StockSpec::Margin(margin) = &opts.stock
         && !(margin.is_finite() && *margin >= 0.0)
     {
-        return Err(Error::Usage(format!(
-            "--stock margin:{margin}: the margin must be ≥ 0 mm"
-        )));
+        return Err(invalid_option(
+            "stock",
+            format!("margin {margin}: the margin must be ≥ 0 mm"),
+        ));
     }
     let t = Instant::now();
     let outline_opts = OutlineOptions {
@@ -380,19 +375,21 @@ fn prepare(outline: &Path, opts: &ContourJobOptions) -> Result<Prepared> {
     };
     let (part, z) = read_part(outline, opts, &outline_opts)?;
     let stock = match &opts.stock {
-        StockSpec::Margin(margin) => stock_around(&part, *margin)
-            .ok_or_else(|| Error::Job(format!("{file}: the outline has no points")))?,
+        StockSpec::Margin(margin) => stock_around(&part, *margin).ok_or_else(|| Error::Mesh {
+            file: file.clone(),
+            reason: "the outline has no points".into(),
+        })?,
         StockSpec::Outline(path) => {
-            let stock = read_outline(path, &outline_opts).map_err(|e| Error::Job(e.to_string()))?;
-            check_inside(&part, &stock, STOCK_GAP).map_err(|e| {
-                Error::Job(format!(
-                    "{}: the part {} {} at ({:.4}, {:.4}) mm; the part must lie inside the stock",
-                    file_name(path),
+            let stock = read_outline(path, &outline_opts)?;
+            check_inside(&part, &stock, STOCK_GAP).map_err(|e| Error::Mesh {
+                file: file_name(path),
+                reason: format!(
+                    "the part {} {} at ({:.4}, {:.4}) mm; the part must lie inside the stock",
                     file_name(outline),
                     e.reason,
                     e.at.x,
                     e.at.y
-                ))
+                ),
             })?;
             stock
         }
@@ -429,10 +426,13 @@ fn check_coordinates(shape: &Shape, file: &str) -> Result<()> {
     if largest <= MAX_COORDINATE_MM {
         return Ok(());
     }
-    Err(Error::Job(format!(
-        "{file}: coordinates reach {largest:.3e} mm, beyond {MAX_COORDINATE_MM:.0e} mm (no \
-         machine is that large); check --scale and the file's units and transforms"
-    )))
+    Err(Error::Mesh {
+        file: file.to_string(),
+        reason: format!(
+            "coordinates reach {largest:.3e} mm, beyond {MAX_COORDINATE_MM:.0e} mm (no machine \
+             is that large); check the scale and the file's units and transforms"
+        ),
+    })
 }
 
 /// Refuses a run whose offset levels — the stock's extent over the stepover, the passes each
@@ -448,8 +448,8 @@ fn check_levels(file: &str, bounds: (Point2, Point2), s: f64, max_levels: usize)
         what: format!("{file}: a stock {extent:.4e} mm across at a stepover of {s:.4} mm"),
         estimate: format!("{levels:.3e} offset levels"),
         limit: format!("{max_levels} levels"),
-        how_to_raise: "check --scale and the stepover, or raise the limit with --max-levels N"
-            .into(),
+        advice: "check the scale and the stepover".into(),
+        limit_key: "max_levels".into(),
     })
 }
 
@@ -469,8 +469,8 @@ fn check_outline_vertices(file: &str, part: &Shape, limit: usize) -> Result<()> 
         ),
         estimate: format!("{vertices} vertices (offset work grows with their square)"),
         limit: format!("{limit} vertices"),
-        how_to_raise: "simplify the outline, or raise the limit with --max-outline-vertices N"
-            .into(),
+        advice: "simplify the outline".into(),
+        limit_key: "max_outline_vertices".into(),
     })
 }
 
@@ -508,24 +508,33 @@ fn read_part(
     let is_mesh = ext.as_deref().is_some_and(|e| MESH_EXTENSIONS.contains(&e));
     if !is_mesh {
         if let Some(z) = opts.z {
-            return Err(Error::Job(format!(
-                "{name}: --z {z} applies to mesh parts (.stl, .obj, .gltf, .glb) only; an \
-                 outline file is already planar"
-            )));
+            return Err(invalid_for_file(
+                &name,
+                "z",
+                format!(
+                    "= {z} applies to mesh parts (.stl, .obj, .gltf, .glb) only; an outline \
+                     file is already planar"
+                ),
+            ));
         }
-        let part = read_outline(path, outline_opts).map_err(|e| Error::Job(e.to_string()))?;
+        let part = read_outline(path, outline_opts)?;
         return Ok((part, None));
     }
     let Some(z) = opts.z else {
-        return Err(Error::Job(format!(
-            "{name}: a mesh part needs --z Z, the height (mm) of the plane that cuts the \
-             outline from it"
-        )));
+        return Err(invalid_for_file(
+            &name,
+            "z",
+            "is needed for a mesh part: the height (mm) of the plane that cuts the outline \
+             from it"
+                .into(),
+        ));
     };
     if opts.scale != 1.0 {
-        return Err(Error::Job(format!(
-            "{name}: --scale applies to outline files; give a mesh's units with --units"
-        )));
+        return Err(invalid_for_file(
+            &name,
+            "scale",
+            "applies to outline files; give a mesh's units instead".into(),
+        ));
     }
     let raw = super::load_part(path, &opts.units)?;
     // Welding joins the triangles of STL-like files, so the section can chain them.
@@ -534,8 +543,7 @@ fn read_part(
             file: name.clone(),
             reason: reason.to_string(),
         })?;
-    let part = mesh_section(&mesh, z, outline_opts.tolerance, &name)
-        .map_err(|e| Error::Job(e.to_string()))?;
+    let part = mesh_section(&mesh, z, outline_opts.tolerance, &name)?;
     Ok((part, Some(z)))
 }
 
@@ -544,11 +552,17 @@ fn read_part(
 fn method_figures(
     p: &Prepared,
     path: &CenterPath,
-    machine: &MachineParams,
+    machine: &PlanarParams,
     name: &str,
 ) -> Result<(MethodFigures, String, f64)> {
     let file = p.file.as_str();
-    let program = Program::new(path, machine).map_err(contour_error(file))?;
+    let program =
+        ContourProgram::new(path, machine, &GcodeOptions::default()).map_err(|error| {
+            Error::ContourPost {
+                file: file.to_string(),
+                error,
+            }
+        })?;
     let st = program.stats();
     let c = clearance(path, &p.part).map_err(contour_error(file))?;
     if c.clearance < -1e-6 {
@@ -590,7 +604,7 @@ fn method_figures(
             rapid_min: st.rapid_minutes,
             dwell_min: st.dwell_minutes,
         },
-        program.to_gcode(),
+        program.to_gcode(&program.header(&file_name(Path::new(file)))),
         u.region,
     ))
 }
@@ -688,9 +702,10 @@ pub fn contour_compare(outline: &Path, opts: &ContourJobOptions) -> Result<Conto
         parallel_nc,
         report,
         svg: picture.svg(),
-        png: picture
-            .png(1600)
-            .map_err(|e| Error::Job(format!("{file}: the paths picture: {e}")))?,
+        png: picture.png(1600).map_err(|e| Error::Io {
+            path: format!("{file}: the paths picture"),
+            source: std::io::Error::other(e.to_string()),
+        })?,
     })
 }
 

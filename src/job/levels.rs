@@ -86,7 +86,7 @@ pub struct AnalysedHierarchy {
 }
 
 pub(crate) fn wavelet_error(e: crate::multires::WaveletError) -> Error {
-    Error::Job(format!("wavelets: {e}"))
+    Error::Wavelets(e)
 }
 
 /// Milliseconds since `t`, to 0.1 ms.
@@ -102,8 +102,7 @@ pub fn analyse_hierarchy(
     wavelet_options: &WaveletOptions,
 ) -> Result<AnalysedHierarchy> {
     let t = Instant::now();
-    let hierarchy =
-        Hierarchy::build(part, options).map_err(|e| Error::Job(format!("remeshing: {e}")))?;
+    let hierarchy = Hierarchy::build(part, options)?;
     let remesh_ms = elapsed_ms(t);
     let base = &hierarchy.levels[0];
     let n = hierarchy.levels.len() - 1;
@@ -177,7 +176,10 @@ pub fn levels(
         };
         let mut glb = GlbBuilder::new();
         glb.add_triangles(&format!("level-{j}"), &mesh, [0.72, 0.74, 0.78, 1.0], None)
-            .map_err(|e| Error::Job(format!("level {j}: {e}")))?;
+            .map_err(|error| Error::Glb {
+                file: format!("level-{j}.glb"),
+                error,
+            })?;
         files.push((format!("level-{j}.glb"), glb.build()));
         summaries.push(LevelSummary {
             level: j,

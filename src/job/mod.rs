@@ -34,7 +34,7 @@ pub use config::{
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,
     DEFAULT_MAX_OUTLINE_VERTICES, MethodFigures, StockSpec, contour_compare, contour_wavelet,
-    parse_flat_tool, parse_stock, write_contour_outputs,
+    write_contour_outputs,
 };
 pub use levels::{AnalysedHierarchy, LevelSummary, LevelsReport, analyse_hierarchy, levels};
 pub use offsets::{

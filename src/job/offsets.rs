@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use super::levels::{AnalysedHierarchy, analyse_hierarchy, elapsed_ms, wavelet_error};
 use super::samples::NamedFile;
-use crate::error::{Error, Result};
+use crate::error::{Error, JobError, Result};
 use crate::mesh::Mesh;
 use crate::mesh::io::GlbBuilder;
 use crate::multires::{RemeshOptions, WaveletOptions};
@@ -179,8 +179,12 @@ pub fn stock_shapes(
     let analysed = analyse_hierarchy(part, remesh, &tight_levels())?;
     let specs = level_specs(part, &analysed, allowances)?;
     let plain: Vec<ShapeSpec> = specs.iter().map(|(_, s)| s.clone()).collect();
-    let shapes = nested_offsets_opt(part, &plain, &OffsetOptions::default())
-        .map_err(|e| Error::Job(format!("stock-to-leave shapes: {e}")))?;
+    let shapes = nested_offsets_opt(part, &plain, &OffsetOptions::default()).map_err(|error| {
+        Error::Offset {
+            what: "stock-to-leave shapes".into(),
+            error,
+        }
+    })?;
     Ok(specs
         .into_iter()
         .map(|(level, _)| level)
@@ -217,7 +221,10 @@ pub fn shape_glb(name: &str, shape: &OffsetShape) -> Result<Vec<u8>> {
         .collect();
     let mut glb = GlbBuilder::new();
     glb.add_triangles(name, &shape.mesh, [0.8, 0.8, 0.8, 1.0], Some(&colours))
-        .map_err(|e| Error::Job(format!("{name}: {e}")))?;
+        .map_err(|error| Error::Glb {
+            file: name.to_string(),
+            error,
+        })?;
     Ok(glb.build())
 }
 
@@ -241,16 +248,19 @@ pub fn offsets(
     timings: bool,
 ) -> Result<OffsetsOutput> {
     if allowances.is_empty() {
-        return Err(Error::Job(
-            "--allowances: give at least one allowance".into(),
-        ));
+        return Err(Error::JobFile(JobError::Invalid {
+            key: "allowances".into(),
+            reason: "is empty: give at least one allowance".into(),
+        }));
     }
     let analysed = analyse_hierarchy(part, remesh, &tight_levels())?;
     let specs = level_specs(part, &analysed, allowances)?;
     let t = Instant::now();
     let plain: Vec<ShapeSpec> = specs.iter().map(|(_, s)| s.clone()).collect();
-    let shapes = nested_offsets_opt(part, &plain, options)
-        .map_err(|e| Error::Job(format!("offsets: {e}")))?;
+    let shapes = nested_offsets_opt(part, &plain, options).map_err(|error| Error::Offset {
+        what: "offsets".into(),
+        error,
+    })?;
     let offsets_ms = elapsed_ms(t);
     let mut files = Vec::new();
     let mut summaries = Vec::new();

@@ -218,7 +218,7 @@ pub fn check_output_dir(dir: &Path, kind: &OutputKind) -> Result<()> {
 pub fn write_output_set(dir: &Path, kind: &OutputKind, files: &[(String, Vec<u8>)]) -> Result<()> {
     check_output_dir(dir, kind)?;
     if let Some((name, _)) = files.iter().find(|(n, _)| !kind.owns(n)) {
-        return Err(Error::Job(format!(
+        return Err(Error::Internal(format!(
             "internal: `wavemill {}` would write {name}, which it does not own",
             kind.command
         )));
@@ -268,11 +268,10 @@ pub fn write_output_set(dir: &Path, kind: &OutputKind, files: &[(String, Vec<u8>
 
 /// `value` as pretty JSON with a final newline.
 pub(crate) fn json_bytes(name: &str, value: &impl serde::Serialize) -> Result<Vec<u8>> {
-    Ok(
-        (serde_json::to_string_pretty(value).map_err(|e| Error::Job(format!("{name}: {e}")))?
-            + "\n")
-            .into_bytes(),
-    )
+    Ok((serde_json::to_string_pretty(value)
+        .map_err(|e| Error::Internal(format!("{name}: {e}")))?
+        + "\n")
+        .into_bytes())
 }
 
 /// Writes `job.nc`, `cl.csv`, `report.json` and `paths.glb` into `dir` as one set (see the

@@ -26,7 +26,7 @@ use super::preview::preview;
 use super::report::*;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
-use crate::error::{Error, Result};
+use crate::error::{Error, JobError, Result};
 use crate::geom::{Move, MoveKind, Toolpath, Vector3};
 use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, set_aside_warning};
@@ -229,11 +229,11 @@ pub fn plan_operation(
     if let InProcessStock::AtLeast { stock_to_leave } = *stock
         && operation.stock_to_leave >= stock_to_leave
     {
-        return Err(Error::Job(format!(
+        return Err(Error::JobFile(JobError::Operations(format!(
             "operation '{}' leaves {} mm where the operations before it already leave \
              {stock_to_leave} mm: it would cut nothing",
             operation.name, operation.stock_to_leave
-        )));
+        ))));
     }
     let planned = |toolpath, details, failure| PlannedOperation {
         operation: operation.clone(),
@@ -274,7 +274,7 @@ pub fn plan_operation(
                 None,
             ))
         }
-        (kind, _) => Err(Error::Job(format!(
+        (kind, _) => Err(Error::Internal(format!(
             "operation '{}' ({}) was given the wrong surface to machine",
             operation.name,
             kind.name()
@@ -381,7 +381,7 @@ pub fn plan(
         let target = match operation.kind {
             OperationKind::SemiFinish => {
                 let (level, shape) = shapes_left.next().ok_or_else(|| {
-                    Error::Job(format!("no stock-to-leave shape for '{}'", operation.name))
+                    Error::Internal(format!("no stock-to-leave shape for '{}'", operation.name))
                 })?;
                 OperationTarget::Shape {
                     level: *level,
@@ -485,8 +485,11 @@ pub fn plan(
             OperationDetails::Finish { passes, linking } => finishing = Some((passes, linking)),
         }
     }
-    let (finishing, link_report) =
-        finishing.ok_or_else(|| Error::Job("the operations must end with finishing".into()))?;
+    let (finishing, link_report) = finishing.ok_or_else(|| {
+        Error::JobFile(JobError::Operations(
+            "the operations must end with finishing".into(),
+        ))
+    })?;
     let length = |kind: MoveKind| -> f64 {
         toolpath
             .moves
@@ -508,9 +511,11 @@ pub fn plan(
             }
         )));
     }
-    let finish = operations
-        .last()
-        .ok_or_else(|| Error::Job("a job needs at least one operation".into()))?;
+    let finish = operations.last().ok_or_else(|| {
+        Error::JobFile(JobError::Operations(
+            "a job needs at least one operation".into(),
+        ))
+    })?;
     let stepover = path::stepover_for_scallop(finish.tool.diameter / 2.0, finish.scallop_height);
     let report = PlanReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),

@@ -43,7 +43,10 @@ pub fn preview(
             MoveKind::Rapid => rapid.push(segment),
         }
     }
-    let glb = |e| Error::Job(format!("preview: {e}"));
+    let glb = |error| Error::Glb {
+        file: "paths.glb".into(),
+        error,
+    };
     let mut b = GlbBuilder::new();
     b.add_triangles("part", part, PART, None).map_err(glb)?;
     b.add_lines("cut", &cut, CUT).map_err(glb)?;

@@ -37,7 +37,10 @@ pub fn sample_files(part: &SamplePart) -> Result<(Mesh, Vec<NamedFile>)> {
     let mesh = part.mesh()?;
     let mut glb = GlbBuilder::new();
     glb.add_triangles(name, &mesh, [0.72, 0.74, 0.78, 1.0], None)
-        .map_err(|e| Error::Job(format!("{name}: {e}")))?;
+        .map_err(|error| Error::Glb {
+            file: format!("{name}.glb"),
+            error,
+        })?;
     let obj = write_obj(
         &mesh,
         &format!("wavemill sample {name} (generated, deterministic)"),

@@ -81,11 +81,9 @@ pub fn semi_finish_operation(
         ));
     }
     let collider = PartCollider::new(&shape.mesh)
-        .map_err(|e| {
-            Error::Job(format!(
-                "stock-to-leave shape {} mm: {e}",
-                figures.allowance_mm
-            ))
+        .map_err(|error| Error::Collider {
+            what: format!("stock-to-leave shape {} mm", figures.allowance_mm),
+            error,
         })?
         .with_table(setup.table);
     let rays = RayScene::new(&shape.mesh);

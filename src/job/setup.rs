@@ -7,7 +7,7 @@ use super::budget::ToleranceBudget;
 use super::config::{Job, unit_direction};
 use crate::access::RayScene;
 use crate::collide::{Margins, PartCollider, PreparedTool, Table};
-use crate::error::{Error, Result};
+use crate::error::{Error, JobError, Result};
 use crate::geom::{Direction, Point3, ToolPose, Vector3, positive_zero};
 use crate::mesh::io::RawMesh;
 use crate::mesh::{Mesh, MeshReport, Piece, PrepareOptions, prepare_without_stray_pieces};
@@ -42,7 +42,10 @@ pub fn prepare_part(raw: &RawMesh, part_name: &str, job: &Job) -> Result<Prepare
         Some(up) => turned_upright(
             &raw.mesh,
             &unit_direction(up).ok_or_else(|| {
-                Error::Job(format!("part.up must be a non-zero vector, got {up:?}"))
+                Error::JobFile(JobError::Invalid {
+                    key: "part.up".into(),
+                    reason: format!("must be a non-zero vector, got {up:?}"),
+                })
             })?,
         ),
         None => raw.mesh.clone(),
@@ -60,10 +63,13 @@ pub fn prepare_part(raw: &RawMesh, part_name: &str, job: &Job) -> Result<Prepare
     let lowest = part.aabb().min.z;
     let table_z = job.machine.table_z.unwrap_or(lowest);
     if table_z > lowest + job.strategy.tolerance {
-        return Err(Error::Job(format!(
-            "machine.table_z {table_z} mm is above the part's lowest point (z = {lowest:.4} mm \
-             after turning the part up): the part would stand inside the table"
-        )));
+        return Err(Error::JobFile(JobError::Invalid {
+            key: "machine.table_z".into(),
+            reason: format!(
+                "= {table_z} mm is above the part's lowest point (z = {lowest:.4} mm after \
+                 turning the part up): the part would stand inside the table"
+            ),
+        }));
     }
     Ok(PreparedPart {
         name: part_name.to_string(),
@@ -145,9 +151,13 @@ impl PlanSetup {
             .safe_distance
             .unwrap_or(reach + job.machine.safe_margin);
         if safe_distance <= reach {
-            return Err(Error::Job(format!(
-                "machine.safe_distance {safe_distance} mm is inside the part's reach from the pivot ({reach:.3} mm)"
-            )));
+            return Err(Error::JobFile(JobError::Invalid {
+                key: "machine.safe_distance".into(),
+                reason: format!(
+                    "= {safe_distance} mm is inside the part's reach from the pivot \
+                     ({reach:.3} mm)"
+                ),
+            }));
         }
         // Rounding is charged where the ball centre is farthest from the pivot: on the safe
         // plane.
@@ -156,8 +166,7 @@ impl PlanSetup {
             job.strategy.tolerance,
             &gcode_options,
             safe_distance + prepared_tool.ball_radius,
-        )
-        .map_err(Error::Job)?;
+        )?;
         let chooser = AxisChooser::new(AxisOptions {
             lead_deg: job.strategy.lead_deg,
             tilt_deg: job.strategy.tilt_deg,
@@ -254,9 +263,8 @@ fn check_drive_points(mesh: &MeshReport, job: &Job) -> Result<()> {
             ),
             estimate: format!("{:.3e} drive points", estimate),
             limit: format!("{limit}"),
-            how_to_raise: "check the part's units and the scallop height, or raise \
-                           limits.max_drive_points"
-                .into(),
+            advice: "check the part's units and the scallop height".into(),
+            limit_key: "limits.max_drive_points".into(),
         });
     }
     Ok(())
@@ -281,6 +289,13 @@ pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<TableTableAC>
         KinematicsKind::TableTableAc => TableTableAC::new(part_origin_in_table)
             .with_a_limits(m.a_limits[0], m.a_limits[1])
             .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi))),
+        // Refused by `Job::validate`, which every planner runs first.
+        KinematicsKind::ThreeAxis => {
+            return Err(Error::JobFile(JobError::Invalid {
+                key: "machine.kinematics".into(),
+                reason: "names a machine that cannot tilt the tool".into(),
+            }));
+        }
     };
     kin.validate()?;
     Ok(kin)

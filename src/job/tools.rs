@@ -97,7 +97,7 @@ pub fn tools(
     }
     let prepare_ms = ms(started);
     let t = Instant::now();
-    let choice = choose_tools(&part, library, options).map_err(|e| Error::Job(e.to_string()))?;
+    let choice = choose_tools(&part, library, options)?;
     let choose_ms = ms(t);
 
     // Colours follow the proposal's order (largest first), so the legend reads like the list.
@@ -119,7 +119,10 @@ pub fn tools(
         .collect();
     let mut glb = GlbBuilder::new();
     glb.add_triangles("tools", &part, [1.0, 1.0, 1.0, 1.0], Some(&colours))
-        .map_err(|e| Error::Job(format!("tools.glb: {e}")))?;
+        .map_err(|error| Error::Glb {
+            file: "tools.glb".into(),
+            error,
+        })?;
     let legend = (0..choice.report.proposal.len())
         .map(|k| PALETTE[k % PALETTE.len()])
         .collect();

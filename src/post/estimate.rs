@@ -1,14 +1,19 @@
-//! Machining-time estimate from the posted blocks.
+//! Machining-time estimate from the posted blocks: one model for every program, 5-axis or
+//! planar.
 //!
-//! Per block (from the previous block's joints): linear length `L = |Δ(X, Y, Z)|` (machine
-//! coordinates, what the controller actually moves) and rotary travel `R = max(|ΔA|, |ΔC|)`
-//! (degrees). Time = `max(L / F, R / ω)` with `F` the move's feed (the rapid rate for rapids)
-//! and `ω` the maximum rotary speed. A pure rotary feed block (`L` below 1e-9 mm) is timed at
-//! `max(R / F, R / ω)`, as G94 controllers read F as degrees/min there. Acceleration is
-//! ignored, so the estimate is a lower bound. The first block has no known start: 0 s.
+//! Per block (from the previous block's joints): linear length `L` (machine coordinates, what
+//! the controller actually moves: `|Δ(X, Y, Z)|` for a straight block, the helix
+//! `√((r·θ)² + ΔZ²)` for an arc of radius `r` and sweep `θ`) and rotary travel
+//! `R = max(|ΔA|, |ΔC|)` (degrees). Time = `max(L / F, R / ω)` with `F` the move's feed (the
+//! rapid rate for rapids) and `ω` the maximum rotary speed. A pure rotary feed block (`L` below
+//! 1e-9 mm) is timed at `max(R / F, R / ω)`, as G94 controllers read F as degrees/min there.
+//! Each block may also pay a fixed dwell (the block-processing delay seed 004 §1.2 counts for
+//! 2.5D programs; 0 for the 5-axis jobs). Acceleration is ignored, so the estimate is a lower
+//! bound. The first block has no known start: only its dwell.
 
 use serde::{Deserialize, Serialize};
 
+use super::ArcXY;
 use super::kinematics::Joints;
 use crate::geom::{Move, MoveKind};
 
@@ -23,49 +28,120 @@ pub struct TimeEstimate {
     pub cut_s: f64,
     /// Retract time, seconds.
     pub retract_s: f64,
+    /// Block-processing dwell, seconds (absent from reports when 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub dwell_s: f64,
     /// Blocks skipped because their feed was not finite and positive.
     pub invalid_feed_blocks: usize,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl TimeEstimate {
     /// Total seconds.
     pub fn total_s(&self) -> f64 {
-        self.rapid_s + self.approach_s + self.cut_s + self.retract_s
+        self.rapid_s + self.approach_s + self.cut_s + self.retract_s + self.dwell_s
     }
+
+    pub(super) fn add(&mut self, kind: MoveKind, s: f64) {
+        match kind {
+            MoveKind::Rapid => self.rapid_s += s,
+            MoveKind::Approach => self.approach_s += s,
+            MoveKind::Cut => self.cut_s += s,
+            MoveKind::Retract => self.retract_s += s,
+        }
+    }
+}
+
+/// The machine figures the estimate needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeModel {
+    /// Fastest rotary motion, degrees/min; a non-positive value ignores rotary limits.
+    pub max_rotary_deg_per_min: f64,
+    /// Fixed time each motion block costs on top of its motion, seconds (≥ 0).
+    pub dwell_per_block_s: f64,
 }
 
 /// Linear length (mm) below which a block counts as pure rotary.
 const PURE_ROTARY_EPS_MM: f64 = 1e-9;
 
-/// Estimates the machining time of posted blocks (see the module docs).
-/// `max_rotary_deg_per_min` must be positive; a non-positive value ignores rotary limits.
-pub fn estimate_time(program: &[(Move, Joints)], max_rotary_deg_per_min: f64) -> TimeEstimate {
+/// Linear length (mm) the control travels from `from` to `to`, along the arc when there is one.
+pub fn block_length(from: &Joints, to: &Joints, arc: Option<&ArcXY>) -> f64 {
+    let Some(arc) = arc else {
+        return (to.xyz() - from.xyz()).norm();
+    };
+    let [cx, cy] = arc.center;
+    let a0 = (from.y - cy).atan2(from.x - cx);
+    let a1 = (to.y - cy).atan2(to.x - cx);
+    let mut sweep = if arc.ccw {
+        (a1 - a0).rem_euclid(std::f64::consts::TAU)
+    } else {
+        (a0 - a1).rem_euclid(std::f64::consts::TAU)
+    };
+    if sweep == 0.0 {
+        sweep = std::f64::consts::TAU; // an arc that ends where it starts is a full circle
+    }
+    let radius = (from.x - cx).hypot(from.y - cy);
+    (radius * sweep).hypot(to.z - from.z)
+}
+
+/// Seconds of motion of one block (no dwell; see the module docs), or `None` when its feed is
+/// not finite and positive.
+pub fn block_seconds(
+    from: &Joints,
+    m: &Move,
+    to: &Joints,
+    arc: Option<&ArcXY>,
+    max_rotary_deg_per_min: f64,
+) -> Option<f64> {
+    if !(m.feed.is_finite() && m.feed > 0.0) {
+        return None;
+    }
+    let lin = block_length(from, to, arc);
+    let rot = (to.a - from.a).abs().max((to.c - from.c).abs());
+    let rot_min = if max_rotary_deg_per_min > 0.0 {
+        rot / max_rotary_deg_per_min
+    } else {
+        0.0
+    };
+    let minutes = if lin < PURE_ROTARY_EPS_MM && m.kind != MoveKind::Rapid {
+        (rot / m.feed).max(rot_min)
+    } else {
+        (lin / m.feed).max(rot_min)
+    };
+    Some(60.0 * minutes)
+}
+
+/// Estimates the machining time of posted blocks `(move, joints, arc)` (see the module docs).
+pub fn estimate_blocks<'a>(
+    blocks: impl IntoIterator<Item = (&'a Move, &'a Joints, Option<&'a ArcXY>)>,
+    model: &TimeModel,
+) -> TimeEstimate {
     let mut est = TimeEstimate::default();
-    for w in program.windows(2) {
-        let (j0, (m, j1)) = (&w[0].1, (&w[1].0, &w[1].1));
-        let lin = (j1.xyz() - j0.xyz()).norm();
-        let rot = (j1.a - j0.a).abs().max((j1.c - j0.c).abs());
-        if !(m.feed.is_finite() && m.feed > 0.0) {
-            est.invalid_feed_blocks += 1;
-            continue;
+    let mut previous: Option<&Joints> = None;
+    for (m, j, arc) in blocks {
+        est.dwell_s += model.dwell_per_block_s;
+        if let Some(from) = previous {
+            match block_seconds(from, m, j, arc, model.max_rotary_deg_per_min) {
+                Some(s) => est.add(m.kind, s),
+                None => est.invalid_feed_blocks += 1,
+            }
         }
-        let rot_min = if max_rotary_deg_per_min > 0.0 {
-            rot / max_rotary_deg_per_min
-        } else {
-            0.0
-        };
-        let minutes = if lin < PURE_ROTARY_EPS_MM && m.kind != MoveKind::Rapid {
-            (rot / m.feed).max(rot_min)
-        } else {
-            (lin / m.feed).max(rot_min)
-        };
-        let s = 60.0 * minutes;
-        match m.kind {
-            MoveKind::Rapid => est.rapid_s += s,
-            MoveKind::Approach => est.approach_s += s,
-            MoveKind::Cut => est.cut_s += s,
-            MoveKind::Retract => est.retract_s += s,
-        }
+        previous = Some(j);
     }
     est
+}
+
+/// Estimates the machining time of a linearised program (no dwell).
+/// `max_rotary_deg_per_min` must be positive; a non-positive value ignores rotary limits.
+pub fn estimate_time(program: &[(Move, Joints)], max_rotary_deg_per_min: f64) -> TimeEstimate {
+    estimate_blocks(
+        program.iter().map(|(m, j)| (m, j, None)),
+        &TimeModel {
+            max_rotary_deg_per_min,
+            dwell_per_block_s: 0.0,
+        },
+    )
 }

@@ -57,6 +57,19 @@ pub enum KinematicsKind {
     /// ([`TableTableAC`]).
     #[default]
     TableTableAc,
+    /// Three linear axes, the tool fixed along machine +Z ([`ThreeAxis`]): 2.5D contour
+    /// programs.
+    ThreeAxis,
+}
+
+impl KinematicsKind {
+    /// `true` when the kind can tilt the tool (has rotary axes).
+    pub fn is_five_axis(self) -> bool {
+        match self {
+            KinematicsKind::TableTableAc => true,
+            KinematicsKind::ThreeAxis => false,
+        }
+    }
 }
 
 /// Horizontal component `√(k_x² + k_y²)` of the tool axis (part frame) at or below which the
@@ -109,6 +122,12 @@ pub enum KinematicsError {
     /// The pose or joints contain NaN or infinite values.
     #[error("non-finite pose or joint values")]
     NonFinite,
+    /// The machine cannot tilt the tool to the pose's axis (a 3-axis machine keeps it along +Z).
+    #[error("the tool axis is {angle_deg:.6}° from +Z and this machine cannot tilt the tool")]
+    FixedAxis {
+        /// Angle between the pose's axis and +Z, degrees.
+        angle_deg: f64,
+    },
     /// The machine description is inconsistent (e.g. limits not ordered, negative tolerance).
     #[error("invalid machine description: {0}")]
     InvalidMachine(String),
@@ -191,11 +210,78 @@ pub trait MachineKinematics {
     /// Checks joint values against the machine's limits.
     fn check_limits(&self, joints: &Joints) -> Result<(), KinematicsError>;
 
-    /// Names of the two rotary axes, in the order of [`Joints::a`] and [`Joints::c`].
-    fn rotary_axes(&self) -> [RotaryAxis; 2];
+    /// Names of the rotary axes, in the order of [`Joints::a`] and [`Joints::c`]: two on a
+    /// 5-axis machine, none on a 3-axis one (whose joints keep `a = c = 0`).
+    fn rotary_axes(&self) -> &[RotaryAxis];
 
     /// One-line human description (for program headers).
     fn description(&self) -> String;
+
+    /// Where the work offset's origin must be for the program's coordinates to mean what the
+    /// post assumed (for program headers).
+    fn work_offset(&self) -> &str;
+}
+
+/// A 3-axis machine: the tool along machine +Z, machine X, Y, Z = the tool tip in the part
+/// frame (the work offset's origin at the part origin). Poses must have the axis +Z.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ThreeAxis;
+
+/// Largest angle (radians) between a pose's axis and +Z that [`ThreeAxis`] accepts: round-off
+/// of a vertical axis, nothing a tilted tool could produce.
+pub const VERTICAL_AXIS_EPS: f64 = 1e-9;
+
+impl MachineKinematics for ThreeAxis {
+    fn inverse(
+        &self,
+        pose: &ToolPose,
+        _previous: Option<&Joints>,
+    ) -> Result<Joints, KinematicsError> {
+        let (t, k) = (pose.tip, pose.axis.into_inner());
+        if !(t.coords.iter().chain(k.iter()).all(|v| v.is_finite())) {
+            return Err(KinematicsError::NonFinite);
+        }
+        let angle = crate::geom::angle_between(&k, &Vector3::z());
+        if angle > VERTICAL_AXIS_EPS {
+            return Err(KinematicsError::FixedAxis {
+                angle_deg: angle.to_degrees(),
+            });
+        }
+        Ok(Joints {
+            x: t.x,
+            y: t.y,
+            z: t.z,
+            a: 0.0,
+            c: 0.0,
+        })
+    }
+
+    fn forward(&self, j: &Joints) -> ToolPose {
+        ToolPose {
+            tip: Point3::new(j.x, j.y, j.z),
+            axis: Unit::new_unchecked(Vector3::z()),
+        }
+    }
+
+    fn check_limits(&self, joints: &Joints) -> Result<(), KinematicsError> {
+        if joints.is_finite() {
+            Ok(())
+        } else {
+            Err(KinematicsError::NonFinite)
+        }
+    }
+
+    fn rotary_axes(&self) -> &[RotaryAxis] {
+        &[]
+    }
+
+    fn description(&self) -> String {
+        "3-axis: tool along +Z".to_string()
+    }
+
+    fn work_offset(&self) -> &str {
+        "origin at the part origin"
+    }
 }
 
 /// Table-table A/C 5-axis machine (tool fixed along +Z, A cradle about X carrying a C round
@@ -551,8 +637,12 @@ impl MachineKinematics for TableTableAC {
         Ok(())
     }
 
-    fn rotary_axes(&self) -> [RotaryAxis; 2] {
-        [RotaryAxis::A, RotaryAxis::C]
+    fn rotary_axes(&self) -> &[RotaryAxis] {
+        &[RotaryAxis::A, RotaryAxis::C]
+    }
+
+    fn work_offset(&self) -> &str {
+        "origin at the rotary pivot"
     }
 
     fn description(&self) -> String {

@@ -20,11 +20,13 @@
 #![warn(missing_docs)]
 
 pub mod cl;
+pub mod contour;
 pub mod estimate;
 mod format;
 pub mod gcode;
 pub mod kinematics;
 pub mod linearise;
+pub mod planar;
 
 #[cfg(test)]
 mod tests;
@@ -32,14 +34,26 @@ mod tests;
 use serde::{Deserialize, Serialize};
 
 pub use cl::{CL_CSV_HEADER, write_cl_csv};
-pub use estimate::{TimeEstimate, estimate_time};
+pub use contour::{BlockRole, ContourPostError, ContourProgram, PlanarParams, ProgramStats};
+pub use estimate::{TimeEstimate, TimeModel, estimate_blocks, estimate_time};
 pub use gcode::{GcodeOptions, GcodeWriter};
 pub use kinematics::{
-    Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, TableTableAC,
+    Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, TableTableAC, ThreeAxis,
 };
 pub use linearise::{LineariseError, LineariseOptions, linearise, linearise_opt};
+pub use planar::{PlanarBlock, PlanarError, PlanarProgram};
 
 use crate::geom::{Move, Toolpath};
+
+/// A circular block in the machine's XY plane (G17): the centre in machine coordinates and the
+/// sense seen from +Z. It starts where the previous block ended and ends at the block's joints.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArcXY {
+    /// Centre (machine X, Y), mm.
+    pub center: [f64; 2],
+    /// Counter-clockwise seen from +Z (`G3`); else clockwise (`G2`).
+    pub ccw: bool,
+}
 
 /// What goes at the top of a program.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -52,7 +66,7 @@ pub struct ProgramHeader {
     pub tool_description: Vec<String>,
     /// Tool number: `T` word and `H` length-offset register.
     pub tool_number: u32,
-    /// Spindle speed (rev/min), clockwise.
+    /// Spindle speed (rev/min), clockwise; 0 leaves the spindle alone.
     pub spindle_rpm: u32,
     /// Flood coolant on (M8) during the program.
     pub coolant: bool,
@@ -67,6 +81,9 @@ pub trait ProgramSink {
     fn begin(&mut self, header: &ProgramHeader);
     /// One block: the move (part-frame pose, kind, feed) and the joints that realise it.
     fn motion(&mut self, m: &Move, j: &Joints);
+    /// One circular block in the machine's XY plane, from the previous block's end to `end`
+    /// (planar programs: [`planar`]).
+    fn arc(&mut self, m: &Move, end: &Joints, arc: &ArcXY);
     /// Ends the program.
     fn end(&mut self);
 }

@@ -3,7 +3,7 @@
 
 use serde::Deserialize;
 
-use super::ToolAssembly;
+use super::{ToolAssembly, ToolError};
 
 /// The tools a shop has, as read (order kept).
 #[derive(Clone, Debug, PartialEq)]
@@ -21,31 +21,38 @@ struct LibraryFile {
 impl ToolLibrary {
     /// Parses and checks a library; `file` names the source in errors, which also say which
     /// tool (by position and id) is wrong.
-    pub fn parse(text: &str, file: &str) -> Result<Self, String> {
+    pub fn parse(text: &str, file: &str) -> Result<Self, ToolError> {
+        let bad = |reason: String| ToolError::Library {
+            file: file.to_string(),
+            reason,
+        };
         let parsed: LibraryFile =
-            toml::from_str(text).map_err(|e| format!("{file}: {}", e.to_string().trim_end()))?;
+            toml::from_str(text).map_err(|e| bad(e.to_string().trim_end().to_string()))?;
         if parsed.tool.is_empty() {
-            return Err(format!("{file}: no [[tool]] tables: the library is empty"));
+            return Err(bad("no [[tool]] tables: the library is empty".into()));
         }
         for (i, tool) in parsed.tool.iter().enumerate() {
             tool.validate()
-                .map_err(|e| format!("{file}: tool {} (id {}): {e}", i + 1, tool.id))?;
+                .map_err(|e| bad(format!("tool {} (id {}): {e}", i + 1, tool.id)))?;
             if let Some(first) = parsed.tool[..i].iter().position(|t| t.id == tool.id) {
-                return Err(format!(
-                    "{file}: tools {} and {} both have id {}: tool numbers must be unique",
+                return Err(bad(format!(
+                    "tools {} and {} both have id {}: tool numbers must be unique",
                     first + 1,
                     i + 1,
                     tool.id
-                ));
+                )));
             }
         }
         Ok(Self { tools: parsed.tool })
     }
 
     /// Reads and checks a library file.
-    pub fn read(path: &std::path::Path) -> Result<Self, String> {
+    pub fn read(path: &std::path::Path) -> Result<Self, ToolError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: {e}"))?;
+        let text = std::fs::read_to_string(path).map_err(|e| ToolError::Library {
+            file: file.clone(),
+            reason: e.to_string(),
+        })?;
         Self::parse(&text, &file)
     }
 
@@ -100,7 +107,11 @@ mod tests {
 
     #[test]
     fn bad_libraries_name_the_file_and_the_tool() {
-        let err = |text: &str| ToolLibrary::parse(text, "shop.toml").unwrap_err();
+        let err = |text: &str| {
+            ToolLibrary::parse(text, "shop.toml")
+                .unwrap_err()
+                .to_string()
+        };
         assert!(err("").contains("shop.toml: no [[tool]]"));
         let e = err("[[tool]]\nid = 1\n");
         assert!(e.starts_with("shop.toml:") && e.contains("cutter"), "{e}");

@@ -25,4 +25,7 @@ pub enum ToolError {
     BadSpec(String),
     #[error("tool: {0}")]
     Invalid(String),
+    /// A tool library file cannot be read or breaks a rule.
+    #[error("{file}: {reason}")]
+    Library { file: String, reason: String },
 }

@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::access::RayScene;
-use crate::collide::{Collision, Margins, PartCollider, PreparedTool, Table};
+use crate::collide::{ColliderError, Collision, Margins, PartCollider, PreparedTool, Table};
 use crate::geom::ToolPose;
 use crate::geom::{Direction, Vector3, orthonormal_frame, triangle_area};
 use crate::mesh::Mesh;
@@ -213,24 +213,43 @@ pub struct Unreachable {
     pub smallest_refused_for: BTreeMap<Refusal, usize>,
 }
 
+/// Why tools cannot be chosen.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ToolChoiceError {
+    /// An option is out of its range.
+    #[error("{name} = {value}: {reason}")]
+    InvalidOption {
+        /// The option (field of [`ToolChoiceOptions`]).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        reason: &'static str,
+    },
+    /// The part cannot be made into a collision model.
+    #[error(transparent)]
+    Collider(#[from] ColliderError),
+}
+
 /// Chooses tools from `library` for `part` (a closed, outward-oriented mesh in mm).
 pub fn choose_tools(
     part: &Mesh,
     library: &ToolLibrary,
     options: &ToolChoiceOptions,
-) -> Result<ToolChoice, String> {
+) -> Result<ToolChoice, ToolChoiceError> {
     if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
-        return Err(format!(
-            "tolerance {} must be a non-negative number of mm",
-            options.tolerance
-        ));
+        return Err(ToolChoiceError::InvalidOption {
+            name: "tolerance",
+            value: options.tolerance,
+            reason: "must be a non-negative number of mm",
+        });
     }
     let normals = part.vertex_normals();
     let ring = vertex_neighbours(part);
     let curvatures = vertex_curvatures(part, &normals, &ring);
     let areas = vertex_areas(part);
 
-    let mut collider = PartCollider::new(part).map_err(|e| e.to_string())?;
+    let mut collider = PartCollider::new(part)?;
     if let Some(margin) = options.table_margin {
         collider = collider.with_table(Table {
             top_z: part.aabb().min.z,

@@ -175,7 +175,7 @@ pub fn a_real_control_reads_the_program_as_the_tests_do(gcode: &str) {
 }
 
 /// `name` on the PATH.
-fn which(name: &str) -> Result<std::path::PathBuf, ()> {
+pub fn which(name: &str) -> Result<std::path::PathBuf, ()> {
     std::env::var_os("PATH")
         .and_then(|paths| {
             std::env::split_paths(&paths)

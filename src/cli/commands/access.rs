@@ -60,7 +60,8 @@ pub fn run(args: &AccessArgs) -> Result<()> {
         timings: !args.no_timings,
         ..Default::default()
     };
-    let output = job::access(&raw, &name, &job, &options, query.as_deref())?;
+    let output = job::access(&raw, &name, &job, &options, query.as_deref())
+        .map_err(|e| crate::cli::name_flags(e, &[("directions", "--directions")]))?;
     job::write_access_outputs(&args.out, &output)?;
     let r = &output.report;
     say!(

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
+use crate::cli::name_flags;
 use crate::cli::values::*;
 use crate::error::Result;
 use crate::job::{self};
@@ -20,12 +21,12 @@ pub struct ContourArgs {
     #[arg(long, default_value = "mm", value_parser = units)]
     pub units: String,
     /// Flat end mill, `flat:D` with the diameter D in mm.
-    #[arg(long)]
-    pub tool: String,
+    #[arg(long, value_name = "flat:D", value_parser = flat_tool)]
+    pub tool: f64,
     /// Stock: `margin:M`, the part's bounding box grown by M mm, or `outline:FILE`, a closed
     /// SVG/DXF outline (same --scale) that contains the part.
-    #[arg(long)]
-    pub stock: String,
+    #[arg(long, value_name = "margin:M|outline:FILE", value_parser = stock)]
+    pub stock: job::StockSpec,
     /// Stepover between passes, mm (0 < S ≤ D). Default 0.4 × D: below the tool radius, so
     /// contour-parallel offsets leave no reachable material and the wavelet passes have a
     /// band of 0.05 × D each side of their level to be simplified in.
@@ -73,10 +74,23 @@ pub enum Direction {
     Mixed,
 }
 
+/// The flag that sets each option of [`job::ContourJobOptions`].
+const FLAGS: &[(&str, &str)] = &[
+    ("tool_diameter", "--tool"),
+    ("stock", "--stock"),
+    ("z", "--z"),
+    ("units", "--units"),
+    ("stepover", "--stepover"),
+    ("band", "--band"),
+    ("scale", "--scale"),
+    ("max_levels", "--max-levels"),
+    ("max_outline_vertices", "--max-outline-vertices"),
+];
+
 /// Runs the command.
 pub fn run(args: &ContourArgs) -> Result<()> {
-    let mut options = job::ContourJobOptions::new(job::parse_flat_tool(&args.tool)?, 0.0);
-    options.stock = job::parse_stock(&args.stock)?;
+    let mut options = job::ContourJobOptions::new(args.tool, 0.0);
+    options.stock = args.stock.clone();
     options.z = args.z;
     options.units = args.units.clone();
     options.stepover = args.stepover;
@@ -104,7 +118,8 @@ pub fn run(args: &ContourArgs) -> Result<()> {
         );
     };
     if !args.compare {
-        let (nc, figures) = job::contour_wavelet(&args.outline, &options)?;
+        let (nc, figures) =
+            job::contour_wavelet(&args.outline, &options).map_err(|e| name_flags(e, FLAGS))?;
         job::write_output_set(
             &args.out,
             &job::OutputKind::CONTOUR,
@@ -114,7 +129,7 @@ pub fn run(args: &ContourArgs) -> Result<()> {
         say!("-> {}", args.out.join("wavelet.nc").display());
         return Ok(());
     }
-    let c = job::contour_compare(&args.outline, &options)?;
+    let c = job::contour_compare(&args.outline, &options).map_err(|e| name_flags(e, FLAGS))?;
     job::write_contour_outputs(&args.out, &c)?;
     let r = &c.report;
     figures_line("contour-parallel", &r.contour_parallel);

@@ -86,7 +86,8 @@ pub fn run(args: &OffsetsArgs) -> Result<()> {
     .with_tool_radius(tool_radius);
     let job::OffsetsOutput {
         mut files, report, ..
-    } = job::offsets(&mesh, &remesh, &args.allowances, &options, !args.no_timings)?;
+    } = job::offsets(&mesh, &remesh, &args.allowances, &options, !args.no_timings)
+        .map_err(|e| crate::cli::name_flags(e, &[("allowances", "--allowances")]))?;
     let json = serde_json::to_string_pretty(&report).unwrap_or_default() + "\n";
     files.push(("offsets.json".to_string(), json.into_bytes()));
     job::write_output_set(&args.out, &job::OutputKind::OFFSETS, &files)?;

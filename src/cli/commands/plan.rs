@@ -79,15 +79,8 @@ pub fn run(args: &PlanArgs) -> Result<()> {
         job.limits.max_drive_points = n;
         flags.push(("limits.max_drive_points", "--max-drive-points"));
     }
-    if let Err(e) = job.validate() {
-        let key = e.key().unwrap_or_default();
-        return Err(
-            match flags.iter().find(|(prefix, _)| key.starts_with(prefix)) {
-                Some((_, flag)) => Error::Usage(format!("{flag}: {e}")),
-                None => Error::from(e),
-            },
-        );
-    }
+    job.validate()
+        .map_err(|e| crate::cli::name_flags(Error::from(e), &flags))?;
     let part_path: PathBuf = match (&args.part, &job.part.path) {
         (Some(p), _) => p.clone(),
         (None, Some(p)) => p.clone(),
@@ -102,26 +95,17 @@ pub fn run(args: &PlanArgs) -> Result<()> {
     let threads = args.threads.unwrap_or(0);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .build()
-        .map_err(|e| Error::Job(format!("worker threads: {e}")))?;
+        .build()?;
     let name = part_path.display().to_string();
     let raw = load(&part_path, &units)?;
     let observer = super::super::progress::Bars::new();
     let output = pool
         .install(|| job::plan(&raw, &name, &units, &job, &observer))
-        .map_err(|e| match e {
-            Error::TooLarge {
-                what,
-                estimate,
-                limit,
-                how_to_raise,
-            } => Error::TooLarge {
-                what,
-                estimate,
-                limit,
-                how_to_raise: format!("{how_to_raise} (--max-drive-points)"),
-            },
-            other => other,
+        .map_err(|e| {
+            // The drive-point limit is named by its flag whether or not it was given.
+            let mut run_flags = flags.clone();
+            run_flags.push(("limits.max_drive_points", "--max-drive-points"));
+            crate::cli::name_flags(e, &run_flags)
         })?;
     job::write_outputs(&args.out, &output, !args.no_timings)?;
     summarise(&output.report, &args.out);

@@ -69,7 +69,8 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
                 triangles * 1e-7
             ),
             limit: format!("{} triangles", args.max_triangles),
-            how_to_raise: "use fewer --levels or raise --max-triangles".into(),
+            advice: "use fewer --levels".into(),
+            limit_key: "--max-triangles".into(),
         });
     }
     let creases = match args.crease_angle {
@@ -86,7 +87,10 @@ pub fn run(args: &SubdivideArgs) -> Result<()> {
     } else {
         let mut glb = GlbBuilder::new();
         glb.add_triangles("subdivided", &fine, [0.72, 0.74, 0.78, 1.0], None)
-            .map_err(|e| Error::Job(format!("{name}: {e}")))?;
+            .map_err(|error| Error::Glb {
+                file: name.clone(),
+                error,
+            })?;
         glb.build()
     };
     job::write_atomically(&args.out, &bytes)?;

@@ -6,7 +6,7 @@ use clap::Args;
 
 use crate::cli::load;
 use crate::cli::values::*;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::job::{self};
 
 #[derive(Args, Debug)]
@@ -43,7 +43,7 @@ pub struct ToolsArgs {
 /// Runs the command.
 pub fn run(args: &ToolsArgs) -> Result<()> {
     job::check_output_dir(&args.out, &job::OutputKind::TOOLS)?;
-    let library = crate::tool::ToolLibrary::read(&args.library).map_err(Error::Job)?;
+    let library = crate::tool::ToolLibrary::read(&args.library)?;
     let name = args.part.display().to_string();
     let raw = load(&args.part, &args.units)?;
     let options = crate::tool_choice::ToolChoiceOptions {

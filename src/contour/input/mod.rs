@@ -127,7 +127,7 @@ pub enum OutlineError {
     #[error(
         "{file}: the plane z = {z} mm runs along a horizontal face of the part (triangle \
          {triangle}), where the section is not defined; try a slightly different Z, e.g. \
-         --z {suggestion}"
+         z = {suggestion}"
     )]
     DegenerateSection {
         file: String,

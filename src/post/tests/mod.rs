@@ -5,6 +5,7 @@ mod estimate;
 mod gcode;
 mod kinematics;
 mod linearise;
+mod planar;
 
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 
