@@ -13,7 +13,9 @@ use crate::mesh::io::RawMesh;
 use crate::mesh::{Mesh, MeshReport, Piece, PrepareOptions, prepare_without_stray_pieces};
 use crate::orient::{AxisChooser, AxisOptions, SmoothingOptions};
 use crate::path::{self, FinishingContext, FinishingOptions, LinkOptions};
-use crate::post::{GcodeOptions, KinematicsKind, MachineKinematics, TableTableAC};
+use crate::post::{
+    GcodeOptions, KinematicsKind, Machine, MachineKinematics, TableTableAC, ThreeAxis,
+};
 use crate::tool::ToolAssembly;
 
 /// The part as it will be planned, and what preparing it found.
@@ -90,7 +92,7 @@ pub struct PlanSetup {
     pub prepared_tool: PreparedTool,
     pub margins: Margins,
     pub table: Table,
-    pub kinematics: TableTableAC,
+    pub kinematics: Machine,
     /// Where the part's frame origin sits in the table frame, mm.
     pub part_origin_in_table: Vector3,
     /// The machine's pivot in the part frame.
@@ -283,19 +285,15 @@ fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
 }
 
 /// The machine the job describes, with the part clamped at `part_origin_in_table`.
-pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<TableTableAC> {
+pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<Machine> {
     let m = &job.machine;
     let kin = match m.kinematics {
-        KinematicsKind::TableTableAc => TableTableAC::new(part_origin_in_table)
-            .with_a_limits(m.a_limits[0], m.a_limits[1])
-            .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi))),
-        // Refused by `Job::validate`, which every planner runs first.
-        KinematicsKind::ThreeAxis => {
-            return Err(Error::JobFile(JobError::Invalid {
-                key: "machine.kinematics".into(),
-                reason: "names a machine that cannot tilt the tool".into(),
-            }));
-        }
+        KinematicsKind::TableTableAc => Machine::TableTableAc(
+            TableTableAC::new(part_origin_in_table)
+                .with_a_limits(m.a_limits[0], m.a_limits[1])
+                .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi))),
+        ),
+        KinematicsKind::ThreeAxis => Machine::ThreeAxis(ThreeAxis),
     };
     kin.validate()?;
     Ok(kin)

@@ -26,6 +26,7 @@ mod format;
 pub mod gcode;
 pub mod kinematics;
 pub mod linearise;
+pub mod machine;
 pub mod planar;
 
 #[cfg(test)]
@@ -41,6 +42,7 @@ pub use kinematics::{
     Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, TableTableAC, ThreeAxis,
 };
 pub use linearise::{LineariseError, LineariseOptions, linearise, linearise_opt};
+pub use machine::Machine;
 pub use planar::{PlanarBlock, PlanarError, PlanarProgram};
 
 use crate::geom::{Move, Toolpath};
