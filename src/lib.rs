@@ -6,6 +6,8 @@
 //! mesh ─► collide / access ─► orient ─► path ─► verify ─► post
 //!   ▲                                                       │
 //! sample (generated parts)              job (job file + the pipeline that wires the stages)
+//!
+//! stock: the in-process material (tri-dexel), removed by swept cutters
 //! ```
 //!
 //! Every stage takes plain data and returns plain data; the CLI (`wavemill`) is a thin shell
@@ -29,6 +31,7 @@ pub mod orient;
 pub mod path;
 pub mod post;
 pub mod sample;
+pub mod stock;
 pub mod tool;
 pub mod tool_choice;
 pub mod verify;

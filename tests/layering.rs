@@ -18,6 +18,7 @@ const LAYERS: &[&str] = &[
     "access",      // visibility maps (obvhs rays)
     "multires",    // remeshing, Loop subdivision, lifting wavelets
     "offset",      // stock-to-leave shapes
+    "stock",       // in-process material (tri-dexel) and its removal
     "contour",     // 2.5D contour paths
     "collide",     // tool bodies against part and table (parry3d)
     "orient",      // tool axes

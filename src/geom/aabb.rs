@@ -69,6 +69,15 @@ impl Aabb {
             .sum()
     }
 
+    /// The box grown by `d` on every side.
+    pub fn inflated(&self, d: f64) -> Aabb {
+        let grow = Vector3::new(d, d, d);
+        Aabb {
+            min: self.min - grow,
+            max: self.max + grow,
+        }
+    }
+
     /// Squared distance from `p` to the box (0 inside).
     pub fn distance_squared(&self, p: &Point3) -> f64 {
         let mut d = 0.0;
