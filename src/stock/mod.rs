@@ -22,6 +22,7 @@
 //! spacing between lines, exactly along them.
 
 pub mod cutter;
+pub mod simulate;
 pub mod spans;
 pub mod sweep;
 
@@ -312,8 +313,20 @@ impl Stock {
     /// Removes the solid from every line crossing it; returns the volume removed (mm³, the mean
     /// of the three grids' estimates, as [`Stock::volume`]).
     pub fn remove(&mut self, solid: &dyn LineInterval) -> f64 {
+        self.remove_recording(solid, None)
+    }
+
+    /// [`Stock::remove`], also collecting the ends of every removed piece (points on the
+    /// solid's surface, inside the material it took) into `ends`, in a fixed order.
+    pub fn remove_recording(
+        &mut self,
+        solid: &dyn LineInterval,
+        mut ends: Option<&mut Vec<Point3>>,
+    ) -> f64 {
+        let record = ends.is_some();
         let b = solid.bounds();
-        let min_span = 1e-9;
+        // 1 nm: below it an interval is round-off, not material (f64 resolves 1e-14 mm at 100 mm).
+        let min_span = 1e-6;
         let mut removed = 0.0;
         for grid in &mut self.grids {
             let (axis, across, spacing) = (grid.axis, grid.across, grid.spacing);
@@ -324,15 +337,31 @@ impl Stock {
             }
             let (n0, origin) = (grid.counts[0], grid.origin);
             let rows = &mut grid.lines[js.start * n0..js.end * n0];
-            // Row sums in row order: the total is the same whatever the thread count.
-            let per_row: Vec<f64> = rows
+            // Row sums (and ends) in row order: the same whatever the thread count.
+            let per_row: Vec<(f64, Vec<Point3>)> = rows
                 .par_chunks_mut(n0)
                 .enumerate()
                 .map(|(r, row)| {
                     let j = js.start + r;
                     let mut length = 0.0;
-                    for i in is.clone() {
-                        let line = &mut row[i];
+                    let mut on_row = Point3::origin();
+                    on_row[across[1]] = origin[1] + j as f64 * spacing;
+                    let mut row_ends = Vec::new();
+                    let Some((lo, hi)) = solid.row_range(axis, across[0], &on_row) else {
+                        return (0.0, row_ends);
+                    };
+                    let first = ((lo - origin[0]) / spacing).ceil().max(is.start as f64);
+                    let last = ((hi - origin[0]) / spacing)
+                        .floor()
+                        .min(is.end as f64 - 1.0);
+                    if first.partial_cmp(&last) == Some(std::cmp::Ordering::Greater)
+                        || first.is_nan()
+                        || last.is_nan()
+                    {
+                        return (0.0, row_ends);
+                    }
+                    let (first, last) = (first as usize, last as usize);
+                    for (i, line) in row.iter_mut().enumerate().take(last + 1).skip(first) {
                         // Lines with no material where the solid can be along them are
                         // skipped before any geometry (most lines a tool's shank crosses).
                         let overlaps = line
@@ -345,13 +374,27 @@ impl Stock {
                         p[across[0]] = origin[0] + i as f64 * spacing;
                         p[across[1]] = origin[1] + j as f64 * spacing;
                         if let Some((t0, t1)) = solid.line_interval(axis, &p) {
-                            length += spans::subtract(line, t0, t1, min_span);
+                            length +=
+                                spans::subtract_recording(line, t0, t1, min_span, &mut |a, b| {
+                                    if record {
+                                        for t in [a, b] {
+                                            let mut q = p;
+                                            q[axis] = t;
+                                            row_ends.push(q);
+                                        }
+                                    }
+                                });
                         }
                     }
-                    length
+                    (length, row_ends)
                 })
                 .collect();
-            removed += per_row.iter().sum::<f64>() * spacing * spacing;
+            removed += per_row.iter().map(|r| r.0).sum::<f64>() * spacing * spacing;
+            if let Some(ends) = ends.as_deref_mut() {
+                for (_, row_ends) in per_row {
+                    ends.extend(row_ends);
+                }
+            }
         }
         removed / 3.0
     }

@@ -24,8 +24,20 @@ impl Span {
 pub type Spans = SmallVec<[Span; 1]>;
 
 /// Removes `[start, end]` from `spans`; returns the length removed. Spans left shorter than
-/// `min_length` (slivers below the model's resolution along the ray) are dropped with it.
+/// `min_length` (slivers below the model's resolution along the ray) are dropped with it, and
+/// an overlap shorter than `min_length` is not a cut.
 pub fn subtract(spans: &mut Spans, start: f64, end: f64, min_length: f64) -> f64 {
+    subtract_recording(spans, start, end, min_length, &mut |_, _| {})
+}
+
+/// [`subtract`], telling `removed` each piece of material it takes away (start, end).
+pub fn subtract_recording(
+    spans: &mut Spans,
+    start: f64,
+    end: f64,
+    min_length: f64,
+    removed: &mut impl FnMut(f64, f64),
+) -> f64 {
     if end.partial_cmp(&start) != Some(std::cmp::Ordering::Greater) || spans.is_empty() {
         return 0.0;
     }
@@ -37,10 +49,16 @@ pub fn subtract(spans: &mut Spans, start: f64, end: f64, min_length: f64) -> f64
     let before: f64 = spans.iter().map(Span::length).sum();
     let mut kept: Spans = SmallVec::new();
     for s in spans.iter() {
-        if s.end <= start || s.start >= end {
+        // An overlap shorter than `min_length` is round-off of a cut made before (a tool
+        // passing again where it already cut): the span stays as it is.
+        if s.end.min(end) - s.start.max(start) < min_length.max(0.0)
+            || s.end <= start
+            || s.start >= end
+        {
             kept.push(*s);
             continue;
         }
+        removed(s.start.max(start), s.end.min(end));
         if s.start < start && start - s.start >= min_length {
             kept.push(Span {
                 start: s.start,

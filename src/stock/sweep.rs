@@ -27,6 +27,15 @@ pub trait LineInterval: Sync {
     /// The interval `[t₀, t₁]` of the line `{p + t·e_axis}` (p's own `axis` coordinate is
     /// ignored) inside the solid, or `None` when the line misses it.
     fn line_interval(&self, axis: usize, p: &Point3) -> Option<(f64, f64)>;
+
+    /// Where along the `across` axis lines of direction `axis` can meet the solid, on the row
+    /// of lines through `p` (its `axis` and `across` coordinates ignored). The default is the
+    /// box; a solid that knows its outline narrows it, so removal tests fewer lines.
+    fn row_range(&self, axis: usize, across: usize, p: &Point3) -> Option<(f64, f64)> {
+        let _ = (axis, p);
+        let b = self.bounds();
+        Some((b.min[across], b.max[across]))
+    }
 }
 
 /// Grows `acc` to hold `(t0, t1)`.
@@ -125,13 +134,51 @@ fn clip(axis: usize, o: &Point3, g: &Vector3, h: f64, lo: &mut f64, hi: &mut f64
     *lo <= *hi
 }
 
+/// The points of a plane polygon (all of `points`, which lie in the plane of `normal`) on their
+/// convex hull, in order around it.
+fn convex_polygon(points: &[Point3], normal: &Vector3) -> Vec<Point3> {
+    let (u, v) = crate::geom::orthonormal_frame(normal);
+    let flat: Vec<(f64, f64)> = points
+        .iter()
+        .map(|p| (p.coords.dot(&u), p.coords.dot(&v)))
+        .collect();
+    // Gift wrapping from the lowest point: at most four points.
+    let start = (0..points.len())
+        .min_by(|&i, &j| {
+            flat[i]
+                .partial_cmp(&flat[j])
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+        .unwrap_or(0);
+    let mut hull = vec![start];
+    loop {
+        let current = *hull.last().unwrap_or(&start);
+        let mut next = (current + 1) % points.len();
+        for k in 0..points.len() {
+            let (c, n, q) = (flat[current], flat[next], flat[k]);
+            let turn = (n.0 - c.0) * (q.1 - c.1) - (n.1 - c.1) * (q.0 - c.0);
+            let farther = (q.0 - c.0).hypot(q.1 - c.1) > (n.0 - c.0).hypot(n.1 - c.1);
+            if turn < 0.0 || (turn == 0.0 && farther) {
+                next = k;
+            }
+        }
+        if next == start || hull.len() == points.len() {
+            break;
+        }
+        hull.push(next);
+    }
+    hull.into_iter().map(|i| points[i]).collect()
+}
+
 /// The points within `radius` of the convex hull of two to four points (see the module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SphereSweptHull {
     points: Vec<Point3>,
     radius: f64,
     bounds: Aabb,
-    /// Faces of the hull as triangles with unit normals (degenerate ones left out).
+    /// Edges of the hull (each thickened into a capsule).
+    edges: Vec<(Point3, Point3)>,
+    /// The hull's faces as triangles with unit normals.
     triangles: Vec<([Point3; 3], Vector3)>,
     /// The tetrahedron's outward face planes `(g, h)` with inside `g·x + h ≥ 0`; empty when
     /// the points are (nearly) coplanar and the hull has no interior.
@@ -154,24 +201,15 @@ impl SphereSweptHull {
             .iter()
             .flat_map(|p| points.iter().map(move |q| (p - q).norm()))
             .fold(0.0, f64::max);
-        let mut triangles = Vec::new();
         let n = points.len();
-        for i in 0..n {
-            for j in i + 1..n {
-                for k in j + 1..n {
-                    let (a, b, c) = (points[i], points[j], points[k]);
-                    let normal = (b - a).cross(&(c - a));
-                    if normal.norm() > 1e-12 * scale * scale {
-                        triangles.push(([a, b, c], normal.normalize()));
-                    }
-                }
-            }
-        }
-        let mut solid = Vec::new();
+        let pairs = || (0..n).flat_map(move |i| (i + 1..n).map(move |j| (i, j)));
+        // A tetrahedron: all its edges and faces, and its interior.
         if n == 4 {
             let [a, b, c, d] = [points[0], points[1], points[2], points[3]];
             let volume6 = (b - a).cross(&(c - a)).dot(&(d - a));
             if volume6.abs() > 1e-9 * scale * scale * scale {
+                let mut solid = Vec::new();
+                let mut triangles = Vec::new();
                 for (p, q, r, opposite) in [(a, b, c, d), (a, b, d, c), (a, c, d, b), (b, c, d, a)]
                 {
                     let mut g = (q - p).cross(&(r - p));
@@ -179,15 +217,61 @@ impl SphereSweptHull {
                         g = -g;
                     }
                     solid.push((g, -g.dot(&p.coords)));
+                    triangles.push(([p, q, r], g.normalize()));
                 }
+                return SphereSweptHull {
+                    points: points.to_vec(),
+                    radius,
+                    bounds,
+                    edges: pairs().map(|(i, j)| (points[i], points[j])).collect(),
+                    triangles,
+                    solid,
+                };
             }
         }
+        // Flat: the polygon the points span in their plane (a translation's parallelogram),
+        // its boundary edges and a fan of triangles; no diagonals, no interior.
+        let widest = (0..n)
+            .flat_map(|i| (i + 1..n).flat_map(move |j| (j + 1..n).map(move |k| (i, j, k))))
+            .map(|(i, j, k)| {
+                let normal = (points[j] - points[i]).cross(&(points[k] - points[i]));
+                (normal.norm(), normal)
+            })
+            .max_by(|x, y| x.0.total_cmp(&y.0));
+        if let Some((area, normal)) = widest
+            && area > 1e-12 * scale * scale
+        {
+            let normal = normal / area;
+            let polygon = convex_polygon(points, &normal);
+            let m = polygon.len();
+            let edges = (0..m).map(|i| (polygon[i], polygon[(i + 1) % m])).collect();
+            let triangles = (1..m - 1)
+                .map(|i| ([polygon[0], polygon[i], polygon[i + 1]], normal))
+                .collect();
+            return SphereSweptHull {
+                points: points.to_vec(),
+                radius,
+                bounds,
+                edges,
+                triangles,
+                solid: Vec::new(),
+            };
+        }
+        // On a line (or one point): the capsule of the farthest pair.
+        let (i, j) = pairs()
+            .max_by(|x, y| {
+                (points[x.0] - points[x.1])
+                    .norm_squared()
+                    .total_cmp(&(points[y.0] - points[y.1]).norm_squared())
+            })
+            .unwrap_or((0, 0));
         SphereSweptHull {
             points: points.to_vec(),
             radius,
             bounds,
-            triangles,
-            solid,
+            edges: vec![(points[i], points[j])],
+            triangles: Vec::new(),
+            solid: Vec::new(),
         }
     }
 
@@ -213,6 +297,27 @@ impl LineInterval for SphereSweptHull {
         self.bounds
     }
 
+    fn row_range(&self, axis: usize, across: usize, p: &Point3) -> Option<(f64, f64)> {
+        // Seen along `axis`, the solid is the hull's shadow thickened by r; a row's slice of
+        // that convex outline ends on it, within r of a shadow edge: the union of the edges'
+        // 2D capsule slices has the same ends. (The hull's edges include the shadow's.)
+        let flat = |q: &Point3| {
+            let mut q = *q;
+            q[axis] = 0.0;
+            q
+        };
+        let mut row = flat(p);
+        row[across] = 0.0;
+        let mut hit = None;
+        for (a, b) in &self.edges {
+            merge(
+                &mut hit,
+                line_capsule(across, &row, &flat(a), &flat(b), self.radius),
+            );
+        }
+        hit
+    }
+
     fn line_interval(&self, axis: usize, p: &Point3) -> Option<(f64, f64)> {
         // Quick reject on the box, across the line.
         for i in 0..3 {
@@ -222,14 +327,8 @@ impl LineInterval for SphereSweptHull {
         }
         let r = self.radius;
         let mut hit = None;
-        let pts = &self.points;
-        if pts.len() == 1 {
-            return line_ball(axis, p, &pts[0], r);
-        }
-        for i in 0..pts.len() {
-            for j in i + 1..pts.len() {
-                merge(&mut hit, line_capsule(axis, p, &pts[i], &pts[j], r));
-            }
+        for (a, b) in &self.edges {
+            merge(&mut hit, line_capsule(axis, p, a, b, r));
         }
         let mut o = *p;
         o[axis] = 0.0;
@@ -240,11 +339,16 @@ impl LineInterval for SphereSweptHull {
             let mut inside = clip(axis, &o, n, r - d, &mut lo, &mut hi)
                 && clip(axis, &o, &-n, r + d, &mut lo, &mut hi);
             // Projection inside the triangle: on the inner side of each edge's plane.
-            for (s, e) in [(a, b), (b, c), (c, a)] {
+            // (Each edge's inner side is the one its opposite corner is on, whichever way round
+            // the corners run.)
+            for (s, e, opposite) in [(a, b, c), (b, c, a), (c, a, b)] {
                 if !inside {
                     break;
                 }
-                let g = n.cross(&(e - s));
+                let mut g = n.cross(&(e - s));
+                if g.dot(&(opposite - s)) < 0.0 {
+                    g = -g;
+                }
                 inside = clip(axis, &o, &g, -g.dot(&s.coords), &mut lo, &mut hi);
             }
             if inside {
@@ -354,6 +458,38 @@ mod tests {
                         let t = b.min[axis] + (b.max[axis] - b.min[axis]) * k as f64 / 400.0;
                         prop_assert!(hull_distance(&pts, &at(t)) > radius - 1e-6);
                     }
+                }
+            }
+        }
+
+        /// No line outside a row's range meets the solid, and the range's ends are met (to
+        /// the sampling): the narrowing loses nothing and is tight.
+        #[test]
+        fn row_ranges_hold_every_line_that_meets_the_solid(
+            pts in proptest::collection::vec(point(), 1..=4),
+            radius in 0.05..2.0f64,
+            axis in 0usize..3,
+            row in -6.0..6.0f64,
+        ) {
+            let solid = SphereSweptHull::new(&pts, radius);
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let mut p = Point3::origin();
+            p[v] = row;
+            let range = solid.row_range(axis, u, &p);
+            let mut met: Option<(f64, f64)> = None;
+            for k in 0..=1200 {
+                let x = -8.0 + 16.0 * k as f64 / 1200.0;
+                p[u] = x;
+                if solid.line_interval(axis, &p).is_some() {
+                    met = Some(met.map_or((x, x), |(a, b)| (a.min(x), b.max(x))));
+                }
+            }
+            match (met, range) {
+                (None, _) => {}
+                (Some(_), None) => prop_assert!(false, "lines meet the solid on an empty row"),
+                (Some((a, b)), Some((lo, hi))) => {
+                    prop_assert!(lo <= a + 1e-9 && b <= hi + 1e-9, "met {a}..{b}, range {lo}..{hi}");
+                    prop_assert!(a - lo < 0.02 && hi - b < 0.02, "loose: met {a}..{b}, range {lo}..{hi}");
                 }
             }
         }

@@ -1,0 +1,250 @@
+//! A toolpath run on the stock: what each move removes, and what it does wrong.
+//!
+//! Two tri-dexel models at the same spacing: the stock, which every move's swept cutting body
+//! cuts, and the part, which only a gouge may cut. The gouge test sweeps the body eroded by the
+//! tolerance (the ball radius less the tolerance: exactly the points more than the tolerance
+//! inside the body) through the part model: whatever it removes is material of the part the
+//! tool went deeper into than the tolerance allows, so a finishing pass that touches the
+//! surface within tolerance removes nothing there. The depth of a gouge is measured exactly at
+//! the ends of the part material removed (points on the eroded body inside the part) against
+//! the part's surface, plus the tolerance: an upper bound on the depth where lines cross it.
+//! The first move that cuts a spot of the part is the one reported for it (a later move finds
+//! it gone).
+//!
+//! Per move: volume removed from the stock, the removed volume per mm of the move (the
+//! engagement a feed control would scale by), gouge volume and depth. Over the program:
+//! rapids that removed material (through material at the rapid rate), and the share of cutting
+//! length that removed nothing (air cutting).
+
+use super::cutter::BallEndBody;
+use super::{Stock, StockError};
+use crate::geom::{MoveKind, Toolpath};
+use crate::mesh::Mesh;
+use crate::mesh::distance::SurfaceDistance;
+
+/// Options of [`simulate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimulationOptions {
+    /// How far the tool may go into the part before it is a gouge, mm; also the accuracy each
+    /// move's sweep is split to.
+    pub tolerance: f64,
+    /// The part model's largest number of dexel lines.
+    pub max_dexels: usize,
+}
+
+impl Default for SimulationOptions {
+    fn default() -> Self {
+        SimulationOptions {
+            tolerance: 0.01,
+            max_dexels: super::DEFAULT_MAX_DEXELS,
+        }
+    }
+}
+
+/// What one move did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MoveRecord {
+    /// Volume of stock removed, mm³.
+    pub removed_mm3: f64,
+    /// Stock removed per mm of tip travel, mm³/mm (0 for a move that does not travel).
+    pub removed_per_mm: f64,
+    /// Volume of the part cut deeper than the tolerance, mm³.
+    pub gouge_mm3: f64,
+    /// Deepest the move went into the part, mm (0 without a gouge; see the module docs).
+    pub gouge_depth_mm: f64,
+}
+
+/// The gouges of a program.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GougeSummary {
+    /// Moves that gouge.
+    pub count: usize,
+    /// The deepest, mm.
+    pub max_depth_mm: f64,
+    /// Part volume cut away, mm³.
+    pub volume_mm3: f64,
+    /// The first move that gouges (index into the toolpath).
+    pub first_move: Option<usize>,
+}
+
+/// A simulated program.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Simulation {
+    /// One record per move of the toolpath (the first, where the tool starts, is empty).
+    pub moves: Vec<MoveRecord>,
+    /// Stock volume removed by the whole program, mm³.
+    pub removed_volume_mm3: f64,
+    /// The gouges.
+    pub gouge: GougeSummary,
+    /// Rapid moves that removed material (indices).
+    pub rapids_through_material: Vec<usize>,
+    /// Share of the feed moves' length that removed nothing.
+    pub air_cut_fraction: f64,
+}
+
+/// Runs `toolpath` with a ball-end mill's `body` on `stock`, checking it against `part`.
+pub fn simulate(
+    stock: &mut Stock,
+    part: &Mesh,
+    toolpath: &Toolpath,
+    body: &BallEndBody,
+    options: &SimulationOptions,
+) -> Result<Simulation, StockError> {
+    let tolerance = options.tolerance;
+    if !(tolerance.is_finite() && tolerance >= 0.0 && tolerance < body.radius) {
+        return Err(StockError::Blank(format!(
+            "the gouge tolerance {tolerance} mm must be ≥ 0 and below the ball radius {}",
+            body.radius
+        )));
+    }
+    let mut part_model = Stock::from_mesh(part, stock.spacing(), options.max_dexels)?;
+    let surface = SurfaceDistance::new(part);
+    let eroded = BallEndBody {
+        radius: body.radius - tolerance,
+        segment: body.segment,
+    };
+    let split = tolerance.max(0.1 * stock.spacing()).max(1e-4);
+    let mut moves = vec![MoveRecord::default(); toolpath.moves.len()];
+    let (mut feed_length, mut air_length) = (0.0, 0.0);
+    let mut rapids_through_material = Vec::new();
+    let mut gouge = GougeSummary::default();
+    for (k, pair) in toolpath.moves.windows(2).enumerate() {
+        let (from, to) = (&pair[0].pose, &pair[1].pose);
+        let record = &mut moves[k + 1];
+        record.removed_mm3 = body
+            .sweep(from, to, split)
+            .iter()
+            .map(|solid| stock.remove(solid))
+            .sum();
+        let travel = (to.tip - from.tip).norm();
+        if travel > 0.0 {
+            record.removed_per_mm = record.removed_mm3 / travel;
+        }
+        let mut ends = Vec::new();
+        record.gouge_mm3 = eroded
+            .sweep(from, to, split)
+            .iter()
+            .map(|solid| part_model.remove_recording(solid, Some(&mut ends)))
+            .sum();
+        if record.gouge_mm3 > 0.0 {
+            let deepest = ends
+                .iter()
+                .filter_map(|p| surface.closest(p, f64::INFINITY))
+                .map(|c| c.distance)
+                .fold(0.0, f64::max);
+            record.gouge_depth_mm = deepest + tolerance;
+            gouge.count += 1;
+            gouge.volume_mm3 += record.gouge_mm3;
+            gouge.max_depth_mm = gouge.max_depth_mm.max(record.gouge_depth_mm);
+            gouge.first_move.get_or_insert(k + 1);
+        }
+        match pair[1].kind {
+            MoveKind::Rapid if record.removed_mm3 > 0.0 => rapids_through_material.push(k + 1),
+            MoveKind::Rapid => {}
+            _ => {
+                feed_length += travel;
+                if record.removed_mm3 == 0.0 {
+                    air_length += travel;
+                }
+            }
+        }
+    }
+    Ok(Simulation {
+        removed_volume_mm3: moves.iter().map(|m| m.removed_mm3).sum(),
+        moves,
+        gouge,
+        rapids_through_material,
+        air_cut_fraction: if feed_length > 0.0 {
+            air_length / feed_length
+        } else {
+            0.0
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{Aabb, Move, Point3, ToolPose, Vector3};
+    use crate::mesh::fixtures::cuboid;
+    use std::f64::consts::PI;
+
+    fn path(points: &[([f64; 3], MoveKind)]) -> Toolpath {
+        Toolpath {
+            tool_id: 1,
+            moves: points
+                .iter()
+                .map(|&(p, kind)| Move {
+                    pose: ToolPose {
+                        tip: Point3::new(p[0], p[1], p[2]),
+                        axis: nalgebra::Unit::new_normalize(Vector3::z()),
+                    },
+                    kind,
+                    feed: 1000.0,
+                })
+                .collect(),
+        }
+    }
+
+    /// A 20 × 20 × 10 part (a box from the origin), a block of stock 2 mm above it. A pass
+    /// 1 mm above the part is clean; a pass dipping 0.5 mm into it gouges, first at that move,
+    /// with the depth of the dip and the volume of the ball's cap below the surface swept
+    /// along the dip; a rapid through the stock is caught.
+    #[test]
+    fn a_deliberate_gouge_and_a_rapid_through_material_are_found() {
+        let part = cuboid(20.0, 20.0, 10.0);
+        let blank = Aabb::from_points(&[Point3::new(0.0, 0.0, 0.0), Point3::new(20.0, 20.0, 12.0)]);
+        let mut stock = Stock::block(&blank, 0.1, super::super::DEFAULT_MAX_DEXELS).unwrap();
+        let body = BallEndBody::new(4.0, 12.0);
+        use MoveKind::*;
+        let program = path(&[
+            ([5.0, 5.0, 30.0], Rapid),
+            ([5.0, 5.0, 11.0], Approach),
+            ([15.0, 5.0, 11.0], Cut), // 1 mm above the part: clean
+            ([15.0, 10.0, 9.5], Cut), // dips 0.5 mm into the part on the way
+            ([5.0, 10.0, 9.5], Cut),  // 10 mm along, 0.5 mm deep
+            ([5.0, 10.0, 30.0], Retract),
+            ([10.0, 15.0, 11.0], Rapid), // a rapid down into the stock
+        ]);
+        let sim = simulate(
+            &mut stock,
+            &part,
+            &program,
+            &body,
+            &SimulationOptions {
+                tolerance: 0.01,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(sim.gouge.first_move, Some(3));
+        assert_eq!(sim.gouge.count, 2);
+        assert_eq!(sim.moves[2].gouge_mm3, 0.0);
+        // The dip is 0.5 mm; the depth is measured at lines, within the spacing's reach.
+        assert!(
+            (sim.gouge.max_depth_mm - 0.5).abs() < 0.02,
+            "{}",
+            sim.gouge.max_depth_mm
+        );
+        // Along the 10 mm run at 0.5 mm deep the ball (r 2) cuts a circular segment of depth
+        // 0.49 (beyond the tolerance): area r²acos((r−h)/r) − (r−h)√(2rh − h²).
+        let (r, h): (f64, f64) = (1.99, 0.49);
+        let segment = r * r * ((r - h) / r).acos() - (r - h) * (2.0 * r * h - h * h).sqrt();
+        let run = sim.moves[4].gouge_mm3;
+        let expected = segment * 10.0;
+        // The run also gets the end cap of the ball beyond the first move's cut, a little more.
+        assert!(
+            run > 0.95 * expected && run < expected + PI * r * h * h,
+            "{run} vs {expected}"
+        );
+        assert_eq!(sim.rapids_through_material, vec![6]);
+        assert!(sim.removed_volume_mm3 > 0.0);
+        // The approach ends where the cut starts: some air cutting (the retract and the
+        // approach down through air), but not all.
+        assert!(
+            sim.air_cut_fraction > 0.0 && sim.air_cut_fraction < 1.0,
+            "{:?}",
+            sim
+        );
+    }
+}
