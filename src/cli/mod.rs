@@ -27,6 +27,7 @@ pub use commands::levels::LevelsArgs;
 pub use commands::offsets::OffsetsArgs;
 pub use commands::plan::PlanArgs;
 pub use commands::sample::{SampleArgs, SampleKind};
+pub use commands::simulate::SimulateArgs;
 pub use commands::subdivide::SubdivideArgs;
 pub use commands::tools::ToolsArgs;
 
@@ -70,6 +71,9 @@ pub enum Command {
     /// Propose tools from a library, largest first: which tool finishes which region of the
     /// part (curvature, the largest ball that fits, accessibility of the whole assembly).
     Tools(ToolsArgs),
+    /// Run a program (CL data) on a blank with a ball-end mill: material removed per move,
+    /// gouges into the part, rapids through material (tri-dexel stock).
+    Simulate(SimulateArgs),
 }
 
 /// Runs the parsed command; returns the process exit code.
@@ -84,6 +88,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Offsets(a) => commands::offsets::run(&a),
         Command::Access(a) => commands::access::run(&a),
         Command::Tools(a) => commands::tools::run(&a),
+        Command::Simulate(a) => commands::simulate::run(&a),
     };
     match result {
         Ok(()) => 0,

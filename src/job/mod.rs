@@ -1,7 +1,8 @@
 //! Jobs: the job file, and the pipeline that wires the stages together into a plan.
 //!
 //! [`access`] computes the visibility maps `wavemill access` writes; [`tools`] proposes tools
-//! from a library for `wavemill tools`.
+//! from a library for `wavemill tools`; [`simulate_program`] runs CL data on a blank for
+//! `wavemill simulate`.
 //!
 //! [`plan`] is what `wavemill plan` runs and what other planners call: it takes a raw part mesh
 //! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
@@ -21,6 +22,7 @@ mod report;
 mod samples;
 mod semi_finish;
 mod setup;
+mod simulate;
 mod tools;
 
 pub use access::{
@@ -52,4 +54,8 @@ pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};
+pub use simulate::{
+    BlankSpec, EngagementReport, GougeReport, SimulateOptions, SimulationReport, StockReport,
+    simulate_program, write_simulation,
+};
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

@@ -76,6 +76,10 @@ impl OutputKind {
         command: "access",
         owns: |n| matches!(n, "access.glb" | "access.json" | "query.csv"),
     };
+    pub const SIMULATE: OutputKind = OutputKind {
+        command: "simulate",
+        owns: |n| n == "simulation.json",
+    };
     pub const TOOLS: OutputKind = OutputKind {
         command: "tools",
         owns: |n| matches!(n, "tools.glb" | "tools.json"),

@@ -8,7 +8,7 @@
 //! Feeds have 3. Never a negative zero. Deterministic.
 
 use super::format::fixed;
-use crate::geom::{MoveKind, Toolpath};
+use crate::geom::{Move, MoveKind, ToolPose, Toolpath};
 
 /// The exact CSV header line.
 pub const CL_CSV_HEADER: &str = "x,y,z,i,j,k,kind,feed,tool";
@@ -48,4 +48,103 @@ pub fn write_cl_csv(toolpath: &Toolpath) -> String {
         s.push('\n');
     }
     s
+}
+
+/// A CL file that cannot be read: the file, the line (from 1) and what is wrong there.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{file}: line {line}: {reason}")]
+pub struct ClError {
+    /// The file, as named by the caller.
+    pub file: String,
+    /// The line, counted from 1.
+    pub line: usize,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// Reads CL data written by [`write_cl_csv`] (the header exactly, then one move per line;
+/// blank lines skipped). Every field is checked: finite numbers, an axis of unit length
+/// (within 1e-6, then normalised), a known kind, a positive feed, one tool id throughout.
+pub fn read_cl_csv(text: &str, file: &str) -> Result<Toolpath, ClError> {
+    let bad = |line: usize, reason: String| ClError {
+        file: file.to_string(),
+        line,
+        reason,
+    };
+    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim()));
+    match lines.next() {
+        Some((_, header)) if header == CL_CSV_HEADER => {}
+        Some((n, header)) => {
+            return Err(bad(
+                n,
+                format!("expected the header `{CL_CSV_HEADER}`, found `{header}`"),
+            ));
+        }
+        None => return Err(bad(1, "the file is empty".into())),
+    }
+    let mut moves = Vec::new();
+    let mut tool_id = None;
+    for (n, line) in lines.filter(|(_, l)| !l.is_empty()) {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if fields.len() != 9 {
+            return Err(bad(n, format!("expected 9 fields, found {}", fields.len())));
+        }
+        let mut numbers = [0.0; 6];
+        for (k, value) in numbers.iter_mut().enumerate() {
+            *value = fields[k]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(n, format!("`{}` is not a finite number", fields[k])))?;
+        }
+        let axis = nalgebra::Vector3::new(numbers[3], numbers[4], numbers[5]);
+        if (axis.norm() - 1.0).abs() > 1e-6 {
+            return Err(bad(
+                n,
+                format!(
+                    "the axis ({}, {}, {}) is not a unit vector",
+                    axis.x, axis.y, axis.z
+                ),
+            ));
+        }
+        let kind = match fields[6] {
+            "rapid" => MoveKind::Rapid,
+            "approach" => MoveKind::Approach,
+            "cut" => MoveKind::Cut,
+            "retract" => MoveKind::Retract,
+            other => return Err(bad(n, format!("unknown move kind `{other}`"))),
+        };
+        let feed = fields[7]
+            .parse::<f64>()
+            .ok()
+            .filter(|f| f.is_finite() && *f > 0.0)
+            .ok_or_else(|| bad(n, format!("feed `{}` is not a positive number", fields[7])))?;
+        let tool = fields[8]
+            .parse::<u32>()
+            .map_err(|_| bad(n, format!("tool `{}` is not a tool number", fields[8])))?;
+        if *tool_id.get_or_insert(tool) != tool {
+            return Err(bad(
+                n,
+                format!(
+                    "tool {tool} after tool {}: one tool per file",
+                    tool_id.unwrap_or(tool)
+                ),
+            ));
+        }
+        moves.push(Move {
+            pose: ToolPose {
+                tip: crate::geom::Point3::new(numbers[0], numbers[1], numbers[2]),
+                axis: nalgebra::Unit::new_normalize(axis),
+            },
+            kind,
+            feed,
+        });
+    }
+    if moves.is_empty() {
+        return Err(bad(1, "no moves after the header".into()));
+    }
+    Ok(Toolpath {
+        tool_id: tool_id.unwrap_or(0),
+        moves,
+    })
 }

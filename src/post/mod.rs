@@ -34,7 +34,7 @@ mod tests;
 
 use serde::{Deserialize, Serialize};
 
-pub use cl::{CL_CSV_HEADER, write_cl_csv};
+pub use cl::{CL_CSV_HEADER, ClError, read_cl_csv, write_cl_csv};
 pub use contour::{BlockRole, ContourPostError, ContourProgram, PlanarParams, ProgramStats};
 pub use estimate::{TimeEstimate, TimeModel, estimate_blocks, estimate_time};
 pub use gcode::{GcodeOptions, GcodeWriter};

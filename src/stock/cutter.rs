@@ -28,6 +28,9 @@ use crate::geom::{Point3, ToolPose, angle_between, slerp};
 pub struct BallEndBody {
     /// Ball radius, mm.
     pub radius: f64,
+    /// Distance from the tip to the ball centre along the axis, mm (the radius, until the body
+    /// is [eroded](Self::eroded)).
+    pub centre_height: f64,
     /// Length of the capsule's axis segment above the ball centre, mm: flute length − 2r (the
     /// half ball on top reaching the flute length), at least 0.
     pub segment: f64,
@@ -39,14 +42,24 @@ impl BallEndBody {
         let radius = 0.5 * diameter;
         BallEndBody {
             radius,
+            centre_height: radius,
             segment: (flute_length - diameter).max(0.0),
+        }
+    }
+
+    /// The points of the body more than `depth` inside it: the same axis segment with the
+    /// radius less `depth` (`depth` below the radius).
+    pub fn eroded(&self, depth: f64) -> Self {
+        BallEndBody {
+            radius: self.radius - depth,
+            ..*self
         }
     }
 
     /// The axis segment's ends (ball centre, top) at `pose`.
     fn segment_at(&self, pose: &ToolPose) -> (Point3, Point3) {
         let k = pose.axis.into_inner();
-        let centre = pose.tip + self.radius * k;
+        let centre = pose.tip + self.centre_height * k;
         (centre, centre + self.segment * k)
     }
 
@@ -57,7 +70,7 @@ impl BallEndBody {
         let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
         let turn = angle_between(&k0, &k1);
         // The farthest point of the segment from the tip.
-        let reach = self.radius + self.segment;
+        let reach = self.centre_height + self.segment;
         let tolerance = tolerance.max(1e-9);
         let steps_for_bulge = if turn > 0.0 {
             // ℓ(1 − cos(Δθ/2)) ≤ tol  ⇔  Δθ ≤ 2 acos(1 − tol/ℓ).

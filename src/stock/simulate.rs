@@ -99,10 +99,7 @@ pub fn simulate(
     }
     let mut part_model = Stock::from_mesh(part, stock.spacing(), options.max_dexels)?;
     let surface = SurfaceDistance::new(part);
-    let eroded = BallEndBody {
-        radius: body.radius - tolerance,
-        segment: body.segment,
-    };
+    let eroded = body.eroded(tolerance);
     let split = tolerance.max(0.1 * stock.spacing()).max(1e-4);
     let mut moves = vec![MoveRecord::default(); toolpath.moves.len()];
     let (mut feed_length, mut air_length) = (0.0, 0.0);
@@ -238,6 +235,21 @@ mod tests {
             "{run} vs {expected}"
         );
         assert_eq!(sim.rapids_through_material, vec![6]);
+        // A pass 0.005 mm into the part (half the tolerance) is not a gouge, though the tool's
+        // tip is below the surface: only the body eroded by the tolerance is tested.
+        let mut stock = Stock::block(&blank, 0.1, super::super::DEFAULT_MAX_DEXELS).unwrap();
+        let within = path(&[
+            ([2.0, 15.0, 30.0], Rapid),
+            ([2.0, 15.0, 9.995], Approach),
+            ([18.0, 15.0, 9.995], Cut),
+        ]);
+        let options = SimulationOptions {
+            tolerance: 0.01,
+            ..Default::default()
+        };
+        let clean = simulate(&mut stock, &part, &within, &body, &options).unwrap();
+        assert_eq!(clean.gouge.count, 0, "{:?}", clean.gouge);
+        assert!(clean.moves[2].removed_mm3 > 0.0);
         assert!(sim.removed_volume_mm3 > 0.0);
         // The approach ends where the cut starts: some air cutting (the retract and the
         // approach down through air), but not all.

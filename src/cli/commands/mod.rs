@@ -7,5 +7,6 @@ pub mod levels;
 pub mod offsets;
 pub mod plan;
 pub mod sample;
+pub mod simulate;
 pub mod subdivide;
 pub mod tools;

@@ -63,3 +63,59 @@ fn empty_toolpath_is_just_the_header() {
         "x,y,z,i,j,k,kind,feed,tool\n"
     );
 }
+
+#[test]
+fn cl_data_reads_back_and_bad_lines_are_named() {
+    use crate::post::read_cl_csv;
+    let tp = toolpath(&[
+        (Rapid, 6000.0, [1.5, -2.25, 50.0], [0.0, 0.0, 1.0]),
+        (Approach, 500.0, [1.5, -2.25, 3.0], dir(10.0, 20.0)),
+        (Cut, 1234.5678, [-1e-9, 4.0, -0.0], dir(40.0, -120.0)),
+        (Retract, 3000.0, [0.0, 4.0, 30.0], dir(40.0, -120.0)),
+    ]);
+    let csv = write_cl_csv(&tp);
+    let back = read_cl_csv(&csv, "cl.csv").unwrap();
+    assert_eq!(back.moves.len(), tp.moves.len());
+    for (a, b) in back.moves.iter().zip(&tp.moves) {
+        assert_eq!(a.kind, b.kind);
+        assert!((a.pose.tip - b.pose.tip).norm() < 1e-9);
+        assert!((a.pose.axis.into_inner() - b.pose.axis.into_inner()).norm() < 2e-9);
+        assert!((a.feed - b.feed).abs() < 1e-3);
+    }
+    let row = csv.lines().nth(2).unwrap();
+    for (text, line, says) in [
+        (String::new(), 1, "empty"),
+        ("x,y,z\n".to_string(), 1, "header"),
+        (format!("{CL_CSV_HEADER}\n"), 1, "no moves"),
+        (format!("{CL_CSV_HEADER}\n{row}\n1,2,3\n"), 3, "9 fields"),
+        (
+            format!("{CL_CSV_HEADER}\n{row}\n\n1,2,nan,0,0,1,cut,10,1\n"),
+            4,
+            "finite",
+        ),
+        (
+            format!("{CL_CSV_HEADER}\n1,2,3,0,0,2,cut,10,1\n"),
+            2,
+            "unit",
+        ),
+        (
+            format!("{CL_CSV_HEADER}\n1,2,3,0,0,1,drill,10,1\n"),
+            2,
+            "kind",
+        ),
+        (format!("{CL_CSV_HEADER}\n1,2,3,0,0,1,cut,0,1\n"), 2, "feed"),
+        (
+            format!("{CL_CSV_HEADER}\n1,2,3,0,0,1,cut,5,1\n1,2,3,0,0,1,cut,5,2\n"),
+            3,
+            "one tool",
+        ),
+    ] {
+        let e = read_cl_csv(&text, "p.csv").unwrap_err();
+        assert_eq!(e.line, line, "{e}");
+        assert!(
+            e.to_string().starts_with(&format!("p.csv: line {line}: ")),
+            "{e}"
+        );
+        assert!(e.reason.contains(says), "{e}");
+    }
+}

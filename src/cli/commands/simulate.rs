@@ -1,0 +1,94 @@
+//! `wavemill simulate`: CL data run on a blank with a ball-end mill, checked against the part.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::cli::values::*;
+use crate::cli::{load, name_flags};
+use crate::error::{Error, Result};
+use crate::job::{self};
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// Part mesh (.stl, .obj, .gltf, .glb), closed, in the frame of the program.
+    pub part: PathBuf,
+    /// The program as CL data (`cl.csv`, as `plan` writes it: tip, axis, kind, feed, tool).
+    #[arg(long)]
+    pub cl: PathBuf,
+    /// The blank: `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1` (about the vertical line through
+    /// the part's box centre), `offset:M` (the part grown by M mm) or `mesh:FILE` (a closed
+    /// mesh), in mm.
+    #[arg(long, value_name = "SPEC", value_parser = blank)]
+    pub stock: job::BlankSpec,
+    /// Ball-end mill, `ball:D`.
+    #[arg(long, value_name = "ball:D", value_parser = ball_spec)]
+    pub tool: String,
+    /// Fluted length from the tip, mm [default: 3 × D].
+    #[arg(long, value_parser = positive)]
+    pub flute_length: Option<f64>,
+    /// Distance between dexel lines, mm [default: the part's box diagonal / 400, within 0.05
+    /// to 1 mm]. Memory and time grow as its inverse square.
+    #[arg(long, value_parser = positive)]
+    pub resolution: Option<f64>,
+    /// How deep the tool may go into the part before it is a gouge, mm.
+    #[arg(long, default_value_t = 0.01, value_parser = non_negative)]
+    pub tolerance: f64,
+    /// Refuse a model with more dexel lines than this, before building it.
+    #[arg(long, default_value_t = crate::stock::DEFAULT_MAX_DEXELS)]
+    pub max_dexels: usize,
+    /// Units of the part and of a mesh blank: mm, m or in.
+    #[arg(long, default_value = "mm", value_parser = units)]
+    pub units: String,
+    /// Leave the run-dependent timings out of simulation.json (byte-identical reports).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder: simulation.json.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// The flag that sets each option of [`job::SimulateOptions`].
+const FLAGS: &[(&str, &str)] = &[
+    ("stock", "--stock"),
+    ("tool", "--tool"),
+    ("resolution", "--resolution"),
+    ("tolerance", "--tolerance"),
+    ("max_dexels", "--max-dexels"),
+];
+
+/// Runs the command.
+pub fn run(args: &SimulateArgs) -> Result<()> {
+    job::check_output_dir(&args.out, &job::OutputKind::SIMULATE)?;
+    let diameter = crate::cli::ball_diameter(&args.tool)?;
+    let name = args.part.display().to_string();
+    let raw = load(&args.part, &args.units)?;
+    let cl_name = args.cl.display().to_string();
+    let cl_text = std::fs::read_to_string(&args.cl).map_err(|source| Error::Io {
+        path: cl_name.clone(),
+        source,
+    })?;
+    let mut options = job::SimulateOptions::new(args.stock.clone(), diameter);
+    options.flute_length = args.flute_length;
+    options.resolution = args.resolution;
+    options.tolerance = args.tolerance;
+    options.max_dexels = args.max_dexels;
+    options.units = args.units.clone();
+    options.timings = !args.no_timings;
+    let report = job::simulate_program(&raw, &name, &cl_text, &cl_name, &options)
+        .map_err(|e| name_flags(e, FLAGS))?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    say!(
+        "{} moves: {:.1} mm³ removed, {} gouging move(s) (deepest {:.4} mm), {} rapid(s) through material, {:.1} % of the cutting length in air",
+        report.moves,
+        report.removed_volume_mm3,
+        report.gouge.count,
+        report.gouge.max_depth_mm,
+        report.rapids_through_material.len(),
+        100.0 * report.air_cut_fraction
+    );
+    say!("-> {}", args.out.join("simulation.json").display());
+    job::write_simulation(&args.out, &report)
+}

@@ -1,0 +1,182 @@
+//! `wavemill simulate` end to end on a box part written here: a clean pass, a deliberate gouge
+//! (exit 3, the report says where), a rapid through the stock, bad input with its exit code
+//! and message, and byte-identical reports from identical runs.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn wavemill(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_wavemill"))
+        .args(args)
+        .output()
+        .expect("run wavemill")
+}
+
+/// A 20 × 20 × 10 box from the origin, outward, as OBJ.
+fn box_obj(dir: &Path) -> PathBuf {
+    let v = [
+        (0, 0, 0),
+        (20, 0, 0),
+        (20, 20, 0),
+        (0, 20, 0),
+        (0, 0, 10),
+        (20, 0, 10),
+        (20, 20, 10),
+        (0, 20, 10),
+    ];
+    let f = [
+        [1, 3, 2],
+        [1, 4, 3],
+        [5, 6, 7],
+        [5, 7, 8],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 4, 8],
+        [3, 8, 7],
+        [4, 1, 5],
+        [4, 5, 8],
+    ];
+    let mut text = String::new();
+    for (x, y, z) in v {
+        text += &format!("v {x} {y} {z}\n");
+    }
+    for [a, b, c] in f {
+        text += &format!("f {a} {b} {c}\n");
+    }
+    let path = dir.join("box.obj");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn cl(dir: &Path, name: &str, rows: &[&str]) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(
+        &path,
+        format!("x,y,z,i,j,k,kind,feed,tool\n{}\n", rows.join("\n")),
+    )
+    .unwrap();
+    path
+}
+
+#[test]
+fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
+    let dir = std::env::temp_dir().join(format!("wavemill-simulate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let part = box_obj(&dir);
+    let clean = cl(
+        &dir,
+        "clean.csv",
+        &[
+            "5,5,30,0,0,1,rapid,15000,1",
+            "5,5,11,0,0,1,approach,600,1",
+            "15,5,10.5,0,0,1,cut,2000,1",
+            "15,5,30,0,0,1,retract,3000,1",
+        ],
+    );
+    let gouging = cl(
+        &dir,
+        "gouge.csv",
+        &[
+            "5,5,30,0,0,1,rapid,15000,1",
+            "5,5,11,0,0,1,approach,600,1",
+            "15,5,9.7,0,0,1,cut,2000,1",
+            "15,5,30,0,0,1,retract,3000,1",
+            "10,15,10.5,0,0,1,rapid,15000,1",
+        ],
+    );
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let run = |program: &Path, out: &str, extra: &[&str]| {
+        let out = s(&dir.join(out));
+        let (part, program) = (s(&part), s(program));
+        let mut args = vec![
+            "simulate",
+            part.as_str(),
+            "--cl",
+            program.as_str(),
+            "--stock",
+            "box:0,0,0,20,20,12",
+            "--tool",
+            "ball:4",
+            "--no-timings",
+            "--out",
+        ];
+        args.push(out.as_str());
+        if !extra.contains(&"--resolution") {
+            args.extend(["--resolution", "0.2"]);
+        }
+        args.extend_from_slice(extra);
+        wavemill(&args)
+    };
+    let report = |out: &str| -> serde_json::Value {
+        serde_json::from_str(
+            &std::fs::read_to_string(dir.join(out).join("simulation.json")).unwrap(),
+        )
+        .unwrap()
+    };
+
+    let o = run(&clean, "clean", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report("clean");
+    assert_eq!(r["gouge"]["count"], 0);
+    assert!(r["removed_volume_mm3"].as_f64().unwrap() > 10.0);
+    assert_eq!(r["moves"], 4);
+
+    let o = run(&gouging, "gouge", &[]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let r = report("gouge");
+    assert_eq!(r["gouge"]["first_move"], 2);
+    let depth = r["gouge"]["max_depth_mm"].as_f64().unwrap();
+    assert!((depth - 0.3).abs() < 0.02, "{depth}");
+    assert_eq!(r["rapids_through_material"], serde_json::json!([4]));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("gouging") && err.contains("rapid"), "{err}");
+    // The same run again: the same bytes.
+    let again = run(&gouging, "gouge-again", &[]);
+    assert_eq!(again.status.code(), Some(3));
+    assert_eq!(
+        std::fs::read(dir.join("gouge/simulation.json")).unwrap(),
+        std::fs::read(dir.join("gouge-again/simulation.json")).unwrap()
+    );
+
+    // Bad input: a stock spec (usage, 2), a CL line (1, naming the line), a resolution whose
+    // model would be too large (1, naming the flag that raises the limit).
+    let bad_stock = wavemill(&[
+        "simulate",
+        &s(&part),
+        "--cl",
+        &s(&clean),
+        "--stock",
+        "sphere:3",
+        "--tool",
+        "ball:4",
+        "--out",
+        &s(&dir.join("x")),
+    ]);
+    assert_eq!(bad_stock.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad_stock.stderr).contains("sphere:3"));
+    let broken = cl(
+        &dir,
+        "broken.csv",
+        &["5,5,30,0,0,1,rapid,15000,1", "5,5,oops,0,0,1,cut,600,1"],
+    );
+    let o = run(&broken, "broken", &[]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("broken.csv: line 3") && err.contains("oops"),
+        "{err}"
+    );
+    assert!(!dir.join("broken/simulation.json").exists());
+    let o = run(&clean, "huge", &["--resolution", "0.0001"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--max-dexels"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
