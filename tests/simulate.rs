@@ -178,5 +178,52 @@ fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--max-dexels"), "{err}");
+
+    // With the job's tool (4 mm ball, 4 mm flutes, 6 mm shank, 20 mm stickout, 20 mm holder):
+    // a plunge 2 mm past the flutes puts the shank in the stock — a collision, exit 3.
+    let job = dir.join("job.toml");
+    std::fs::write(
+        &job,
+        "[tool]\ndiameter = 4.0\nflute_length = 4.0\nshank_diameter = 6.0\nstickout = 20.0\n\
+         holder = [{ diameter = 20.0, length = 30.0 }]\n",
+    )
+    .unwrap();
+    let plunge = cl(
+        &dir,
+        "plunge.csv",
+        &[
+            "10,10,40,0,0,1,rapid,15000,1",
+            "10,10,13,0,0,1,approach,600,1",
+            "10,10,6,0,0,1,cut,600,1",
+        ],
+    );
+    let o = wavemill(&[
+        "simulate",
+        &s(&part),
+        "--cl",
+        &s(&plunge),
+        "--stock",
+        "box:0,0,10,20,20,12",
+        "--job",
+        &s(&job),
+        "--resolution",
+        "0.2",
+        "--no-timings",
+        "--out",
+        &s(&dir.join("plunge")),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let r = report("plunge");
+    assert_eq!(r["collisions"][0]["move"], 2, "{r}");
+    assert_eq!(r["collisions"][0]["body"], "shank");
+    assert!(r["checked"].to_string().contains("collisions"));
+    // The approach stops 1 mm above the stock: no collision there; the cut ends with the tip
+    // at z 6, 4 mm into the part's box (the part is the box below z 10): a gouge too.
+    assert_eq!(r["gouge"]["first_move"], 2);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -61,6 +61,9 @@ pub struct SimulateOptions {
     pub tool_diameter: f64,
     /// Fluted length from the tip, mm; `None` = 3 × diameter.
     pub flute_length: Option<f64>,
+    /// The whole tool (a ball-end cutter, shank, holder), when known: its non-cutting bodies
+    /// are checked against the material, and its cutter sets the diameter and flutes.
+    pub assembly: Option<crate::tool::ToolAssembly>,
     /// Distance between dexel lines, mm; `None` = the part's box diagonal / 400, within
     /// 0.05 to 1 mm.
     pub resolution: Option<f64>,
@@ -81,6 +84,7 @@ impl SimulateOptions {
             blank,
             tool_diameter,
             flute_length: None,
+            assembly: None,
             resolution: None,
             tolerance: 0.01,
             max_dexels: DEFAULT_MAX_DEXELS,
@@ -97,6 +101,16 @@ pub struct GougeReport {
     pub max_depth_mm: f64,
     pub volume_mm3: f64,
     pub first_move: Option<usize>,
+}
+
+/// A non-cutting body in material, in `simulation.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct CollisionReport {
+    #[serde(rename = "move")]
+    pub move_index: usize,
+    pub body: crate::tool::BodyRole,
+    pub depth_mm: f64,
+    pub at: [f64; 3],
 }
 
 /// Removed volume per mm of cut, over the feed moves that removed material, mm³/mm.
@@ -130,6 +144,11 @@ pub struct SimulationReport {
     pub gouge: GougeReport,
     /// Rapid moves that removed material (indices into the program, from 0).
     pub rapids_through_material: Vec<usize>,
+    /// Shank, neck or holder touching material (the first 1000; `collision_count` has all).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collisions: Option<Vec<CollisionReport>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collision_count: Option<usize>,
     pub air_cut_fraction: f64,
     pub engagement: EngagementReport,
     pub stock: StockReport,
@@ -235,8 +254,37 @@ pub fn simulate_program(
     cl_name: &str,
     options: &SimulateOptions,
 ) -> Result<SimulationReport> {
-    let d = options.tool_diameter;
-    let flutes = options.flute_length.unwrap_or(3.0 * d);
+    let (d, flutes) = match &options.assembly {
+        Some(tool) => match tool.cutter {
+            crate::tool::Cutter::Ball {
+                diameter,
+                flute_length,
+            } => (diameter, flute_length),
+            other => {
+                return Err(Error::JobFile(JobError::Invalid {
+                    key: "tool".into(),
+                    reason: format!(
+                        "is a {} cutter: simulate drives ball-end mills so far",
+                        other.kind()
+                    ),
+                }));
+            }
+        },
+        None => (
+            options.tool_diameter,
+            options.flute_length.unwrap_or(3.0 * options.tool_diameter),
+        ),
+    };
+    let non_cutting: Vec<crate::tool::Body> = options
+        .assembly
+        .as_ref()
+        .map(|tool| {
+            tool.bodies()
+                .into_iter()
+                .filter(|b| b.role != crate::tool::BodyRole::Flutes)
+                .collect()
+        })
+        .unwrap_or_default();
     if !(d.is_finite() && d > 0.0 && flutes.is_finite() && flutes >= 0.5 * d) {
         return Err(Error::JobFile(JobError::Invalid {
             key: "tool".into(),
@@ -301,6 +349,7 @@ pub fn simulate_program(
         &SimulationOptions {
             tolerance: options.tolerance,
             max_dexels: options.max_dexels,
+            non_cutting: non_cutting.clone(),
         },
     )
     .map_err(stock_error)?;
@@ -329,7 +378,10 @@ pub fn simulate_program(
         wavemill_version: env!("CARGO_PKG_VERSION"),
         part: file_name(Path::new(part_name)),
         program: file_name(Path::new(cl_name)),
-        tool: format!("ball:{d} (flutes {flutes} mm)"),
+        tool: options.assembly.as_ref().map_or_else(
+            || format!("ball:{d} (flutes {flutes} mm)"),
+            |t| t.describe(),
+        ),
         tolerance_mm: options.tolerance,
         moves: toolpath.moves.len(),
         removed_volume_mm3: sim.removed_volume_mm3,
@@ -340,6 +392,19 @@ pub fn simulate_program(
             first_move: sim.gouge.first_move,
         },
         rapids_through_material: sim.rapids_through_material,
+        collision_count: (!non_cutting.is_empty()).then_some(sim.collisions.len()),
+        collisions: (!non_cutting.is_empty()).then(|| {
+            sim.collisions
+                .iter()
+                .take(1000)
+                .map(|c| CollisionReport {
+                    move_index: c.move_index,
+                    body: c.role,
+                    depth_mm: c.depth_mm,
+                    at: [c.at.x, c.at.y, c.at.z],
+                })
+                .collect()
+        }),
         air_cut_fraction: sim.air_cut_fraction,
         engagement,
         stock: StockReport {
@@ -349,11 +414,17 @@ pub fn simulate_program(
             volume_before_mm3: volume_before,
             volume_after_mm3: stock.volume(),
         },
-        checked: vec![
-            "material removed by the ball-end cutting body (flutes included)",
-            "gouges: the body deeper into the part than the tolerance",
-            "rapids through material",
-        ],
+        checked: {
+            let mut checked = vec![
+                "material removed by the ball-end cutting body (flutes included)",
+                "gouges: the body deeper into the part than the tolerance",
+                "rapids through material",
+            ];
+            if !non_cutting.is_empty() {
+                checked.push("shank, neck and holder against the material (collisions)");
+            }
+            checked
+        },
         warnings,
         timings_ms: options.timings.then_some(Timings {
             blank: blank_ms,
@@ -374,9 +445,17 @@ pub fn write_simulation(dir: &Path, report: &SimulationReport) -> Result<()> {
         &OutputKind::SIMULATE,
         &[("simulation.json".to_string(), json)],
     )?;
-    if report.gouge.count > 0 || !report.rapids_through_material.is_empty() {
+    let collisions = report.collision_count.unwrap_or(0);
+    if report.gouge.count > 0 || !report.rapids_through_material.is_empty() || collisions > 0 {
+        let first_collision = report
+            .collisions
+            .as_ref()
+            .and_then(|c| c.first())
+            .map_or(String::new(), |c| {
+                format!(", the first at move {} ({:?})", c.move_index, c.body)
+            });
         return Err(Error::Verification(format!(
-            "{}: {} gouging move(s), the first move {:?}, up to {:.4} mm deep; {} rapid(s) through material{}",
+            "{}: {} gouging move(s), the first move {:?}, up to {:.4} mm deep; {} rapid(s) through material{}; {collisions} collision(s){first_collision}",
             report.program,
             report.gouge.count,
             report.gouge.first_move,

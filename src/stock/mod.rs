@@ -400,6 +400,85 @@ impl Stock {
     }
 }
 
+/// Material found inside a solid that must not touch it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Touch {
+    /// How deep the material is inside the solid, mm, as the caller's depth function measures
+    /// it at the middle of a run of material along a line (the deepest run's).
+    pub depth_mm: f64,
+    /// The middle of that run.
+    pub at: Point3,
+}
+
+impl Stock {
+    /// The box of the material: a bound of everything [`Stock::touching`] can find, now and
+    /// after any removal.
+    pub fn material_bounds(&self) -> Aabb {
+        let mut b = Aabb::empty();
+        for grid in &self.grids {
+            for j in 0..grid.counts[1] {
+                for i in 0..grid.counts[0] {
+                    let line = &grid.lines[i + grid.counts[0] * j];
+                    if let (Some(first), Some(last)) = (line.first(), line.last()) {
+                        let mut p = grid.line_point(i, j);
+                        p[grid.axis] = first.start;
+                        b.grow(&p);
+                        p[grid.axis] = last.end;
+                        b.grow(&p);
+                    }
+                }
+            }
+        }
+        b
+    }
+
+    /// Material inside `solid`, without removing it: for each run of material inside it along
+    /// a line, `depth` at the run's middle (a convex solid's chord is deepest near its middle);
+    /// the deepest, or `None` when the solid is clear of material. Runs shorter than 1 nm are
+    /// round-off.
+    pub fn touching(
+        &self,
+        solid: &dyn LineInterval,
+        depth: impl Fn(&Point3) -> f64,
+    ) -> Option<Touch> {
+        let b = solid.bounds();
+        let mut best: Option<Touch> = None;
+        for grid in &self.grids {
+            let (axis, across, spacing) = (grid.axis, grid.across, grid.spacing);
+            let is = grid.index_range(0, b.min[across[0]], b.max[across[0]]);
+            for j in grid.index_range(1, b.min[across[1]], b.max[across[1]]) {
+                for i in is.clone() {
+                    let line = &grid.lines[i + grid.counts[0] * j];
+                    if !line
+                        .iter()
+                        .any(|s| s.end > b.min[axis] && s.start < b.max[axis])
+                    {
+                        continue;
+                    }
+                    let mut p = Point3::origin();
+                    p[across[0]] = grid.origin[0] + i as f64 * spacing;
+                    p[across[1]] = grid.origin[1] + j as f64 * spacing;
+                    let Some((t0, t1)) = solid.line_interval(axis, &p) else {
+                        continue;
+                    };
+                    for s in line {
+                        let (lo, hi) = (s.start.max(t0), s.end.min(t1));
+                        if hi - lo > 1e-6 {
+                            let mut at = p;
+                            at[axis] = 0.5 * (lo + hi);
+                            let d = depth(&at);
+                            if best.is_none_or(|t| d > t.depth_mm) {
+                                best = Some(Touch { depth_mm: d, at });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
 impl Stock {
     /// Removes the cutting body of a ball-end mill swept along every move of `toolpath` (each
     /// split as [`cutter::BallEndBody::sweep`] does, within `tolerance`); returns the volume

@@ -17,19 +17,24 @@
 //! length that removed nothing (air cutting).
 
 use super::cutter::BallEndBody;
+use super::sweep::{Frustum, LineInterval};
 use super::{Stock, StockError};
-use crate::geom::{MoveKind, Toolpath};
+use crate::geom::{MoveKind, Point3, ToolPose, Toolpath, angle_between, slerp};
 use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
+use crate::tool::{Body, BodyRole};
 
 /// Options of [`simulate`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SimulationOptions {
     /// How far the tool may go into the part before it is a gouge, mm; also the accuracy each
     /// move's sweep is split to.
     pub tolerance: f64,
     /// The part model's largest number of dexel lines.
     pub max_dexels: usize,
+    /// The tool's bodies that must not touch material (shank, neck, holder; see
+    /// [`crate::tool::ToolAssembly::bodies`]); flutes are cutting and left out.
+    pub non_cutting: Vec<Body>,
 }
 
 impl Default for SimulationOptions {
@@ -37,6 +42,7 @@ impl Default for SimulationOptions {
         SimulationOptions {
             tolerance: 0.01,
             max_dexels: super::DEFAULT_MAX_DEXELS,
+            non_cutting: Vec::new(),
         }
     }
 }
@@ -67,6 +73,19 @@ pub struct GougeSummary {
     pub first_move: Option<usize>,
 }
 
+/// A body that must not cut touching material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Collision {
+    /// The move (index into the toolpath).
+    pub move_index: usize,
+    /// Which body.
+    pub role: BodyRole,
+    /// The longest run of material inside the body along a dexel line, mm.
+    pub depth_mm: f64,
+    /// Where.
+    pub at: Point3,
+}
+
 /// A simulated program.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Simulation {
@@ -78,6 +97,8 @@ pub struct Simulation {
     pub gouge: GougeSummary,
     /// Rapid moves that removed material (indices).
     pub rapids_through_material: Vec<usize>,
+    /// Non-cutting bodies touching material, one per move and body (the deepest).
+    pub collisions: Vec<Collision>,
     /// Share of the feed moves' length that removed nothing.
     pub air_cut_fraction: f64,
 }
@@ -105,6 +126,10 @@ pub fn simulate(
     let (mut feed_length, mut air_length) = (0.0, 0.0);
     let mut rapids_through_material = Vec::new();
     let mut gouge = GougeSummary::default();
+    let mut collisions = Vec::new();
+    // Material only shrinks: what is outside this box now stays clear.
+    let material = stock.material_bounds();
+    let step = 0.5 * stock.spacing();
     for (k, pair) in toolpath.moves.windows(2).enumerate() {
         let (from, to) = (&pair[0].pose, &pair[1].pose);
         let record = &mut moves[k + 1];
@@ -135,6 +160,16 @@ pub fn simulate(
             gouge.max_depth_mm = gouge.max_depth_mm.max(record.gouge_depth_mm);
             gouge.first_move.get_or_insert(k + 1);
         }
+        for body in &options.non_cutting {
+            if let Some(c) = body_touching(stock, &material, body, from, to, step, tolerance) {
+                collisions.push(Collision {
+                    move_index: k + 1,
+                    role: body.role,
+                    depth_mm: c.depth_mm,
+                    at: c.at,
+                });
+            }
+        }
         match pair[1].kind {
             MoveKind::Rapid if record.removed_mm3 > 0.0 => rapids_through_material.push(k + 1),
             MoveKind::Rapid => {}
@@ -151,12 +186,60 @@ pub fn simulate(
         moves,
         gouge,
         rapids_through_material,
+        collisions,
         air_cut_fraction: if feed_length > 0.0 {
             air_length / feed_length
         } else {
             0.0
         },
     })
+}
+
+/// `body` moved from `from` to `to` against the material (after the move's own cut): at poses
+/// sampled so no point of the body moves more than `step` between them, the deepest material
+/// inside the body (radially or from its ends) if deeper than `threshold`.
+fn body_touching(
+    stock: &Stock,
+    material: &crate::geom::Aabb,
+    body: &Body,
+    from: &ToolPose,
+    to: &ToolPose,
+    step: f64,
+    threshold: f64,
+) -> Option<super::Touch> {
+    let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
+    let travel = (to.tip - from.tip).norm() + angle_between(&k0, &k1) * body.to;
+    let samples = ((travel / step).ceil() as usize).clamp(1, 100_000);
+    let mut deepest: Option<super::Touch> = None;
+    for s in 0..=samples {
+        let t = s as f64 / samples as f64;
+        let frustum = Frustum {
+            base: from.tip + t * (to.tip - from.tip),
+            axis: slerp(&k0, &k1, t),
+            from: body.from,
+            to: body.to,
+            radius_from: body.radius_from,
+            radius_to: body.radius_to,
+        };
+        if frustum.bounds().distance_squared_to_box(material) > 0.0 {
+            continue;
+        }
+        let depth = |p: &Point3| {
+            let d = p - frustum.base;
+            let h = d.dot(&frustum.axis);
+            let along = (h - body.from) / (body.to - body.from);
+            let radius = body.radius_from + along * (body.radius_to - body.radius_from);
+            let radial = radius - (d - h * frustum.axis).norm();
+            radial.min(h - body.from).min(body.to - h)
+        };
+        if let Some(touch) = stock.touching(&frustum, depth)
+            && touch.depth_mm > threshold
+            && deepest.is_none_or(|d| touch.depth_mm > d.depth_mm)
+        {
+            deepest = Some(touch);
+        }
+    }
+    deepest
 }
 
 #[cfg(test)]
@@ -257,6 +340,60 @@ mod tests {
             sim.air_cut_fraction > 0.0 && sim.air_cut_fraction < 1.0,
             "{:?}",
             sim
+        );
+    }
+
+    /// A ball of 4 mm with 4 mm flutes on a 6 mm shank and a 20 mm holder, plunged into a
+    /// block: the shank is found in material at the first plunge (1 mm radially into the wall
+    /// of the 4 mm hole the flutes cut), the holder at the second; a plunge within the flutes
+    /// is clean.
+    #[test]
+    fn a_shank_and_a_holder_in_material_are_found_at_their_moves() {
+        let part = cuboid(10.0, 10.0, 1.0);
+        let blank = Aabb::from_points(&[Point3::new(0.0, 0.0, 0.0), Point3::new(40.0, 40.0, 20.0)]);
+        let mut stock = Stock::block(&blank, 0.1, super::super::DEFAULT_MAX_DEXELS).unwrap();
+        let body = BallEndBody::new(4.0, 4.0);
+        let non_cutting = vec![
+            Body {
+                role: BodyRole::Shank,
+                from: 4.0,
+                to: 20.0,
+                radius_from: 3.0,
+                radius_to: 3.0,
+            },
+            Body {
+                role: BodyRole::Holder,
+                from: 20.0,
+                to: 50.0,
+                radius_from: 10.0,
+                radius_to: 10.0,
+            },
+        ];
+        use MoveKind::*;
+        let program = path(&[
+            ([30.0, 30.0, 60.0], Rapid),
+            ([30.0, 30.0, 17.0], Approach), // within the flutes: clean
+            ([30.0, 30.0, 60.0], Retract),
+            ([20.0, 20.0, 60.0], Rapid),
+            ([20.0, 20.0, 14.0], Approach), // the shank 2 mm into the block
+            ([20.0, 20.0, -5.0], Cut),      // the holder 5 mm into it
+        ]);
+        let options = SimulationOptions {
+            tolerance: 0.01,
+            non_cutting,
+            ..Default::default()
+        };
+        let sim = simulate(&mut stock, &part, &program, &body, &options).unwrap();
+        let at = |m: usize| sim.collisions.iter().filter(move |c| c.move_index == m);
+        assert_eq!(at(1).count(), 0, "{:?}", sim.collisions);
+        let shank: Vec<_> = at(4).collect();
+        assert_eq!(shank.len(), 1, "{:?}", sim.collisions);
+        assert_eq!(shank[0].role, BodyRole::Shank);
+        assert!((shank[0].depth_mm - 1.0).abs() < 0.15, "{:?}", shank[0]);
+        assert!(
+            at(5).any(|c| c.role == BodyRole::Holder && c.depth_mm > 4.0),
+            "{:?}",
+            sim.collisions
         );
     }
 }

@@ -369,6 +369,105 @@ impl LineInterval for SphereSweptHull {
     }
 }
 
+/// A solid frustum of a cone (or a cylinder) about the axis through `base` along the unit
+/// `axis`: the points at height `h ∈ [from, to]` above `base` within `radius(h)` of the axis,
+/// the radius linear from `radius_from` to `radius_to`. Convex, so a line meets it in one
+/// interval, found in closed form.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frustum {
+    pub base: Point3,
+    pub axis: Vector3,
+    pub from: f64,
+    pub to: f64,
+    pub radius_from: f64,
+    pub radius_to: f64,
+}
+
+impl LineInterval for Frustum {
+    fn bounds(&self) -> Aabb {
+        let mut b = Aabb::empty();
+        let k = self.axis;
+        for (h, r) in [(self.from, self.radius_from), (self.to, self.radius_to)] {
+            let c = self.base + h * k;
+            for i in 0..3 {
+                let reach = r * (1.0 - k[i] * k[i]).max(0.0).sqrt();
+                let (mut lo, mut hi) = (c, c);
+                lo[i] -= reach;
+                hi[i] += reach;
+                b.grow(&lo);
+                b.grow(&hi);
+            }
+        }
+        b
+    }
+
+    fn line_interval(&self, axis: usize, p: &Point3) -> Option<(f64, f64)> {
+        let k = self.axis;
+        let mut o = *p;
+        o[axis] = 0.0;
+        let w = o - self.base;
+        // Height along the line: h(t) = w·k + t k[axis]; radius R(h) = a + b h.
+        let (wk, uk) = (w.dot(&k), k[axis]);
+        let slope = (self.radius_to - self.radius_from) / (self.to - self.from);
+        let (a, b) = (self.radius_from - slope * self.from, slope);
+        // ρ² − R² = A t² + 2B t + C, with ρ² = |w + t u|² − h², u = e_axis.
+        let (r0, r1) = (a + b * wk, b * uk);
+        let big_a = 1.0 - uk * uk - r1 * r1;
+        let big_b = w[axis] - wk * uk - r0 * r1;
+        let big_c = w.norm_squared() - wk * wk - r0 * r0;
+        // The slab of heights.
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        if uk.abs() > 1e-15 {
+            let (t0, t1) = ((self.from - wk) / uk, (self.to - wk) / uk);
+            lo = t0.min(t1);
+            hi = t0.max(t1);
+        } else if !(self.from..=self.to).contains(&wk) {
+            return None;
+        }
+        let inside = |t: f64| big_a * t * t + 2.0 * big_b * t + big_c <= 0.0;
+        if big_a.abs() < 1e-15 {
+            // Linear in t: 2B t + C ≤ 0.
+            if big_b.abs() < 1e-300 {
+                return (big_c <= 0.0 && lo < hi).then_some((lo, hi));
+            }
+            let t = -big_c / (2.0 * big_b);
+            if big_b > 0.0 {
+                hi = hi.min(t)
+            } else {
+                lo = lo.max(t)
+            }
+            return (lo < hi).then_some((lo, hi));
+        }
+        let disc = big_b * big_b - big_a * big_c;
+        if disc < 0.0 {
+            // No root: inside everywhere or nowhere (within the slab, where R > 0).
+            let mid = if lo.is_finite() && hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                0.0
+            };
+            return (big_a < 0.0 && inside(mid) && lo < hi).then_some((lo, hi));
+        }
+        let s = disc.sqrt();
+        let (q0, q1) = ((-big_b - s) / big_a, (-big_b + s) / big_a);
+        let (q0, q1) = (q0.min(q1), q0.max(q1));
+        if big_a > 0.0 {
+            lo = lo.max(q0);
+            hi = hi.min(q1);
+            return (lo < hi).then_some((lo, hi));
+        }
+        // Outside the roots; the slab keeps the one piece on this nappe (the solid is convex).
+        let left = (lo, hi.min(q0));
+        let right = (lo.max(q1), hi);
+        match (left.0 < left.1, right.0 < right.1) {
+            (true, false) => Some(left),
+            (false, true) => Some(right),
+            (true, true) => Some((left.0, right.1)),
+            (false, false) => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -491,6 +590,46 @@ mod tests {
                     prop_assert!(lo <= a + 1e-9 && b <= hi + 1e-9, "met {a}..{b}, range {lo}..{hi}");
                     prop_assert!(a - lo < 0.02 && hi - b < 0.02, "loose: met {a}..{b}, range {lo}..{hi}");
                 }
+            }
+        }
+
+        /// A frustum's line interval agrees with a direct membership test of points along the
+        /// line (height in range, within the radius there).
+        #[test]
+        fn frustum_intervals_agree_with_membership(
+            base in point(),
+            axis in (-1.0..1.0f64, -1.0..1.0f64, 0.1..1.0f64),
+            from in 0.0..3.0f64,
+            length in 0.5..6.0f64,
+            radii in (0.2..4.0f64, 0.2..4.0f64),
+            line_axis in 0usize..3,
+            across in (-8.0..8.0f64, -8.0..8.0f64),
+        ) {
+            let k = Vector3::new(axis.0, axis.1, axis.2).normalize();
+            let f = Frustum { base, axis: k, from, to: from + length, radius_from: radii.0, radius_to: radii.1 };
+            let (u, v) = ((line_axis + 1) % 3, (line_axis + 2) % 3);
+            let mut p = Point3::origin();
+            p[u] = across.0;
+            p[v] = across.1;
+            let member = |t: f64| {
+                let mut q = p;
+                q[line_axis] = t;
+                let d = q - base;
+                let h = d.dot(&k);
+                let r = f.radius_from + (f.radius_to - f.radius_from) * (h - f.from) / (f.to - f.from);
+                (f.from..=f.to).contains(&h) && (d - h * k).norm() <= r
+            };
+            let hit = f.line_interval(line_axis, &p);
+            for step in 0..=2000 {
+                let t = -20.0 + 40.0 * step as f64 / 2000.0;
+                let inside = hit.is_some_and(|(a, b)| a + 1e-9 < t && t < b - 1e-9);
+                let outside = hit.is_none_or(|(a, b)| t < a - 1e-9 || t > b + 1e-9);
+                if inside { prop_assert!(member(t), "t {} inside {:?} but not a member", t, hit); }
+                if outside { prop_assert!(!member(t), "t {} outside {:?} but a member", t, hit); }
+            }
+            let b = f.bounds();
+            if let Some((t0, t1)) = hit {
+                prop_assert!(t0 >= b.min[line_axis] - 1e-9 && t1 <= b.max[line_axis] + 1e-9);
             }
         }
     }

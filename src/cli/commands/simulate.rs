@@ -21,10 +21,14 @@ pub struct SimulateArgs {
     /// mesh), in mm.
     #[arg(long, value_name = "SPEC", value_parser = blank)]
     pub stock: job::BlankSpec,
-    /// Ball-end mill, `ball:D`.
-    #[arg(long, value_name = "ball:D", value_parser = ball_spec)]
-    pub tool: String,
-    /// Fluted length from the tip, mm [default: 3 × D].
+    /// A job file: its `[tool]` (ball, flutes, shank, stickout, holder) is the tool, and the
+    /// shank and holder are checked against the material.
+    #[arg(long)]
+    pub job: Option<PathBuf>,
+    /// Ball-end mill, `ball:D` (with --job: replaces the job's ball diameter).
+    #[arg(long, value_name = "ball:D", value_parser = ball_spec, required_unless_present = "job")]
+    pub tool: Option<String>,
+    /// Fluted length from the tip, mm [default: 3 × D; with --job: the job's].
     #[arg(long, value_parser = positive)]
     pub flute_length: Option<f64>,
     /// Distance between dexel lines, mm [default: the part's box diagonal / 400, within 0.05
@@ -60,7 +64,24 @@ const FLAGS: &[(&str, &str)] = &[
 /// Runs the command.
 pub fn run(args: &SimulateArgs) -> Result<()> {
     job::check_output_dir(&args.out, &job::OutputKind::SIMULATE)?;
-    let diameter = crate::cli::ball_diameter(&args.tool)?;
+    let (diameter, assembly) = match &args.job {
+        Some(path) => {
+            let mut job = job::Job::load(path)?;
+            if let Some(spec) = &args.tool {
+                crate::cli::set_tool(&mut job, spec)?;
+            }
+            if let Some(f) = args.flute_length {
+                job.tool.flute_length = f;
+            }
+            job.validate()
+                .map_err(|e| name_flags(Error::from(e), &[("tool.", "--tool")]))?;
+            (job.tool.diameter, Some(job.tool.assembly()))
+        }
+        None => {
+            let spec = args.tool.as_deref().unwrap_or_default();
+            (crate::cli::ball_diameter(spec)?, None)
+        }
+    };
     let name = args.part.display().to_string();
     let raw = load(&args.part, &args.units)?;
     let cl_name = args.cl.display().to_string();
@@ -70,6 +91,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     })?;
     let mut options = job::SimulateOptions::new(args.stock.clone(), diameter);
     options.flute_length = args.flute_length;
+    options.assembly = assembly;
     options.resolution = args.resolution;
     options.tolerance = args.tolerance;
     options.max_dexels = args.max_dexels;
