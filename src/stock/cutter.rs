@@ -20,8 +20,8 @@
 //!
 //! [`Stock::remove`]: super::Stock::remove
 
-use super::sweep::SphereSweptHull;
-use crate::geom::{Point3, ToolPose, angle_between, slerp};
+use super::sweep::{Capsule, Clipped, LineInterval, SphereSweptHull};
+use crate::geom::{Aabb, Point3, ToolPose, angle_between, slerp};
 
 /// The cutting body of a ball-end mill: the capsule from the ball centre up the axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,41 +66,137 @@ impl BallEndBody {
     /// The body swept from `from` to `to`, as convex solids whose union differs from the exact
     /// sweep by less than `tolerance` (see the module docs). Antipodal axes, which no
     /// interpolation joins, are swept as the two end positions joined by their hull.
-    pub fn sweep(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SphereSweptHull> {
+    pub fn sweep(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SweptSolid> {
         let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
         let turn = angle_between(&k0, &k1);
-        // The farthest point of the segment from the tip.
-        let reach = self.centre_height + self.segment;
         let tolerance = tolerance.max(1e-9);
-        let steps_for_bulge = if turn > 0.0 {
-            // ℓ(1 − cos(Δθ/2)) ≤ tol  ⇔  Δθ ≤ 2 acos(1 − tol/ℓ).
-            let max_step = 2.0 * (1.0 - (tolerance / reach).min(1.0)).acos();
-            (turn / max_step).ceil()
-        } else {
-            1.0
+        // ℓ(1 − cos(Δθ/2)) ≤ tol  ⇔  Δθ ≤ 2 acos(1 − tol/ℓ): steps for a point ℓ from the tip.
+        let steps_for_bulge = |reach: f64| {
+            if turn > 0.0 && reach > 0.0 {
+                let max_step = 2.0 * (1.0 - (tolerance / reach).min(1.0)).acos();
+                (turn / max_step).ceil()
+            } else {
+                1.0
+            }
         };
-        let (a0, b0) = self.segment_at(from);
-        let (a1, b1) = self.segment_at(to);
-        let steps_for_twist =
-            (SphereSweptHull::twist(&a0, &b0, &a1, &b1) / (4.0 * tolerance)).ceil();
-        let steps = steps_for_bulge.max(steps_for_twist).clamp(1.0, 1e5) as usize;
         let pose_at = |t: f64| ToolPose {
             tip: from.tip + t * (to.tip - from.tip),
             axis: nalgebra::Unit::new_normalize(slerp(&k0, &k1, t)),
         };
-        let mut solids = Vec::with_capacity(steps);
+        let mut solids = Vec::new();
+        // The ball: its centre's chords.
+        let ball_steps = steps_for_bulge(self.centre_height).clamp(1.0, 1e5) as usize;
+        let mut previous = self.segment_at(from).0;
+        for s in 1..=ball_steps {
+            let next = self.segment_at(&pose_at(s as f64 / ball_steps as f64)).0;
+            solids.push(SweptSolid::Ball(Capsule {
+                a: previous,
+                b: next,
+                radius: self.radius,
+            }));
+            previous = next;
+        }
+        if self.segment == 0.0 {
+            return solids;
+        }
+        // The flutes above the ball's centre plane: hulls of the segment's end positions,
+        // each cut below by a plane the swept flutes stay above (see `flutes_plane`).
+        let reach = self.centre_height + self.segment;
+        let (a0, b0) = self.segment_at(from);
+        let (a1, b1) = self.segment_at(to);
+        let steps_for_twist =
+            (SphereSweptHull::twist(&a0, &b0, &a1, &b1) / (4.0 * tolerance)).ceil();
+        let steps = steps_for_bulge(reach)
+            .max(steps_for_twist)
+            .clamp(1.0, 1e5) as usize;
         let mut previous = self.segment_at(from);
         for s in 1..=steps {
-            let next = self.segment_at(&pose_at(s as f64 / steps as f64));
-            let points = if self.segment == 0.0 {
-                vec![previous.0, next.0]
-            } else {
-                vec![previous.0, previous.1, next.0, next.1]
-            };
-            solids.push(SphereSweptHull::new(&points, self.radius));
+            let (t0, t1) = ((s - 1) as f64 / steps as f64, s as f64 / steps as f64);
+            let next = self.segment_at(&pose_at(t1));
+            let hull = SphereSweptHull::new(
+                &[previous.0, previous.1, next.0, next.1],
+                self.radius,
+            );
+            let middle = pose_at(0.5 * (t0 + t1));
+            let (normal, offset) = self.flutes_plane(
+                &middle,
+                turn / steps as f64,
+                (to.tip - from.tip).norm() / steps as f64,
+                tolerance,
+            );
+            solids.push(SweptSolid::Flutes(Clipped {
+                solid: hull,
+                normal,
+                offset,
+            }));
             previous = next;
         }
         solids
+    }
+
+    /// A plane every point of the flutes (the body above the ball centre's plane) stays on the
+    /// upper side of, over a step that turns the axis by `turn` and moves the tip `travel`,
+    /// centred at the `middle` pose, with `tolerance` to spare for the hull's excess.
+    ///
+    /// A point x of the flutes at time t has k(t)·(x − c(t)) ≥ 0 and |x − c(t)| ≤ segment + r;
+    /// with k̄, c̄ the middle axis and centre, |k̄ − k(t)| ≤ turn/2 and |c(t) − c̄| ≤ travel/2 +
+    /// centre_height·turn/2, so k̄·(x − c̄) ≥ −(turn/2)(segment + r + centre_height) −
+    /// travel/2. Below that plane the body is the ball, which the ball's own solids remove, so
+    /// the flutes' hull is cut there and most lines under a finishing tool's shadow (where the
+    /// material is below the ball) are dismissed by a plane test.
+    fn flutes_plane(
+        &self,
+        middle: &ToolPose,
+        turn: f64,
+        travel: f64,
+        tolerance: f64,
+    ) -> (crate::geom::Vector3, f64) {
+        let k = middle.axis.into_inner();
+        let centre = middle.tip + self.centre_height * k;
+        let slack = 0.5 * turn * (self.segment + self.radius + self.centre_height)
+            + 0.5 * travel
+            + tolerance;
+        (k, k.dot(&centre.coords) - slack)
+    }
+}
+
+/// One convex piece of a swept cutter.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SweptSolid {
+    /// The ball swept along a chord of its centre's path.
+    Ball(Capsule),
+    /// The flutes over a step: the hull of the body's segment at its ends, cut below by a plane
+    /// the swept flutes stay above.
+    Flutes(Clipped<SphereSweptHull>),
+}
+
+impl LineInterval for SweptSolid {
+    fn bounds(&self) -> Aabb {
+        match self {
+            SweptSolid::Ball(c) => c.bounds(),
+            SweptSolid::Flutes(f) => f.bounds(),
+        }
+    }
+
+    fn line_interval(&self, axis: usize, p: &Point3) -> Option<(f64, f64)> {
+        match self {
+            SweptSolid::Ball(c) => c.line_interval(axis, p),
+            SweptSolid::Flutes(f) => f.line_interval(axis, p),
+        }
+    }
+
+    fn row_range(&self, axis: usize, across: usize, p: &Point3) -> Option<(f64, f64)> {
+        match self {
+            SweptSolid::Ball(c) => c.row_range(axis, across, p),
+            SweptSolid::Flutes(f) => f.row_range(axis, across, p),
+        }
+    }
+
+    fn range_over(&self, axis: usize, lo: &Point3, hi: &Point3) -> Option<(f64, f64)> {
+        match self {
+            SweptSolid::Ball(c) => c.range_over(axis, lo, hi),
+            SweptSolid::Flutes(f) => f.range_over(axis, lo, hi),
+        }
     }
 }
 
@@ -162,20 +258,54 @@ mod tests {
         // The same move, one step only, cuts visibly less: the split matters.
         let mut coarse = block(0.1);
         let one = BallEndBody::new(diameter, flutes).sweep(&from, &to, 10.0);
-        assert_eq!(one.len(), 1);
+        assert_eq!(one.len(), 2, "one ball chord and one flute step");
         let chord_only: f64 = one.iter().map(|solid| coarse.remove(solid)).sum();
         assert!(chord_only < removed * 0.99, "{chord_only} vs {removed}");
     }
 
+    fn flute_steps(solids: &[SweptSolid]) -> usize {
+        solids
+            .iter()
+            .filter(|s| matches!(s, SweptSolid::Flutes(_)))
+            .count()
+    }
+
     #[test]
-    fn a_straight_move_is_one_solid_and_a_long_move_is_split_by_its_twist() {
+    fn a_straight_move_is_one_step_and_a_long_move_is_split_by_its_twist() {
         let body = BallEndBody::new(6.0, 18.0);
         let a = pose([0.0, 0.0, 0.0], Vector3::new(0.0, 0.3, 1.0));
         let b = pose([20.0, 5.0, -3.0], Vector3::new(0.0, 0.3, 1.0));
-        assert_eq!(body.sweep(&a, &b, 0.001).len(), 1);
+        let straight = body.sweep(&a, &b, 0.001);
+        assert_eq!((straight.len(), flute_steps(&straight)), (2, 1));
         let c = pose([20.0, 5.0, -3.0], Vector3::new(0.5, 0.3, 1.0));
-        let n = body.sweep(&a, &c, 0.001).len();
-        let n_loose = body.sweep(&a, &c, 0.01).len();
+        let n = flute_steps(&body.sweep(&a, &c, 0.001));
+        let n_loose = flute_steps(&body.sweep(&a, &c, 0.01));
         assert!(n > n_loose && n_loose > 1, "{n} {n_loose}");
+    }
+
+    /// The flutes' pieces are cut by a plane below which the body is the ball: removing the
+    /// pieces and the ball chords takes what the uncut flute hulls and ball chords take,
+    /// within the representation, on a turning, moving tool buried in material.
+    #[test]
+    fn cutting_the_flutes_below_the_ball_centre_loses_nothing() {
+        let body = BallEndBody::new(6.0, 18.0);
+        let from = pose([-4.0, 1.0, -6.0], Vector3::new(0.2, -0.1, 1.0));
+        let to = pose([5.0, -2.0, -4.0], Vector3::new(-0.4, 0.3, 1.0));
+        let solids = body.sweep(&from, &to, 0.01);
+        let mut clipped = block(0.1);
+        let with_planes: f64 = solids.iter().map(|s| clipped.remove(s)).sum();
+        let mut whole = block(0.1);
+        let without: f64 = solids
+            .iter()
+            .map(|s| match s {
+                SweptSolid::Flutes(f) => whole.remove(&f.solid),
+                ball => whole.remove(ball),
+            })
+            .sum();
+        assert!(
+            (with_planes - without).abs() < 1e-9 * without,
+            "{with_planes} vs {without}"
+        );
+        assert_eq!(clipped, whole);
     }
 }

@@ -22,6 +22,7 @@
 //! spacing between lines, exactly along them.
 
 pub mod cutter;
+pub mod replay;
 pub mod simulate;
 pub mod spans;
 pub mod sweep;
@@ -364,15 +365,15 @@ impl Stock {
                     for (i, line) in row.iter_mut().enumerate().take(last + 1).skip(first) {
                         // Lines with no material where the solid can be along them are
                         // skipped before any geometry (most lines a tool's shank crosses).
-                        let overlaps = line
-                            .iter()
-                            .any(|s| s.end > b.min[axis] && s.start < b.max[axis]);
-                        if !overlaps {
-                            continue;
-                        }
                         let mut p = Point3::origin();
                         p[across[0]] = origin[0] + i as f64 * spacing;
                         p[across[1]] = origin[1] + j as f64 * spacing;
+                        let Some((lo, hi)) = solid.range_over(axis, &p, &p) else {
+                            continue;
+                        };
+                        if !line.iter().any(|s| s.end > lo && s.start < hi) {
+                            continue;
+                        }
                         if let Some((t0, t1)) = solid.line_interval(axis, &p) {
                             length +=
                                 spans::subtract_recording(line, t0, t1, min_span, &mut |a, b| {
@@ -492,12 +493,19 @@ impl Stock {
         tolerance: f64,
     ) -> Vec<f64> {
         let mut removed = vec![0.0; toolpath.moves.len()];
-        for (k, pair) in toolpath.moves.windows(2).enumerate() {
-            removed[k + 1] = body
-                .sweep(&pair[0].pose, &pair[1].pose, tolerance)
-                .iter()
-                .map(|solid| self.remove(solid))
-                .sum();
+        let pairs: Vec<_> = toolpath.moves.windows(2).collect();
+        for (c, batch) in pairs.chunks(replay::BATCH).enumerate() {
+            let work: Vec<replay::MoveWork<cutter::SweptSolid>> = batch
+                .par_iter()
+                .map(|pair| replay::MoveWork {
+                    cut: body.sweep(&pair[0].pose, &pair[1].pose, tolerance),
+                    ..Default::default()
+                })
+                .collect();
+            let outcomes = replay::replay(self, None, &work, 0);
+            for (k, outcome) in outcomes.into_iter().enumerate() {
+                removed[c * replay::BATCH + k + 1] = outcome.removed_mm3;
+            }
         }
         removed
     }

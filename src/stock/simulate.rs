@@ -16,7 +16,10 @@
 //! rapids that removed material (through material at the rapid rate), and the share of cutting
 //! length that removed nothing (air cutting).
 
-use super::cutter::BallEndBody;
+use rayon::prelude::*;
+
+use super::cutter::{BallEndBody, SweptSolid};
+use super::replay::{BATCH, MoveWork, replay};
 use super::sweep::{Frustum, LineInterval};
 use super::{Stock, StockError};
 use crate::geom::{MoveKind, Point3, ToolPose, Toolpath, angle_between, slerp};
@@ -111,6 +114,18 @@ pub fn simulate(
     body: &BallEndBody,
     options: &SimulationOptions,
 ) -> Result<Simulation, StockError> {
+    simulate_with_progress(stock, part, toolpath, body, options, &|_| {})
+}
+
+/// [`simulate`], calling `progress` with the number of moves done after each batch.
+pub fn simulate_with_progress(
+    stock: &mut Stock,
+    part: &Mesh,
+    toolpath: &Toolpath,
+    body: &BallEndBody,
+    options: &SimulationOptions,
+    progress: &dyn Fn(usize),
+) -> Result<Simulation, StockError> {
     let tolerance = options.tolerance;
     if !(tolerance.is_finite() && tolerance >= 0.0 && tolerance < body.radius) {
         return Err(StockError::Blank(format!(
@@ -130,56 +145,88 @@ pub fn simulate(
     // Material only shrinks: what is outside this box now stays clear.
     let material = stock.material_bounds();
     let step = 0.5 * stock.spacing();
-    for (k, pair) in toolpath.moves.windows(2).enumerate() {
-        let (from, to) = (&pair[0].pose, &pair[1].pose);
-        let record = &mut moves[k + 1];
-        record.removed_mm3 = body
-            .sweep(from, to, split)
-            .iter()
-            .map(|solid| stock.remove(solid))
-            .sum();
-        let travel = (to.tip - from.tip).norm();
-        if travel > 0.0 {
-            record.removed_per_mm = record.removed_mm3 / travel;
-        }
-        let mut ends = Vec::new();
-        record.gouge_mm3 = eroded
-            .sweep(from, to, split)
-            .iter()
-            .map(|solid| part_model.remove_recording(solid, Some(&mut ends)))
-            .sum();
-        if record.gouge_mm3 > 0.0 {
-            let deepest = ends
-                .iter()
-                .filter_map(|p| surface.closest(p, f64::INFINITY))
-                .map(|c| c.distance)
-                .fold(0.0, f64::max);
-            record.gouge_depth_mm = deepest + tolerance;
-            gouge.count += 1;
-            gouge.volume_mm3 += record.gouge_mm3;
-            gouge.max_depth_mm = gouge.max_depth_mm.max(record.gouge_depth_mm);
-            gouge.first_move.get_or_insert(k + 1);
-        }
-        for body in &options.non_cutting {
-            if let Some(c) = body_touching(stock, &material, body, from, to, step, tolerance) {
-                collisions.push(Collision {
-                    move_index: k + 1,
-                    role: body.role,
-                    depth_mm: c.depth_mm,
-                    at: c.at,
-                });
+    let pairs: Vec<_> = toolpath.moves.windows(2).collect();
+    let mut done = 0;
+    for batch in pairs.chunks(BATCH) {
+        let work: Vec<MoveWork<SweptSolid>> = batch
+            .par_iter()
+            .map(|pair| {
+                let (from, to) = (&pair[0].pose, &pair[1].pose);
+                MoveWork {
+                    cut: body.sweep(from, to, split),
+                    gouge: eroded.sweep(from, to, split),
+                    guards: options
+                        .non_cutting
+                        .iter()
+                        .enumerate()
+                        .flat_map(|(index, body)| {
+                            guard_poses(&material, body, from, to, step)
+                                .into_iter()
+                                .map(move |f| (index, f))
+                        })
+                        .collect(),
+                }
+            })
+            .collect();
+        let outcomes = replay(stock, Some(&mut part_model), &work, options.non_cutting.len());
+        // The depth of each gouge: its removed ends measured against the part, in parallel.
+        let depths: Vec<f64> = outcomes
+            .par_iter()
+            .map(|o| {
+                if o.gouge_mm3 > 0.0 {
+                    o.gouge_ends
+                        .iter()
+                        .filter_map(|p| surface.closest(p, f64::INFINITY))
+                        .map(|c| c.distance)
+                        .fold(0.0, f64::max)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        for (b, (outcome, deepest)) in outcomes.into_iter().zip(depths).enumerate() {
+            let k = done + b;
+            let pair = batch[b];
+            let (from, to) = (&pair[0].pose, &pair[1].pose);
+            let record = &mut moves[k + 1];
+            record.removed_mm3 = outcome.removed_mm3;
+            let travel = (to.tip - from.tip).norm();
+            if travel > 0.0 {
+                record.removed_per_mm = record.removed_mm3 / travel;
             }
-        }
-        match pair[1].kind {
-            MoveKind::Rapid if record.removed_mm3 > 0.0 => rapids_through_material.push(k + 1),
-            MoveKind::Rapid => {}
-            _ => {
-                feed_length += travel;
-                if record.removed_mm3 == 0.0 {
-                    air_length += travel;
+            record.gouge_mm3 = outcome.gouge_mm3;
+            if record.gouge_mm3 > 0.0 {
+                record.gouge_depth_mm = deepest + tolerance;
+                gouge.count += 1;
+                gouge.volume_mm3 += record.gouge_mm3;
+                gouge.max_depth_mm = gouge.max_depth_mm.max(record.gouge_depth_mm);
+                gouge.first_move.get_or_insert(k + 1);
+            }
+            for (index, touch) in outcome.touches.into_iter().enumerate() {
+                if let Some(touch) = touch
+                    && touch.depth_mm > tolerance
+                {
+                    collisions.push(Collision {
+                        move_index: k + 1,
+                        role: options.non_cutting[index].role,
+                        depth_mm: touch.depth_mm,
+                        at: touch.at,
+                    });
+                }
+            }
+            match pair[1].kind {
+                MoveKind::Rapid if record.removed_mm3 > 0.0 => rapids_through_material.push(k + 1),
+                MoveKind::Rapid => {}
+                _ => {
+                    feed_length += travel;
+                    if record.removed_mm3 == 0.0 {
+                        air_length += travel;
+                    }
                 }
             }
         }
+        done += batch.len();
+        progress(done);
     }
     Ok(Simulation {
         removed_volume_mm3: moves.iter().map(|m| m.removed_mm3).sum(),
@@ -195,51 +242,32 @@ pub fn simulate(
     })
 }
 
-/// `body` moved from `from` to `to` against the material (after the move's own cut): at poses
-/// sampled so no point of the body moves more than `step` between them, the deepest material
-/// inside the body (radially or from its ends) if deeper than `threshold`.
-fn body_touching(
-    stock: &Stock,
+/// `body` moved from `from` to `to`, at poses sampled so no point of it moves more than `step`
+/// between them, leaving out the poses whose box misses the material's.
+fn guard_poses(
     material: &crate::geom::Aabb,
     body: &Body,
     from: &ToolPose,
     to: &ToolPose,
     step: f64,
-    threshold: f64,
-) -> Option<super::Touch> {
+) -> Vec<Frustum> {
     let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
     let travel = (to.tip - from.tip).norm() + angle_between(&k0, &k1) * body.to;
     let samples = ((travel / step).ceil() as usize).clamp(1, 100_000);
-    let mut deepest: Option<super::Touch> = None;
-    for s in 0..=samples {
-        let t = s as f64 / samples as f64;
-        let frustum = Frustum {
-            base: from.tip + t * (to.tip - from.tip),
-            axis: slerp(&k0, &k1, t),
-            from: body.from,
-            to: body.to,
-            radius_from: body.radius_from,
-            radius_to: body.radius_to,
-        };
-        if frustum.bounds().distance_squared_to_box(material) > 0.0 {
-            continue;
-        }
-        let depth = |p: &Point3| {
-            let d = p - frustum.base;
-            let h = d.dot(&frustum.axis);
-            let along = (h - body.from) / (body.to - body.from);
-            let radius = body.radius_from + along * (body.radius_to - body.radius_from);
-            let radial = radius - (d - h * frustum.axis).norm();
-            radial.min(h - body.from).min(body.to - h)
-        };
-        if let Some(touch) = stock.touching(&frustum, depth)
-            && touch.depth_mm > threshold
-            && deepest.is_none_or(|d| touch.depth_mm > d.depth_mm)
-        {
-            deepest = Some(touch);
-        }
-    }
-    deepest
+    (0..=samples)
+        .map(|s| {
+            let t = s as f64 / samples as f64;
+            Frustum {
+                base: from.tip + t * (to.tip - from.tip),
+                axis: slerp(&k0, &k1, t),
+                from: body.from,
+                to: body.to,
+                radius_from: body.radius_from,
+                radius_to: body.radius_to,
+            }
+        })
+        .filter(|f| f.bounds().distance_squared_to_box(material) <= 0.0)
+        .collect()
 }
 
 #[cfg(test)]

@@ -36,6 +36,21 @@ pub trait LineInterval: Sync {
         let b = self.bounds();
         Some((b.min[across], b.max[across]))
     }
+
+    /// A cheap interval along `axis` holding the solid's points on every line whose across
+    /// coordinates lie in the box from `lo` to `hi` (their `axis` coordinates ignored; one
+    /// line when they are equal), or `None` when no such line meets the solid. Removal skips
+    /// lines whose material lies outside it before the exact [`Self::line_interval`]. The
+    /// default is the solid's box.
+    fn range_over(&self, axis: usize, lo: &Point3, hi: &Point3) -> Option<(f64, f64)> {
+        let b = self.bounds();
+        for i in 0..3 {
+            if i != axis && (hi[i] < b.min[i] || lo[i] > b.max[i]) {
+                return None;
+            }
+        }
+        Some((b.min[axis], b.max[axis]))
+    }
 }
 
 /// Grows `acc` to hold `(t0, t1)`.
@@ -72,49 +87,188 @@ pub fn line_capsule(
     b: &Point3,
     radius: f64,
 ) -> Option<(f64, f64)> {
-    let mut hit = None;
-    merge(&mut hit, line_ball(axis, p, a, radius));
-    merge(&mut hit, line_ball(axis, p, b, radius));
     let ba = b - a;
     let baba = ba.norm_squared();
     if baba == 0.0 {
-        return hit;
+        return line_ball(axis, p, a, radius);
     }
     // Work on the line with its axis coordinate at 0: o = p with o[axis] = 0, u = e_axis.
     let mut o = *p;
     o[axis] = 0.0;
     let oa = o - a;
     let (bard, baoa, rdoa, oaoa) = (ba[axis], ba.dot(&oa), oa[axis], oa.norm_squared());
-    // The infinite cylinder around the segment: quadratic α t² + 2β t + γ ≤ 0.
+    // The infinite cylinder around the segment's line: α t² + 2β t + γ ≤ 0. Both end balls lie
+    // inside it, so a line that misses it misses the capsule.
     let alpha = baba - bard * bard;
     let beta = baba * rdoa - baoa * bard;
     let gamma = baba * oaoa - baoa * baoa - radius * radius * baba;
-    let body = if alpha <= 1e-12 * baba {
-        // The line runs along the segment: inside the cylinder everywhere or nowhere.
-        (gamma <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY))
-    } else {
-        let disc = beta * beta - alpha * gamma;
-        (disc >= 0.0).then(|| {
-            let s = disc.sqrt();
-            ((-beta - s) / alpha, (-beta + s) / alpha)
-        })
-    };
-    if let Some((t0, t1)) = body {
-        // Keep the part whose projection falls on the segment: 0 ≤ baoa + t·bard ≤ baba.
-        let (mut lo, mut hi) = (t0, t1);
-        if bard.abs() > 0.0 {
-            let (u0, u1) = ((0.0 - baoa) / bard, (baba - baoa) / bard);
-            let (u0, u1) = if u0 <= u1 { (u0, u1) } else { (u1, u0) };
-            lo = lo.max(u0);
-            hi = hi.min(u1);
-        } else if !(0.0..=baba).contains(&baoa) {
-            lo = f64::INFINITY;
+    if alpha <= 1e-12 * baba {
+        // The line runs along the segment: within r of its line everywhere or nowhere; then
+        // the capsule's chord runs from one end ball to the other.
+        if gamma > 0.0 {
+            return None;
         }
-        if lo <= hi {
-            merge(&mut hit, Some((lo, hi)));
-        }
+        let mut hit = None;
+        merge(&mut hit, line_ball(axis, p, a, radius));
+        merge(&mut hit, line_ball(axis, p, b, radius));
+        return hit;
+    }
+    let disc = beta * beta - alpha * gamma;
+    if disc < 0.0 {
+        return None;
+    }
+    let s = disc.sqrt();
+    let (t0, t1) = ((-beta - s) / alpha, (-beta + s) / alpha);
+    // Where the cylinder's chord leaves the slab between the end planes, the end ball there
+    // decides; where it does not, the balls add nothing beyond the chord (they lie inside the
+    // cylinder, and their points beyond the slab would be on this chord outside it).
+    // Projection onto the segment, as a fraction of it: (baoa + t·bard) / baba.
+    let fraction = |t: f64| (baoa + t * bard) / baba;
+    let (f0, f1) = (fraction(t0), fraction(t1));
+    let mut hit = None;
+    let (mut lo, mut hi) = (t0, t1);
+    if bard != 0.0 {
+        let (u0, u1) = ((0.0 - baoa) / bard, (baba - baoa) / bard);
+        let (u0, u1) = if u0 <= u1 { (u0, u1) } else { (u1, u0) };
+        lo = lo.max(u0);
+        hi = hi.min(u1);
+    } else if !(0.0..=baba).contains(&baoa) {
+        lo = f64::INFINITY;
+    }
+    if lo <= hi {
+        hit = Some((lo, hi));
+    }
+    if f0 < 0.0 || f1 < 0.0 {
+        merge(&mut hit, line_ball(axis, p, a, radius));
+    }
+    if f0 > 1.0 || f1 > 1.0 {
+        merge(&mut hit, line_ball(axis, p, b, radius));
     }
     hit
+}
+
+/// A capsule: the points within `radius` of the segment `a`→`b` (a ball's centre swept along
+/// a straight line).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Capsule {
+    pub a: Point3,
+    pub b: Point3,
+    pub radius: f64,
+}
+
+impl LineInterval for Capsule {
+    fn bounds(&self) -> Aabb {
+        Aabb::from_points(&[self.a, self.b]).inflated(self.radius)
+    }
+
+    fn row_range(&self, axis: usize, across: usize, p: &Point3) -> Option<(f64, f64)> {
+        let flat = |q: &Point3| {
+            let mut q = *q;
+            q[axis] = 0.0;
+            q
+        };
+        let mut row = flat(p);
+        row[across] = 0.0;
+        line_capsule(across, &row, &flat(&self.a), &flat(&self.b), self.radius)
+    }
+
+    fn line_interval(&self, axis: usize, p: &Point3) -> Option<(f64, f64)> {
+        line_capsule(axis, p, &self.a, &self.b, self.radius)
+    }
+
+    fn range_over(&self, axis: usize, lo: &Point3, hi: &Point3) -> Option<(f64, f64)> {
+        // Every segment point is within half its length of the middle, so across the lines it
+        // is at least d = (distance from the middle to the box) − half away from each of them,
+        // and the capsule reaches at most √(r² − d²) along a line from a segment point.
+        let middle = nalgebra::center(&self.a, &self.b);
+        let half = 0.5 * (self.b - self.a).norm();
+        let mut gap2 = 0.0;
+        for i in 0..3 {
+            if i != axis {
+                let outside = (lo[i] - middle[i]).max(middle[i] - hi[i]).max(0.0);
+                gap2 += outside * outside;
+            }
+        }
+        let gap = (gap2.sqrt() - half).max(0.0);
+        if gap > self.radius {
+            return None;
+        }
+        let reach = (self.radius * self.radius - gap * gap).sqrt();
+        Some((
+            self.a[axis].min(self.b[axis]) - reach,
+            self.a[axis].max(self.b[axis]) + reach,
+        ))
+    }
+}
+
+/// The part of a convex solid on one side of a plane: the points of `solid` with
+/// `normal·x ≥ offset`. Convex, so still one interval per line, and one a line can often be
+/// dismissed by without touching the solid (see [`crate::stock::cutter`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clipped<S> {
+    pub solid: S,
+    pub normal: Vector3,
+    pub offset: f64,
+}
+
+impl<S> Clipped<S> {
+    /// Narrows `[t_lo, t_hi]` to where lines through the box `lo`..`hi` (across `axis`) can be
+    /// on the plane's side: `normal·x ≥ offset` with `normal·x` at its largest over the box.
+    fn clip_over(
+        &self,
+        axis: usize,
+        lo: &Point3,
+        hi: &Point3,
+        t_lo: &mut f64,
+        t_hi: &mut f64,
+    ) -> bool {
+        let n = &self.normal;
+        let mut most = 0.0;
+        for i in 0..3 {
+            if i != axis {
+                most += (n[i] * lo[i]).max(n[i] * hi[i]);
+            }
+        }
+        // n[axis]·t ≥ offset − most.
+        let need = self.offset - most;
+        let slope = n[axis];
+        if slope.abs() < 1e-300 {
+            return need <= 0.0;
+        }
+        let t = need / slope;
+        if slope > 0.0 {
+            *t_lo = t_lo.max(t);
+        } else {
+            *t_hi = t_hi.min(t);
+        }
+        *t_lo <= *t_hi
+    }
+}
+
+impl<S: LineInterval> LineInterval for Clipped<S> {
+    fn bounds(&self) -> Aabb {
+        self.solid.bounds()
+    }
+
+    fn row_range(&self, axis: usize, across: usize, p: &Point3) -> Option<(f64, f64)> {
+        self.solid.row_range(axis, across, p)
+    }
+
+    fn range_over(&self, axis: usize, lo: &Point3, hi: &Point3) -> Option<(f64, f64)> {
+        let (mut t_lo, mut t_hi) = self.solid.range_over(axis, lo, hi)?;
+        self.clip_over(axis, lo, hi, &mut t_lo, &mut t_hi)
+            .then_some((t_lo, t_hi))
+    }
+
+    fn line_interval(&self, axis: usize, p: &Point3) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        if !self.clip_over(axis, p, p, &mut lo, &mut hi) {
+            return None;
+        }
+        let (t0, t1) = self.solid.line_interval(axis, p)?;
+        let (lo, hi) = (lo.max(t0), hi.min(t1));
+        (lo <= hi).then_some((lo, hi))
+    }
 }
 
 /// Clips the line `o + t·e_axis` (o with its axis coordinate 0) by the half-space
@@ -381,6 +535,19 @@ pub struct Frustum {
     pub to: f64,
     pub radius_from: f64,
     pub radius_to: f64,
+}
+
+impl Frustum {
+    /// How deep `p` is inside the frustum: its distance to the side (radially, at its height)
+    /// or to the nearer end, whichever is less; negative outside.
+    pub fn depth(&self, p: &Point3) -> f64 {
+        let d = p - self.base;
+        let h = d.dot(&self.axis);
+        let along = (h - self.from) / (self.to - self.from);
+        let radius = self.radius_from + along * (self.radius_to - self.radius_from);
+        let radial = radius - (d - h * self.axis).norm();
+        radial.min(h - self.from).min(self.to - h)
+    }
 }
 
 impl LineInterval for Frustum {
