@@ -122,6 +122,21 @@ fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
     assert_eq!(r["gouge"]["count"], 0);
     assert!(r["removed_volume_mm3"].as_f64().unwrap() > 10.0);
     assert_eq!(r["moves"], 4);
+    // The blank stands 2 mm over the part's top, untouched beside the pass: the rest there,
+    // within half the resolution.
+    let rest = r["rest"]["max_mm"].as_f64().unwrap();
+    assert!((rest - 2.0).abs() <= 0.1 + 1e-9, "{rest}");
+    // The pass ends with the tip at z = 10.5 under a top at 12: an axial depth of 1.5 mm, and
+    // a width of the ball's chord at the top, 2√(2² − 0.5²) mm (lines 0.2 mm apart).
+    let axial = r["depth_of_cut"]["axial_mm"]["max"].as_f64().unwrap();
+    let radial = r["depth_of_cut"]["radial_mm"]["max"].as_f64().unwrap();
+    assert!((axial - 1.5).abs() < 0.1, "{axial}");
+    assert!((radial - 2.0 * 3.75f64.sqrt()).abs() < 0.45, "{radial}");
+    // The pictures: a GLB and a PNG.
+    let glb = std::fs::read(dir.join("clean/stock.glb")).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    let png = std::fs::read(dir.join("clean/stock.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
 
     let o = run(&gouging, "gouge", &[]);
     assert_eq!(
@@ -140,10 +155,13 @@ fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
     // The same run again: the same bytes.
     let again = run(&gouging, "gouge-again", &[]);
     assert_eq!(again.status.code(), Some(3));
-    assert_eq!(
-        std::fs::read(dir.join("gouge/simulation.json")).unwrap(),
-        std::fs::read(dir.join("gouge-again/simulation.json")).unwrap()
-    );
+    for file in ["simulation.json", "stock.glb", "stock.png"] {
+        assert_eq!(
+            std::fs::read(dir.join("gouge").join(file)).unwrap(),
+            std::fs::read(dir.join("gouge-again").join(file)).unwrap(),
+            "{file}"
+        );
+    }
 
     // Bad input: a stock spec (usage, 2), a CL line (1, naming the line), a resolution whose
     // model would be too large (1, naming the flag that raises the limit).

@@ -300,14 +300,7 @@ impl Raster {
 
     /// The raster as an 8-bit RGB PNG (the `png` crate; deterministic for the same pixels).
     fn encode(&self) -> Result<Vec<u8>, png::EncodingError> {
-        let mut out = Vec::new();
-        let mut encoder = png::Encoder::new(&mut out, self.w as u32, self.h as u32);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header()?;
-        writer.write_image_data(&self.px)?;
-        writer.finish()?;
-        Ok(out)
+        super::render::encode_rgb(self.w, self.h, &self.px)
     }
 }
 

@@ -18,6 +18,7 @@ mod operation;
 mod output;
 mod pipeline;
 mod preview;
+mod render;
 mod report;
 mod samples;
 mod semi_finish;
@@ -55,7 +56,7 @@ pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};
 pub use simulate::{
-    BlankSpec, EngagementReport, GougeReport, SimulateOptions, SimulationReport, StockReport,
-    simulate_program, write_simulation,
+    BlankSpec, DepthOfCutReport, EngagementReport, GougeReport, SimulateOptions, SimulationReport,
+    SimulationRun, Spread, StockReport, simulate_program, write_simulation,
 };
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

@@ -78,7 +78,7 @@ impl OutputKind {
     };
     pub const SIMULATE: OutputKind = OutputKind {
         command: "simulate",
-        owns: |n| n == "simulation.json",
+        owns: |n| matches!(n, "simulation.json" | "stock.glb" | "stock.png"),
     };
     pub const TOOLS: OutputKind = OutputKind {
         command: "tools",

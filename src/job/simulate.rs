@@ -1,11 +1,12 @@
-//! `simulate`: a program's CL data run on a blank, checked against the part (issue 19, first
-//! part): the blank as a tri-dexel stock, each move's ball-end body removing material, the part
-//! as a second model only a gouge may cut (`stock::simulate`). Writes `simulation.json`.
+//! `simulate`: a program's CL data run on a blank, checked against the part (issue 19): the
+//! blank as a tri-dexel stock, each move's ball-end body removing material, the part as a
+//! second model only a gouge may cut, shank and holder against the material
+//! (`stock::simulate`). Writes `simulation.json` (with the rest material over the part and the
+//! depths of cut), `stock.glb` (the stock left, coloured by its distance to the part) and
+//! `stock.png` (the same from two sides, with its legend).
 //!
-//! Not yet: posted G-code read back through the machine's forward kinematics, shank and holder
-//! against material (collisions), the rest material over the part surface, flat, bull-nose and
-//! tapered cutters, the stock's surface mesh and picture. The report names only what was
-//! checked.
+//! Not yet: posted G-code read back through the machine's forward kinematics; flat, bull-nose
+//! and tapered cutters. The report names only what was checked.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -13,13 +14,16 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::output::{OutputKind, write_output_set};
+use super::pipeline::Observer;
+use super::render;
 use crate::error::{Error, JobError, Result};
 use crate::geom::{Aabb, MoveKind, Point3, Vector3};
 use crate::mesh::io::RawMesh;
 use crate::mesh::{Mesh, PrepareOptions, prepare};
 use crate::post::read_cl_csv;
 use crate::stock::cutter::BallEndBody;
-use crate::stock::simulate::{SimulationOptions, simulate};
+use crate::stock::rest::{Rest, rest_over};
+use crate::stock::simulate::{SimulationOptions, simulate_with_progress};
 use crate::stock::{DEFAULT_MAX_DEXELS, Stock, StockError};
 
 /// The blank a simulation starts from.
@@ -121,6 +125,41 @@ pub struct EngagementReport {
     pub mean: f64,
 }
 
+/// A distribution over the cutting moves that removed material.
+#[derive(Clone, Debug, Serialize)]
+pub struct Spread {
+    pub max: f64,
+    pub p99: f64,
+    pub mean: f64,
+}
+
+impl Spread {
+    fn of(mut values: Vec<f64>) -> Spread {
+        values.sort_by(f64::total_cmp);
+        let n = values.len();
+        Spread {
+            max: values.last().copied().unwrap_or(0.0),
+            p99: values
+                .get(((n as f64 * 0.99) as usize).min(n.saturating_sub(1)))
+                .copied()
+                .unwrap_or(0.0),
+            mean: if n == 0 {
+                0.0
+            } else {
+                values.iter().sum::<f64>() / n as f64
+            },
+        }
+    }
+}
+
+/// Depths of cut in `simulation.json`: the extent of the stock each move removed along the
+/// tool axis (axial) and across the feed and the axis (radial), mm.
+#[derive(Clone, Debug, Serialize)]
+pub struct DepthOfCutReport {
+    pub axial_mm: Spread,
+    pub radial_mm: Spread,
+}
+
 /// The stock in `simulation.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct StockReport {
@@ -151,7 +190,13 @@ pub struct SimulationReport {
     pub collision_count: Option<usize>,
     pub air_cut_fraction: f64,
     pub engagement: EngagementReport,
+    pub depth_of_cut: DepthOfCutReport,
+    /// Material left over the part's surface (area-weighted over its triangles, good to
+    /// about half the resolution).
+    pub rest: Rest,
     pub stock: StockReport,
+    /// What the colours of `stock.glb` and `stock.png` mean.
+    pub colours: Vec<String>,
     /// What this simulation checks, so a missing check is not read as a pass.
     pub checked: Vec<&'static str>,
     pub warnings: Vec<String>,
@@ -164,6 +209,115 @@ pub struct SimulationReport {
 pub struct Timings {
     pub blank: f64,
     pub simulate: f64,
+    pub rest: f64,
+    pub pictures: f64,
+}
+
+/// A finished simulation: the report, the stock left and the part it was checked against.
+#[derive(Clone, Debug)]
+pub struct SimulationRun {
+    pub report: SimulationReport,
+    pub stock: Stock,
+    pub part: Mesh,
+    /// `stock.glb` and `stock.png`.
+    pub pictures: Files,
+}
+
+/// The colours of the stock's surface by its signed distance `d` to the part (mm, negative
+/// inside): red deeper than `band` into the part (a gouge), green within `band`, blue above,
+/// light at `band` to dark at `deep` and beyond.
+fn distance_colour(d: f64, band: f64, deep: f64) -> [f32; 4] {
+    if d < -band {
+        [0.85, 0.1, 0.1, 1.0]
+    } else if d <= band {
+        [0.15, 0.75, 0.2, 1.0]
+    } else {
+        let f = ((d - band) / (deep - band).max(1e-9)).clamp(0.0, 1.0) as f32;
+        [0.55 - 0.45 * f, 0.75 - 0.55 * f, 1.0 - 0.3 * f, 1.0]
+    }
+}
+
+/// The voxel budget of the pictures' stock mesh: about 4 M lattice points (a few hundred
+/// thousand triangles on an impeller).
+const PICTURE_VOXELS: usize = 4_000_000;
+
+/// Output files by name, with their bytes.
+type Files = Vec<(String, Vec<u8>)>;
+
+/// `stock.glb` and `stock.png`, and the legend of their colours.
+fn pictures(
+    stock: &Stock,
+    part: &Mesh,
+    tolerance: f64,
+) -> Result<(Files, Vec<String>)> {
+    use rayon::prelude::*;
+    let (surface, voxel) = stock.surface_mesh(PICTURE_VOXELS);
+    let distance = crate::mesh::distance::SurfaceDistance::new(part);
+    // Surface nets places a vertex within about half a lattice step of the model's surface.
+    let band = tolerance.max(0.5 * voxel);
+    let deep = 2.0_f64.max(4.0 * band);
+    let colours: Vec<[f32; 4]> = surface
+        .positions
+        .par_iter()
+        .map(|p| {
+            let d = distance
+                .signed_distance(p)
+                .map_or(f64::INFINITY, |(d, _)| d);
+            distance_colour(d, band, deep)
+        })
+        .collect();
+    let legend = vec![
+        format!("red: more than {band:.3} mm inside the part (a gouge, as far as the mesh shows)"),
+        format!(
+            "green: within {band:.3} mm of the part (the tolerance or half the mesh's {voxel:.3} mm lattice, the larger)"
+        ),
+        format!("light to dark blue: material left, {band:.3} mm to {deep:.3} mm and more"),
+    ];
+    let mut glb = crate::mesh::io::GlbBuilder::new();
+    glb.add_triangles("stock", &surface, [1.0, 1.0, 1.0, 1.0], Some(&colours))
+        .map_err(|error| Error::Glb {
+            file: "stock.glb".into(),
+            error,
+        })?;
+    let panel = 600;
+    let mut canvas = render::Canvas::new(2 * panel, panel + 40);
+    for (k, (eye, up)) in render::VIEWS.iter().enumerate() {
+        let view = render::View {
+            towards_eye: Vector3::from(*eye),
+            up: Vector3::from(*up),
+        };
+        render::draw_mesh(
+            &mut canvas,
+            (k * panel, 0, panel),
+            &surface,
+            &colours,
+            &view,
+        );
+    }
+    render::legend(
+        &mut canvas,
+        10,
+        panel + 12,
+        &[
+            (
+                distance_colour(-2.0 * band, band, deep),
+                format!("<-{band:.2}mm"),
+            ),
+            (distance_colour(0.0, band, deep), format!("+-{band:.2}mm")),
+            (
+                distance_colour(band * 1.0001, band, deep),
+                format!(">{band:.2}mm"),
+            ),
+            (distance_colour(deep, band, deep), format!(">{deep:.2}mm")),
+        ],
+    );
+    let png = canvas
+        .png()
+        .map_err(|e| Error::Internal(format!("stock.png: {e}")))?;
+    Ok((
+        vec![("stock.glb".into(), glb.build()), ("stock.png".into(), png)],
+        legend,
+    ))
 }
 
 fn stock_error(e: StockError) -> Error {
@@ -253,7 +407,8 @@ pub fn simulate_program(
     cl_text: &str,
     cl_name: &str,
     options: &SimulateOptions,
-) -> Result<SimulationReport> {
+    observer: &dyn Observer,
+) -> Result<SimulationRun> {
     let (d, flutes) = match &options.assembly {
         Some(tool) => match tool.cutter {
             crate::tool::Cutter::Ball {
@@ -341,7 +496,9 @@ pub fn simulate_program(
     let volume_before = stock.volume();
     let body = BallEndBody::new(d, flutes);
     let t = Instant::now();
-    let sim = simulate(
+    observer.stage("simulate", toolpath.moves.len() as u64);
+    let reported = std::sync::atomic::AtomicUsize::new(0);
+    let sim = simulate_with_progress(
         &mut stock,
         &part,
         &toolpath,
@@ -351,9 +508,36 @@ pub fn simulate_program(
             max_dexels: options.max_dexels,
             non_cutting: non_cutting.clone(),
         },
+        &|done| {
+            let before = reported.swap(done, std::sync::atomic::Ordering::Relaxed);
+            for _ in before..done {
+                observer.advance();
+            }
+        },
     )
     .map_err(stock_error)?;
     let simulate_ms = elapsed_ms(t);
+    observer.stage("rest material", 0);
+    let t = Instant::now();
+    // Walk out as far as the stock can reach: its box's diagonal.
+    let rest = rest_over(&stock, &part, stock.bounds().diagonal());
+    let rest_ms = elapsed_ms(t);
+    observer.stage("stock pictures", 0);
+    let t = Instant::now();
+    let (pictures, colours) = pictures(&stock, &part, options.tolerance)?;
+    let pictures_ms = elapsed_ms(t);
+    observer.finish();
+    let cutting = || {
+        sim.moves
+            .iter()
+            .zip(&toolpath.moves)
+            .filter(|(r, m)| m.kind != MoveKind::Rapid && r.removed_mm3 > 0.0)
+            .map(|(r, _)| r)
+    };
+    let depth_of_cut = DepthOfCutReport {
+        axial_mm: Spread::of(cutting().map(|r| r.axial_depth_mm).collect()),
+        radial_mm: Spread::of(cutting().map(|r| r.radial_width_mm).collect()),
+    };
     let mut engaged: Vec<f64> = sim
         .moves
         .iter()
@@ -374,7 +558,7 @@ pub fn simulate_program(
             engaged.iter().sum::<f64>() / engaged.len() as f64
         },
     };
-    Ok(SimulationReport {
+    let report = SimulationReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),
         part: file_name(Path::new(part_name)),
         program: file_name(Path::new(cl_name)),
@@ -407,6 +591,9 @@ pub fn simulate_program(
         }),
         air_cut_fraction: sim.air_cut_fraction,
         engagement,
+        depth_of_cut,
+        rest,
+        colours,
         stock: StockReport {
             blank: options.blank.describe(),
             resolution_mm: spacing,
@@ -423,28 +610,38 @@ pub fn simulate_program(
             if !non_cutting.is_empty() {
                 checked.push("shank, neck and holder against the material (collisions)");
             }
+            checked.push("rest material over the part's surface");
+            checked.push("depths of cut (axial and radial) of every cutting move");
             checked
         },
         warnings,
         timings_ms: options.timings.then_some(Timings {
             blank: blank_ms,
             simulate: simulate_ms,
+            rest: rest_ms,
+            pictures: pictures_ms,
         }),
+    };
+    Ok(SimulationRun {
+        report,
+        stock,
+        part,
+        pictures,
     })
 }
 
-/// Writes `simulation.json` into `dir` (replacing an earlier run's); then, if the program
-/// gouges or rapids through material, fails verification (exit 3) saying so.
-pub fn write_simulation(dir: &Path, report: &SimulationReport) -> Result<()> {
+/// Writes `simulation.json`, `stock.glb` and `stock.png` into `dir` (replacing an earlier
+/// run's, all or none); then, if the program gouges, rapids through material or touches it
+/// with a non-cutting body, fails verification (exit 3) saying so.
+pub fn write_simulation(dir: &Path, run: &SimulationRun) -> Result<()> {
+    let report = &run.report;
     let json = (serde_json::to_string_pretty(report)
         .map_err(|e| Error::Internal(format!("simulation.json: {e}")))?
         + "\n")
         .into_bytes();
-    write_output_set(
-        dir,
-        &OutputKind::SIMULATE,
-        &[("simulation.json".to_string(), json)],
-    )?;
+    let mut files = vec![("simulation.json".to_string(), json)];
+    files.extend(run.pictures.iter().cloned());
+    write_output_set(dir, &OutputKind::SIMULATE, &files)?;
     let collisions = report.collision_count.unwrap_or(0);
     if report.gouge.count > 0 || !report.rapids_through_material.is_empty() || collisions > 0 {
         let first_collision = report

@@ -106,17 +106,12 @@ impl BallEndBody {
         let (a1, b1) = self.segment_at(to);
         let steps_for_twist =
             (SphereSweptHull::twist(&a0, &b0, &a1, &b1) / (4.0 * tolerance)).ceil();
-        let steps = steps_for_bulge(reach)
-            .max(steps_for_twist)
-            .clamp(1.0, 1e5) as usize;
+        let steps = steps_for_bulge(reach).max(steps_for_twist).clamp(1.0, 1e5) as usize;
         let mut previous = self.segment_at(from);
         for s in 1..=steps {
             let (t0, t1) = ((s - 1) as f64 / steps as f64, s as f64 / steps as f64);
             let next = self.segment_at(&pose_at(t1));
-            let hull = SphereSweptHull::new(
-                &[previous.0, previous.1, next.0, next.1],
-                self.radius,
-            );
+            let hull = SphereSweptHull::new(&[previous.0, previous.1, next.0, next.1], self.radius);
             let middle = pose_at(0.5 * (t0 + t1));
             let (normal, offset) = self.flutes_plane(
                 &middle,

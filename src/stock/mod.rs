@@ -23,8 +23,10 @@
 
 pub mod cutter;
 pub mod replay;
+pub mod rest;
 pub mod simulate;
 pub mod spans;
+pub mod surface;
 pub mod sweep;
 
 mod mesh_blank;

@@ -46,6 +46,56 @@ pub struct MoveWork<S> {
     /// Bodies that must not touch the stock's material, with an index the caller groups them
     /// by (one body sampled at several poses shares its index).
     pub guards: Vec<(usize, Frustum)>,
+    /// The tool's frame at the move's end, to measure the depths of cut in: the tip, the
+    /// axis, and the side direction (across the feed and the axis).
+    pub frame: Option<CutFrame>,
+}
+
+/// Where depths of cut are measured from: a point and two unit directions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CutFrame {
+    pub tip: Point3,
+    pub axis: crate::geom::Vector3,
+    pub side: crate::geom::Vector3,
+}
+
+/// The extent of the material a move removed, in its [`CutFrame`]: along the axis (the axial
+/// depth of cut) and along the side direction (the radial width of cut), `(min, max)` each.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CutExtent {
+    pub axial: (f64, f64),
+    pub side: (f64, f64),
+}
+
+impl CutExtent {
+    fn grow(extent: &mut Option<CutExtent>, frame: &CutFrame, q: &Point3) {
+        let d = q - frame.tip;
+        let (h, s) = (d.dot(&frame.axis), d.dot(&frame.side));
+        let e = extent.get_or_insert(CutExtent {
+            axial: (h, h),
+            side: (s, s),
+        });
+        e.axial = (e.axial.0.min(h), e.axial.1.max(h));
+        e.side = (e.side.0.min(s), e.side.1.max(s));
+    }
+
+    fn merge(extent: &mut Option<CutExtent>, other: Option<CutExtent>) {
+        if let Some(o) = other {
+            let e = extent.get_or_insert(o);
+            e.axial = (e.axial.0.min(o.axial.0), e.axial.1.max(o.axial.1));
+            e.side = (e.side.0.min(o.side.0), e.side.1.max(o.side.1));
+        }
+    }
+
+    /// Axial depth of cut, mm.
+    pub fn axial_depth(&self) -> f64 {
+        self.axial.1 - self.axial.0
+    }
+
+    /// Radial width of cut, mm.
+    pub fn radial_width(&self) -> f64 {
+        self.side.1 - self.side.0
+    }
 }
 
 impl<S> Default for MoveWork<S> {
@@ -54,6 +104,7 @@ impl<S> Default for MoveWork<S> {
             cut: Vec::new(),
             gouge: Vec::new(),
             guards: Vec::new(),
+            frame: None,
         }
     }
 }
@@ -69,6 +120,9 @@ pub struct MoveOutcome {
     pub gouge_ends: Vec<Point3>,
     /// The deepest touch of each guard index, by index (`guard_count` entries).
     pub touches: Vec<Option<Touch>>,
+    /// The extent of the stock removed, in the move's frame (when it has one and removed
+    /// anything).
+    pub extent: Option<CutExtent>,
 }
 
 /// The extent of material along the lines of each tile of a grid, `(min, max)` (`min > max`
@@ -88,7 +142,8 @@ impl Tiles {
                 let (ti, tj) = (t % across, t / across);
                 let mut extent = (f64::INFINITY, f64::NEG_INFINITY);
                 for j in tj * TILE..((tj + 1) * TILE).min(n1) {
-                    for line in &grid.lines[j * n0 + ti * TILE..j * n0 + ((ti + 1) * TILE).min(n0)] {
+                    for line in &grid.lines[j * n0 + ti * TILE..j * n0 + ((ti + 1) * TILE).min(n0)]
+                    {
                         if let (Some(first), Some(last)) = (line.first(), line.last()) {
                             extent.0 = extent.0.min(first.start);
                             extent.1 = extent.1.max(last.end);
@@ -188,7 +243,7 @@ impl<'a> Rows<'a> {
 
     /// Removes `solid` from these rows; the length of material removed. With `ends`, the
     /// ends of every removed piece are pushed onto it.
-    fn remove(&mut self, solid: &dyn LineInterval, mut ends: Option<&mut Vec<Point3>>) -> f64 {
+    fn remove(&mut self, solid: &dyn LineInterval, ends: &mut dyn FnMut(Point3)) -> f64 {
         let b = solid.bounds();
         let (axis, across) = (self.axis, self.across);
         let is = self.index_range(0, b.min[across[0]], b.max[across[0]]);
@@ -229,12 +284,10 @@ impl<'a> Rows<'a> {
                     }
                     if let Some((t0, t1)) = solid.line_interval(axis, &p) {
                         length += spans::subtract_recording(line, t0, t1, MIN_SPAN, &mut |a, b| {
-                            if let Some(ends) = ends.as_deref_mut() {
-                                for t in [a, b] {
-                                    let mut q = p;
-                                    q[axis] = t;
-                                    ends.push(q);
-                                }
+                            for t in [a, b] {
+                                let mut q = p;
+                                q[axis] = t;
+                                ends(q);
                             }
                         });
                     }
@@ -246,7 +299,12 @@ impl<'a> Rows<'a> {
 
     /// Whether `solid` may meet material on the lines `columns` of row `j` (all in one tile):
     /// the solid's extent over them against the tile's material.
-    fn may_meet(&self, solid: &dyn LineInterval, j: usize, columns: &std::ops::Range<usize>) -> bool {
+    fn may_meet(
+        &self,
+        solid: &dyn LineInterval,
+        j: usize,
+        columns: &std::ops::Range<usize>,
+    ) -> bool {
         let (lo, hi) = self.tiles.extents[columns.start / TILE + self.tiles.across * (j / TILE)];
         if lo > hi {
             return false;
@@ -284,7 +342,14 @@ impl<'a> Rows<'a> {
     }
 
     /// [`Self::touching`] on line `(i, j)`, the `m`-th row here.
-    fn touch_line(&self, frustum: &Frustum, i: usize, j: usize, m: usize, best: &mut Option<Touch>) {
+    fn touch_line(
+        &self,
+        frustum: &Frustum,
+        i: usize,
+        j: usize,
+        m: usize,
+        best: &mut Option<Touch>,
+    ) {
         let b = frustum.bounds();
         let axis = self.axis;
         {
@@ -323,13 +388,14 @@ struct Share {
     gouge: f64,
     gouge_ends: Vec<Point3>,
     touches: Vec<Option<Touch>>,
+    extent: Option<CutExtent>,
 }
 
 /// Applies `work` in order to `stock` (and the gouge solids to `part`, when given); one
 /// outcome per move. Guard indices must be below `guard_count`.
 pub fn replay<S: LineInterval>(
     stock: &mut Stock,
-    mut part: Option<&mut Stock>,
+    part: Option<&mut Stock>,
     work: &[MoveWork<S>],
     guard_count: usize,
 ) -> Vec<MoveOutcome> {
@@ -338,7 +404,7 @@ pub fn replay<S: LineInterval>(
     let stock_tiles = stock.grids.each_ref().map(Tiles::of);
     let part_tiles = part.as_ref().map(|p| p.grids.each_ref().map(Tiles::of));
     let stock_stripes = Rows::deal(&mut stock.grids, &stock_tiles);
-    let part_stripes: Vec<Option<[Rows<'_>; 3]>> = match (part.as_deref_mut(), &part_tiles) {
+    let part_stripes: Vec<Option<[Rows<'_>; 3]>> = match (part, &part_tiles) {
         (Some(part), Some(tiles)) => Rows::deal(&mut part.grids, tiles)
             .into_iter()
             .map(Some)
@@ -355,15 +421,22 @@ pub fn replay<S: LineInterval>(
                         touches: vec![None; guard_count],
                         ..Share::default()
                     };
+                    let mut extent = None;
                     for solid in &w.cut {
                         for rows in stock_rows.iter_mut() {
-                            share.removed += rows.remove(solid, None);
+                            share.removed += rows.remove(solid, &mut |q| {
+                                if let Some(frame) = &w.frame {
+                                    CutExtent::grow(&mut extent, frame, &q);
+                                }
+                            });
                         }
                     }
+                    share.extent = extent;
                     if let Some(part_rows) = part_rows.as_mut() {
+                        let ends = &mut share.gouge_ends;
                         for solid in &w.gouge {
                             for rows in part_rows.iter_mut() {
-                                share.gouge += rows.remove(solid, Some(&mut share.gouge_ends));
+                                share.gouge += rows.remove(solid, &mut |q| ends.push(q));
                             }
                         }
                     }
@@ -394,6 +467,7 @@ pub fn replay<S: LineInterval>(
             outcome.removed_mm3 += share.removed;
             outcome.gouge_mm3 += share.gouge;
             outcome.gouge_ends.extend(share.gouge_ends);
+            CutExtent::merge(&mut outcome.extent, share.extent);
             for (slot, touch) in outcome.touches.iter_mut().zip(share.touches) {
                 if let Some(touch) = touch
                     && slot.is_none_or(|t| touch.depth_mm > t.depth_mm)
@@ -454,6 +528,7 @@ mod tests {
                     cut: body.sweep(&from, &to, 0.01),
                     gouge: body.eroded(0.5).sweep(&from, &to, 0.01),
                     guards: vec![(0, shank(&from)), (1, shank(&to))],
+                    frame: None,
                 }
             })
             .collect()
@@ -478,18 +553,28 @@ mod tests {
             assert!((removed - outcome.removed_mm3).abs() <= 1e-9 * removed.max(1.0));
             assert!((gouge - outcome.gouge_mm3).abs() <= 1e-9 * gouge.max(1.0));
             let sort = |v: &mut Vec<Point3>| {
-                v.sort_by(|a, b| a.coords.as_slice().partial_cmp(b.coords.as_slice()).unwrap())
+                v.sort_by(|a, b| {
+                    a.coords
+                        .as_slice()
+                        .partial_cmp(b.coords.as_slice())
+                        .unwrap()
+                })
             };
             let mut got = outcome.gouge_ends.clone();
             sort(&mut ends);
             sort(&mut got);
             assert_eq!(ends, got);
             for (index, frustum) in &w.guards {
-                let depth = one_stock.touching(frustum, |p| frustum.depth(p)).map(|t| t.depth_mm);
+                let depth = one_stock
+                    .touching(frustum, |p| frustum.depth(p))
+                    .map(|t| t.depth_mm);
                 assert_eq!(depth, outcome.touches[*index].map(|t| t.depth_mm));
             }
         }
-        assert!(outcomes.iter().any(|o| o.touches[1].is_some()), "the shank meets material");
+        assert!(
+            outcomes.iter().any(|o| o.touches[1].is_some()),
+            "the shank meets material"
+        );
         assert!(outcomes.iter().any(|o| o.gouge_mm3 > 0.0));
         assert_eq!(stock, one_stock);
         assert_eq!(part, one_part);

@@ -19,7 +19,7 @@
 use rayon::prelude::*;
 
 use super::cutter::{BallEndBody, SweptSolid};
-use super::replay::{BATCH, MoveWork, replay};
+use super::replay::{BATCH, CutFrame, MoveWork, replay};
 use super::sweep::{Frustum, LineInterval};
 use super::{Stock, StockError};
 use crate::geom::{MoveKind, Point3, ToolPose, Toolpath, angle_between, slerp};
@@ -61,6 +61,12 @@ pub struct MoveRecord {
     pub gouge_mm3: f64,
     /// Deepest the move went into the part, mm (0 without a gouge; see the module docs).
     pub gouge_depth_mm: f64,
+    /// Axial depth of cut: the extent along the tool axis (at the move's end) of the stock
+    /// the move removed, mm (0 when it removed nothing or did not travel across the axis).
+    pub axial_depth_mm: f64,
+    /// Radial width of cut: the extent of the removed stock across the feed direction and the
+    /// axis, mm (likewise).
+    pub radial_width_mm: f64,
 }
 
 /// The gouges of a program.
@@ -165,10 +171,16 @@ pub fn simulate_with_progress(
                                 .map(move |f| (index, f))
                         })
                         .collect(),
+                    frame: cut_frame(from, to),
                 }
             })
             .collect();
-        let outcomes = replay(stock, Some(&mut part_model), &work, options.non_cutting.len());
+        let outcomes = replay(
+            stock,
+            Some(&mut part_model),
+            &work,
+            options.non_cutting.len(),
+        );
         // The depth of each gouge: its removed ends measured against the part, in parallel.
         let depths: Vec<f64> = outcomes
             .par_iter()
@@ -195,6 +207,10 @@ pub fn simulate_with_progress(
                 record.removed_per_mm = record.removed_mm3 / travel;
             }
             record.gouge_mm3 = outcome.gouge_mm3;
+            if let Some(extent) = outcome.extent {
+                record.axial_depth_mm = extent.axial_depth();
+                record.radial_width_mm = extent.radial_width();
+            }
             if record.gouge_mm3 > 0.0 {
                 record.gouge_depth_mm = deepest + tolerance;
                 gouge.count += 1;
@@ -239,6 +255,20 @@ pub fn simulate_with_progress(
         } else {
             0.0
         },
+    })
+}
+
+/// The frame a move's depths of cut are measured in: at its end, the axis and the direction
+/// across the feed and the axis; `None` for a move along its axis (a plunge or retract) or one
+/// that does not travel.
+fn cut_frame(from: &ToolPose, to: &ToolPose) -> Option<CutFrame> {
+    let axis = to.axis.into_inner();
+    let side = axis.cross(&(to.tip - from.tip));
+    let norm = side.norm();
+    (norm > 1e-9 * (to.tip - from.tip).norm().max(1e-9)).then(|| CutFrame {
+        tip: to.tip,
+        axis,
+        side: side / norm,
     })
 }
 

@@ -97,8 +97,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     options.max_dexels = args.max_dexels;
     options.units = args.units.clone();
     options.timings = !args.no_timings;
-    let report = job::simulate_program(&raw, &name, &cl_text, &cl_name, &options)
+    let bars = super::super::progress::Bars::new();
+    let run = job::simulate_program(&raw, &name, &cl_text, &cl_name, &options, &bars)
         .map_err(|e| name_flags(e, FLAGS))?;
+    let report = &run.report;
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
@@ -111,6 +113,17 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         report.rapids_through_material.len(),
         100.0 * report.air_cut_fraction
     );
-    say!("-> {}", args.out.join("simulation.json").display());
-    job::write_simulation(&args.out, &report)
+    say!(
+        "rest over the part: max {:.3} mm, mean {:.3} mm, p99 {:.3} mm; depth of cut: axial max {:.3} mm, radial max {:.3} mm",
+        report.rest.max_mm,
+        report.rest.mean_mm,
+        report.rest.p99_mm,
+        report.depth_of_cut.axial_mm.max,
+        report.depth_of_cut.radial_mm.max
+    );
+    say!(
+        "-> {} (+ stock.glb, stock.png)",
+        args.out.join("simulation.json").display()
+    );
+    job::write_simulation(&args.out, &run)
 }
