@@ -245,3 +245,116 @@ fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
     assert_eq!(r["gouge"]["first_move"], 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The same program as CL data and posted for a table-table A/C machine (the real post, then
+/// read back through `verify`'s own forward kinematics) leaves the same stock: the removed
+/// volumes and the rest agree within the tolerance's share, neither gouges.
+#[test]
+fn a_posted_program_and_its_cl_data_give_the_same_stock() {
+    use nalgebra::Unit;
+    use wavemill::geom::{Move, MoveKind, Point3, ToolPose, Toolpath, Vector3};
+    use wavemill::post::{self, GcodeOptions, LineariseOptions, ProgramHeader, TableTableAC};
+    let dir = std::env::temp_dir().join(format!("wavemill-posted-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let part = box_obj(&dir);
+    // Passes over the top with the axis leaning and turning: the rotary axes move along them.
+    let mut moves = vec![Move {
+        pose: ToolPose {
+            tip: Point3::new(2.0, 2.0, 40.0),
+            axis: Unit::new_normalize(Vector3::z()),
+        },
+        kind: MoveKind::Rapid,
+        feed: 15000.0,
+    }];
+    for row in 0..4 {
+        let y = 3.0 + 4.0 * row as f64;
+        for k in 0..=16 {
+            let x = if row % 2 == 0 {
+                2.0 + k as f64
+            } else {
+                18.0 - k as f64
+            };
+            let lean = 0.35 * (0.4 * x).sin();
+            let axis = Unit::new_normalize(Vector3::new(lean, 0.2 * lean, 1.0));
+            // The ball's bottom 0.02 mm over the top face, whatever the lean.
+            let centre = Point3::new(x, y, 12.02);
+            moves.push(Move {
+                pose: ToolPose {
+                    tip: centre - 2.0 * axis.into_inner(),
+                    axis,
+                },
+                kind: if k == 0 {
+                    MoveKind::Approach
+                } else {
+                    MoveKind::Cut
+                },
+                feed: 2000.0,
+            });
+        }
+    }
+    let toolpath = Toolpath { tool_id: 1, moves };
+    let machine = TableTableAC::new(Vector3::new(-10.0, -10.0, 0.0));
+    let gcode = post::post_gcode(
+        &machine,
+        &toolpath,
+        &ProgramHeader {
+            tool_number: 1,
+            ..ProgramHeader::default()
+        },
+        &LineariseOptions::default().with_tolerance_mm(0.002),
+        &GcodeOptions::default(),
+    )
+    .unwrap();
+    std::fs::write(dir.join("job.nc"), &gcode).unwrap();
+    std::fs::write(dir.join("cl.csv"), post::write_cl_csv(&toolpath)).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let run = |program: &str, out: &str| {
+        let o = wavemill(&[
+            "simulate",
+            &s(&part),
+            "--program",
+            &s(&dir.join(program)),
+            "--stock",
+            "box:0,0,0,20,20,11",
+            "--tool",
+            "ball:4",
+            "--resolution",
+            "0.2",
+            "--no-timings",
+            "--out",
+            &s(&dir.join(out)),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(out).join("simulation.json")).unwrap(),
+        )
+        .unwrap();
+        r
+    };
+    let (cl, nc) = (run("cl.csv", "from-cl"), run("job.nc", "from-nc"));
+    assert!(
+        nc["program_format"]
+            .as_str()
+            .unwrap()
+            .starts_with("posted g-code")
+    );
+    let volume = |r: &serde_json::Value| r["removed_volume_mm3"].as_f64().unwrap();
+    // The post's linearisation and rounding move the tip by a few µm over the ~100 mm² cut.
+    assert!(volume(&cl) > 50.0, "{}", volume(&cl));
+    assert!(
+        (volume(&cl) - volume(&nc)).abs() < 0.01 * volume(&cl),
+        "{} vs {}",
+        volume(&cl),
+        volume(&nc)
+    );
+    for r in [&cl, &nc] {
+        assert_eq!(r["gouge"]["count"], 0);
+    }
+    let rest = |r: &serde_json::Value| r["rest"]["mean_mm"].as_f64().unwrap();
+    assert!(
+        (rest(&cl) - rest(&nc)).abs() < 0.02,
+        "{} vs {}",
+        rest(&cl),
+        rest(&nc)
+    );
+}

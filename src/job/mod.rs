@@ -56,7 +56,7 @@ pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};
 pub use simulate::{
-    BlankSpec, DepthOfCutReport, EngagementReport, GougeReport, SimulateOptions, SimulationReport,
-    SimulationRun, Spread, StockReport, simulate_program, write_simulation,
+    BlankSpec, DepthOfCutReport, EngagementReport, GougeReport, ProgramFormat, SimulateOptions,
+    SimulationReport, SimulationRun, Spread, StockReport, simulate_program, write_simulation,
 };
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

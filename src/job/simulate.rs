@@ -56,6 +56,20 @@ impl BlankSpec {
     }
 }
 
+/// How the program text is read.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ProgramFormat {
+    /// CL data (`cl.csv`, as `plan` writes it): tip and axis in the part frame.
+    ClData,
+    /// Posted G-code for a table-table A/C machine, read back through its forward kinematics
+    /// (`verify`'s model, written apart from the post) with the part clamped at
+    /// `part_origin_in_table` (`None`: where `plan` puts it by default, the part's box centre
+    /// in X and Y and its bottom on the table).
+    TableTableAc {
+        part_origin_in_table: Option<[f64; 3]>,
+    },
+}
+
 /// Options of [`simulate_program`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulateOptions {
@@ -79,6 +93,8 @@ pub struct SimulateOptions {
     pub units: String,
     /// Keep the run-dependent timings in the report.
     pub timings: bool,
+    /// How the program is read.
+    pub format: ProgramFormat,
 }
 
 impl SimulateOptions {
@@ -94,6 +110,7 @@ impl SimulateOptions {
             max_dexels: DEFAULT_MAX_DEXELS,
             units: "mm".into(),
             timings: true,
+            format: ProgramFormat::ClData,
         }
     }
 }
@@ -176,6 +193,8 @@ pub struct SimulationReport {
     pub wavemill_version: &'static str,
     pub part: String,
     pub program: String,
+    /// How the program was read.
+    pub program_format: String,
     pub tool: String,
     pub tolerance_mm: f64,
     pub moves: usize,
@@ -245,11 +264,7 @@ const PICTURE_VOXELS: usize = 4_000_000;
 type Files = Vec<(String, Vec<u8>)>;
 
 /// `stock.glb` and `stock.png`, and the legend of their colours.
-fn pictures(
-    stock: &Stock,
-    part: &Mesh,
-    tolerance: f64,
-) -> Result<(Files, Vec<String>)> {
+fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<String>)> {
     use rayon::prelude::*;
     let (surface, voxel) = stock.surface_mesh(PICTURE_VOXELS);
     let distance = crate::mesh::distance::SurfaceDistance::new(part);
@@ -400,7 +415,8 @@ fn blank(part: &Mesh, options: &SimulateOptions, spacing: f64) -> Result<Stock> 
     }
 }
 
-/// Runs the CL data in `cl_text` (named `cl_name`) on the blank, against the part.
+/// Runs the program `cl_text` (named `cl_name`; CL data or posted G-code, as
+/// `options.format` says) on the blank, against the part.
 pub fn simulate_program(
     raw: &RawMesh,
     part_name: &str,
@@ -457,12 +473,49 @@ pub fn simulate_program(
             ),
         }));
     }
-    let toolpath = read_cl_csv(cl_text, cl_name).map_err(|e| Error::DataFile {
-        file: e.file,
-        line: e.line,
-        reason: e.reason,
-    })?;
     let part = closed_part(raw, part_name)?;
+    let (toolpath, lines, format) = match &options.format {
+        ProgramFormat::ClData => (
+            read_cl_csv(cl_text, cl_name).map_err(|e| Error::DataFile {
+                file: e.file,
+                line: e.line,
+                reason: e.reason,
+            })?,
+            None,
+            "cl data; moves are numbered by their row from 0 (the header not counted)".to_string(),
+        ),
+        ProgramFormat::TableTableAc {
+            part_origin_in_table,
+        } => {
+            let b = part.aabb();
+            let origin = part_origin_in_table
+                .map(Vector3::from)
+                .unwrap_or_else(|| -Vector3::new(b.center().x, b.center().y, b.min.z))
+                .map(|v| v + 0.0);
+            let machine = crate::verify::MachineModel::TableTableAc {
+                part_origin_in_table: origin,
+            };
+            // Moves within a quarter of the tolerance of the control's interpolation.
+            let (toolpath, lines) = crate::verify::program_toolpath(
+                cl_text,
+                &machine,
+                0.25 * options.tolerance.max(1e-4),
+            )
+            .map_err(|e| Error::DataFile {
+                file: cl_name.to_string(),
+                line: e.line,
+                reason: e.reason,
+            })?;
+            (
+                toolpath,
+                Some(lines),
+                format!(
+                    "posted g-code, table-table A/C, part origin in table [{}, {}, {}] mm, read back through the machine's forward kinematics; moves are named by their program line",
+                    origin.x, origin.y, origin.z
+                ),
+            )
+        }
+    };
     let spacing = match options.resolution {
         Some(r) if r.is_finite() && r > 0.0 => r,
         Some(r) => {
@@ -520,7 +573,9 @@ pub fn simulate_program(
     observer.stage("rest material", 0);
     let t = Instant::now();
     // Walk out as far as the stock can reach: its box's diagonal.
-    let rest = rest_over(&stock, &part, stock.bounds().diagonal());
+    let part_model =
+        Stock::from_mesh(&part, stock.spacing(), options.max_dexels).map_err(stock_error)?;
+    let rest = rest_over(&stock, &part, &part_model, stock.bounds().diagonal());
     let rest_ms = elapsed_ms(t);
     observer.stage("stock pictures", 0);
     let t = Instant::now();
@@ -558,10 +613,19 @@ pub fn simulate_program(
             engaged.iter().sum::<f64>() / engaged.len() as f64
         },
     };
+    // Posted programs name a move by its line (a block may be several moves).
+    let label = |k: usize| lines.as_ref().map_or(k, |l| l[k]);
+    let mut rapids: Vec<usize> = sim
+        .rapids_through_material
+        .iter()
+        .map(|&k| label(k))
+        .collect();
+    rapids.dedup();
     let report = SimulationReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),
         part: file_name(Path::new(part_name)),
         program: file_name(Path::new(cl_name)),
+        program_format: format,
         tool: options.assembly.as_ref().map_or_else(
             || format!("ball:{d} (flutes {flutes} mm)"),
             |t| t.describe(),
@@ -573,16 +637,16 @@ pub fn simulate_program(
             count: sim.gouge.count,
             max_depth_mm: sim.gouge.max_depth_mm,
             volume_mm3: sim.gouge.volume_mm3,
-            first_move: sim.gouge.first_move,
+            first_move: sim.gouge.first_move.map(label),
         },
-        rapids_through_material: sim.rapids_through_material,
+        rapids_through_material: rapids,
         collision_count: (!non_cutting.is_empty()).then_some(sim.collisions.len()),
         collisions: (!non_cutting.is_empty()).then(|| {
             sim.collisions
                 .iter()
                 .take(1000)
                 .map(|c| CollisionReport {
-                    move_index: c.move_index,
+                    move_index: label(c.move_index),
                     body: c.role,
                     depth_mm: c.depth_mm,
                     at: [c.at.x, c.at.y, c.at.z],

@@ -1,10 +1,12 @@
 //! Rest material: how much stock a program left over the part's surface.
 //!
 //! From the centre of each triangle of the part, outwards along its normal, the stock is
-//! walked in quarter-spacing steps while it is material ([`Stock::is_material`]); the rest
-//! there is the last distance still in material. The walk starts half a spacing out, where a
-//! surface cut exactly to size has no material left in the model (the model knows a surface to
-//! within its spacing across the lines), so the figures are good to about half a spacing.
+//! walked in quarter-spacing steps while it is material ([`Stock::is_material`]) and not the
+//! part's (a dexel model of the part at the same spacing: at a concave corner the normal of one
+//! face runs into the part under the next, which is not rest); the rest there is the last
+//! distance still in material. The walk starts half a spacing out, where a surface cut exactly
+//! to size has no material left in the model (the model knows a surface to within its spacing
+//! across the lines), so the figures are good to about a spacing.
 //! Summaries are weighted by the triangles' areas, so a finely meshed corner does not count
 //! more than a broad face.
 
@@ -23,9 +25,9 @@ pub struct Rest {
     pub covered_fraction: f64,
 }
 
-/// The rest of `stock` over each triangle of `part` (walked up to `reach` mm), in triangle
-/// order.
-pub fn rest_per_triangle(stock: &Stock, part: &Mesh, reach: f64) -> Vec<f64> {
+/// The rest of `stock` over each triangle of `part` (walked up to `reach` mm, stopping where
+/// `part_model`, the part as dexels, is material), in triangle order.
+pub fn rest_per_triangle(stock: &Stock, part: &Mesh, part_model: &Stock, reach: f64) -> Vec<f64> {
     let spacing = stock.spacing();
     let (start, step) = (0.5 * spacing, 0.25 * spacing);
     (0..part.triangles.len())
@@ -39,7 +41,10 @@ pub fn rest_per_triangle(stock: &Stock, part: &Mesh, reach: f64) -> Vec<f64> {
             let centre = a + ((b - a) + (c - a)) / 3.0;
             let mut rest = 0.0;
             let mut d = start;
-            while d <= reach && stock.is_material(&(centre + d * n)) {
+            while d <= reach
+                && stock.is_material(&(centre + d * n))
+                && !part_model.is_material(&(centre + d * n))
+            {
                 rest = d;
                 d += step;
             }
@@ -49,8 +54,8 @@ pub fn rest_per_triangle(stock: &Stock, part: &Mesh, reach: f64) -> Vec<f64> {
 }
 
 /// Summarises [`rest_per_triangle`].
-pub fn rest_over(stock: &Stock, part: &Mesh, reach: f64) -> Rest {
-    let rest = rest_per_triangle(stock, part, reach);
+pub fn rest_over(stock: &Stock, part: &Mesh, part_model: &Stock, reach: f64) -> Rest {
+    let rest = rest_per_triangle(stock, part, part_model, reach);
     let mut weighted: Vec<(f64, f64)> = rest
         .iter()
         .enumerate()
@@ -94,7 +99,8 @@ mod tests {
     use crate::stock::DEFAULT_MAX_DEXELS;
 
     /// A 10 mm cube part in a block 1 mm larger on top and 0.4 mm larger on the sides: the
-    /// top carries 1 mm, the sides 0.4, the bottom none, each within half a spacing.
+    /// top carries 1 mm, the sides 0.4, the bottom none, each within a spacing. The same cube
+    /// as its own stock carries none: the walks into the part at its edges do not count.
     #[test]
     fn rest_over_a_cube_in_a_larger_block_is_the_margins() {
         let part = cuboid(10.0, 10.0, 10.0);
@@ -105,7 +111,8 @@ mod tests {
         ]);
         let spacing = 0.05;
         let stock = Stock::block(&blank, spacing, DEFAULT_MAX_DEXELS).unwrap();
-        let per = rest_per_triangle(&stock, &part, 5.0);
+        let model = Stock::from_mesh(&part, spacing, DEFAULT_MAX_DEXELS).unwrap();
+        let per = rest_per_triangle(&stock, &part, &model, 5.0);
         for (t, r) in per.iter().enumerate() {
             let n = part.face_normal(t);
             let expected = if n.z > 0.9 {
@@ -120,8 +127,8 @@ mod tests {
                 "{t}: {r} vs {expected}"
             );
         }
-        let rest = rest_over(&stock, &part, 5.0);
-        assert!((rest.max_mm - 1.0).abs() <= 0.5 * spacing + 1e-9);
+        let rest = rest_over(&stock, &part, &model, 5.0);
+        assert!((rest.max_mm - 1.0).abs() <= spacing + 1e-9);
         // Area shares: top 1/6, sides 4/6, bottom 1/6 bare.
         assert!((rest.covered_fraction - 5.0 / 6.0).abs() < 1e-9);
         let mean = (1.0 + 4.0 * 0.4) / 6.0;

@@ -15,7 +15,7 @@ mod posted;
 mod program;
 mod segment_distance;
 
-pub use posted::{MachineModel, PostedClearance, PostedOptions, check_posted};
+pub use posted::{MachineModel, PostedClearance, PostedOptions, check_posted, program_toolpath};
 pub use program::{MotionBlock, ProgramError, read_program};
 pub use segment_distance::SegmentDistance;
 

@@ -66,16 +66,96 @@ impl MachineModel {
         match self {
             MachineModel::TableTableAc {
                 part_origin_in_table,
-            } => {
+            } => Point3::from(self.rotate_into_part(u, a, c) - part_origin_in_table),
+        }
+    }
+
+    /// A machine-frame direction in the part frame at rotary angles `a`, `c` (radians).
+    fn rotate_into_part(&self, u: &Vector3, a: f64, c: f64) -> Vector3 {
+        match self {
+            MachineModel::TableTableAc { .. } => {
                 // R_x(a)ᵀ, then R_z(c)ᵀ: undo the cradle, then the table.
                 let (sa, ca) = a.sin_cos();
                 let w = Vector3::new(u.x, ca * u.y + sa * u.z, -sa * u.y + ca * u.z);
                 let (sc, cc) = c.sin_cos();
-                let v = Vector3::new(cc * w.x + sc * w.y, -sc * w.x + cc * w.y, w.z);
-                Point3::from(v - part_origin_in_table)
+                Vector3::new(cc * w.x + sc * w.y, -sc * w.x + cc * w.y, w.z)
             }
         }
     }
+
+    /// The tool's pose in the part frame at joints `[x, y, z, a°, c°]` (the tip at machine
+    /// X, Y, Z with length compensation on, the tool along machine +Z).
+    fn pose(&self, joints: &[f64; 5]) -> crate::geom::ToolPose {
+        let (a, c) = (joints[3].to_radians(), joints[4].to_radians());
+        let tip = self.centre_in_part(&Vector3::new(joints[0], joints[1], joints[2]), a, c);
+        let axis = self.rotate_into_part(&Vector3::z(), a, c);
+        crate::geom::ToolPose {
+            tip,
+            axis: nalgebra::Unit::new_normalize(axis),
+        }
+    }
+}
+
+/// A posted program read back as the part-frame toolpath the control drives: every motion
+/// block from the first fully known position, its joints interpolated linearly as the control
+/// does, cut into moves whose tips stay within `max_error` mm of their chords (the bound of
+/// the module docs, with the tip for the ball centre). G0 blocks become rapids, G1 blocks cuts
+/// (at feed 0: the feed is not read). Written apart from the post, like the rest of this
+/// module, so a simulation of it checks the post too.
+///
+/// Also the program line each move comes from.
+pub fn program_toolpath(
+    program: &str,
+    machine: &MachineModel,
+    max_error: f64,
+) -> Result<(crate::geom::Toolpath, Vec<usize>), ProgramError> {
+    use crate::geom::{Move, MoveKind, Toolpath};
+    let blocks = read_program(program, machine.axis_letters())?;
+    let joints = |b: &MotionBlock| -> Option<[f64; 5]> {
+        let [x, y, z, a, c] = b.axes;
+        Some([x?, y?, z?, a?, c?])
+    };
+    let mut moves = Vec::new();
+    let mut lines = Vec::new();
+    let mut previous: Option<[f64; 5]> = None;
+    for block in &blocks {
+        let Some(j1) = joints(block) else {
+            continue;
+        };
+        let kind = if block.rapid {
+            MoveKind::Rapid
+        } else {
+            MoveKind::Cut
+        };
+        let Some(j0) = previous else {
+            moves.push(Move {
+                pose: machine.pose(&j1),
+                kind: MoveKind::Rapid,
+                feed: 0.0,
+            });
+            lines.push(block.line);
+            previous = Some(j1);
+            continue;
+        };
+        let u0 = Vector3::new(j0[0], j0[1], j0[2]);
+        let u1 = Vector3::new(j1[0], j1[1], j1[2]);
+        let omega = (j1[3] - j0[3]).to_radians().abs() + (j1[4] - j0[4]).to_radians().abs();
+        let curvature = omega * omega * u0.norm().max(u1.norm()) + 2.0 * omega * (u1 - u0).norm();
+        let n =
+            ((curvature / (8.0 * max_error.max(1e-9))).sqrt().ceil() as usize).clamp(1, MAX_PIECES);
+        for k in 1..=n {
+            let t = k as f64 / n as f64;
+            let j: [f64; 5] = std::array::from_fn(|i| j0[i] + (j1[i] - j0[i]) * t);
+            moves.push(Move {
+                pose: machine.pose(&j),
+                kind,
+                feed: 0.0,
+            });
+            lines.push(block.line);
+        }
+        previous = Some(j1);
+    }
+    Ok((Toolpath { tool_id: 1, moves }, lines))
 }
 
 /// How the back-simulation measures.

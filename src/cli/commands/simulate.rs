@@ -1,4 +1,5 @@
-//! `wavemill simulate`: CL data run on a blank with a ball-end mill, checked against the part.
+//! `wavemill simulate`: a program (CL data or posted G-code) run on a blank with a ball-end
+//! mill, checked against the part.
 
 use std::path::PathBuf;
 
@@ -13,9 +14,12 @@ use crate::job::{self};
 pub struct SimulateArgs {
     /// Part mesh (.stl, .obj, .gltf, .glb), closed, in the frame of the program.
     pub part: PathBuf,
-    /// The program as CL data (`cl.csv`, as `plan` writes it: tip, axis, kind, feed, tool).
-    #[arg(long)]
-    pub cl: PathBuf,
+    /// The program: CL data (a `.csv`, as `plan` writes `cl.csv`: tip, axis, kind, feed,
+    /// tool) or posted G-code (any other name, as `plan` writes `job.nc`), read back through
+    /// the machine's forward kinematics: the job's `[machine]` with --job, else a table-table
+    /// A/C with the part where `plan` puts it by default.
+    #[arg(long, visible_alias = "cl")]
+    pub program: PathBuf,
     /// The blank: `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1` (about the vertical line through
     /// the part's box centre), `offset:M` (the part grown by M mm) or `mesh:FILE` (a closed
     /// mesh), in mm.
@@ -47,7 +51,7 @@ pub struct SimulateArgs {
     /// Leave the run-dependent timings out of simulation.json (byte-identical reports).
     #[arg(long)]
     pub no_timings: bool,
-    /// Output folder: simulation.json.
+    /// Output folder: simulation.json, stock.glb, stock.png.
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -64,6 +68,7 @@ const FLAGS: &[(&str, &str)] = &[
 /// Runs the command.
 pub fn run(args: &SimulateArgs) -> Result<()> {
     job::check_output_dir(&args.out, &job::OutputKind::SIMULATE)?;
+    let mut machine: Option<job::Job> = None;
     let (diameter, assembly) = match &args.job {
         Some(path) => {
             let mut job = job::Job::load(path)?;
@@ -75,7 +80,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             }
             job.validate()
                 .map_err(|e| name_flags(Error::from(e), &[("tool.", "--tool")]))?;
-            (job.tool.diameter, Some(job.tool.assembly()))
+            let found = (job.tool.diameter, Some(job.tool.assembly()));
+            machine = Some(job);
+            found
         }
         None => {
             let spec = args.tool.as_deref().unwrap_or_default();
@@ -84,8 +91,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     };
     let name = args.part.display().to_string();
     let raw = load(&args.part, &args.units)?;
-    let cl_name = args.cl.display().to_string();
-    let cl_text = std::fs::read_to_string(&args.cl).map_err(|source| Error::Io {
+    let cl_name = args.program.display().to_string();
+    let cl_text = std::fs::read_to_string(&args.program).map_err(|source| Error::Io {
         path: cl_name.clone(),
         source,
     })?;
@@ -97,6 +104,26 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     options.max_dexels = args.max_dexels;
     options.units = args.units.clone();
     options.timings = !args.no_timings;
+    let is_cl = args
+        .program
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    if !is_cl {
+        options.format = match &machine {
+            Some(job) if job.machine.kinematics != crate::post::KinematicsKind::TableTableAc => {
+                return Err(Error::Usage(format!(
+                    "{cl_name}: posted programs are read back for table-table A/C machines; the job's machine is {:?}",
+                    job.machine.kinematics
+                )));
+            }
+            Some(job) => job::ProgramFormat::TableTableAc {
+                part_origin_in_table: job.machine.part_origin_in_table,
+            },
+            None => job::ProgramFormat::TableTableAc {
+                part_origin_in_table: None,
+            },
+        };
+    }
     let bars = super::super::progress::Bars::new();
     let run = job::simulate_program(&raw, &name, &cl_text, &cl_name, &options, &bars)
         .map_err(|e| name_flags(e, FLAGS))?;
