@@ -97,12 +97,13 @@ fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
             program.as_str(),
             "--stock",
             "box:0,0,0,20,20,12",
-            "--tool",
-            "ball:4",
             "--no-timings",
             "--out",
         ];
         args.push(out.as_str());
+        if !extra.contains(&"--tool") {
+            args.extend(["--tool", "ball:4"]);
+        }
         if !extra.contains(&"--resolution") {
             args.extend(["--resolution", "0.2"]);
         }
@@ -132,6 +133,21 @@ fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
     let radial = r["depth_of_cut"]["radial_mm"]["max"].as_f64().unwrap();
     assert!((axial - 1.5).abs() < 0.1, "{axial}");
     assert!((radial - 2.0 * 3.75f64.sqrt()).abs() < 0.45, "{radial}");
+    // The same pass with a flat end of the same diameter: its square bottom takes more.
+    let o = run(&clean, "clean-flat", &["--tool", "flat:4"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let flat = report("clean-flat");
+    assert_eq!(flat["gouge"]["count"], 0);
+    assert!(
+        flat["tool"].as_str().unwrap().contains("flat"),
+        "{}",
+        flat["tool"]
+    );
+    let (ball_volume, flat_volume) = (
+        r["removed_volume_mm3"].as_f64().unwrap(),
+        flat["removed_volume_mm3"].as_f64().unwrap(),
+    );
+    assert!(flat_volume > ball_volume, "{flat_volume} vs {ball_volume}");
     // The pictures: a GLB and a PNG.
     let glb = std::fs::read(dir.join("clean/stock.glb")).unwrap();
     assert_eq!(&glb[..4], b"glTF");

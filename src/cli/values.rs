@@ -90,6 +90,13 @@ pub(crate) fn ball_spec(text: &str) -> std::result::Result<String, String> {
         .map_err(|e| e.to_string())
 }
 
+/// Any cutter spec (`ball:D`, `flat:D`, `bull:D:R`, `taper:D:DEG`), checked.
+pub(crate) fn cutter_spec(text: &str) -> std::result::Result<String, String> {
+    crate::tool::parse_cutter(text)
+        .map(|_| text.to_string())
+        .map_err(|e| e.to_string())
+}
+
 /// A flat end mill `flat:D`: its diameter, mm.
 pub(crate) fn flat_tool(text: &str) -> std::result::Result<f64, String> {
     flat_diameter(text).map_err(|e| e.to_string())

@@ -5,8 +5,9 @@
 //! depths of cut), `stock.glb` (the stock left, coloured by its distance to the part) and
 //! `stock.png` (the same from two sides, with its legend).
 //!
-//! Not yet: posted G-code read back through the machine's forward kinematics; flat, bull-nose
-//! and tapered cutters. The report names only what was checked.
+//! The program is CL data or posted G-code read back through the machine's forward kinematics
+//! (`verify::program_toolpath`); the cutter is a ball, flat, bull-nose or tapered-ball end
+//! mill. The report names only what was checked.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -21,7 +22,7 @@ use crate::geom::{Aabb, MoveKind, Point3, Vector3};
 use crate::mesh::io::RawMesh;
 use crate::mesh::{Mesh, PrepareOptions, prepare};
 use crate::post::read_cl_csv;
-use crate::stock::cutter::BallEndBody;
+use crate::stock::cutter::CuttingBody;
 use crate::stock::rest::{Rest, rest_over};
 use crate::stock::simulate::{SimulationOptions, simulate_with_progress};
 use crate::stock::{DEFAULT_MAX_DEXELS, Stock, StockError};
@@ -95,6 +96,41 @@ pub struct SimulateOptions {
     pub timings: bool,
     /// How the program is read.
     pub format: ProgramFormat,
+    /// The cutter, when not a ball of `tool_diameter` (and no `assembly` is given).
+    pub cutter: Option<crate::tool::Cutter>,
+}
+
+/// `cutter` with its flutes `flute_length` long.
+fn with_flute_length(cutter: crate::tool::Cutter, flute_length: f64) -> crate::tool::Cutter {
+    use crate::tool::Cutter;
+    match cutter {
+        Cutter::Ball { diameter, .. } => Cutter::Ball {
+            diameter,
+            flute_length,
+        },
+        Cutter::Flat { diameter, .. } => Cutter::Flat {
+            diameter,
+            flute_length,
+        },
+        Cutter::BullNose {
+            diameter,
+            corner_radius,
+            ..
+        } => Cutter::BullNose {
+            diameter,
+            corner_radius,
+            flute_length,
+        },
+        Cutter::TaperedBall {
+            diameter,
+            taper_deg,
+            ..
+        } => Cutter::TaperedBall {
+            diameter,
+            taper_deg,
+            flute_length,
+        },
+    }
 }
 
 impl SimulateOptions {
@@ -111,6 +147,7 @@ impl SimulateOptions {
             units: "mm".into(),
             timings: true,
             format: ProgramFormat::ClData,
+            cutter: None,
         }
     }
 }
@@ -425,27 +462,26 @@ pub fn simulate_program(
     options: &SimulateOptions,
     observer: &dyn Observer,
 ) -> Result<SimulationRun> {
-    let (d, flutes) = match &options.assembly {
-        Some(tool) => match tool.cutter {
-            crate::tool::Cutter::Ball {
-                diameter,
-                flute_length,
-            } => (diameter, flute_length),
-            other => {
-                return Err(Error::JobFile(JobError::Invalid {
-                    key: "tool".into(),
-                    reason: format!(
-                        "is a {} cutter: simulate drives ball-end mills so far",
-                        other.kind()
-                    ),
-                }));
-            }
+    // The cutter: the job's, or the one given, or a ball of the given diameter; the flute
+    // length given replaces its own.
+    let mut cutter = match (&options.assembly, &options.cutter) {
+        (Some(tool), _) => tool.cutter,
+        (None, Some(cutter)) => *cutter,
+        (None, None) => crate::tool::Cutter::Ball {
+            diameter: options.tool_diameter,
+            flute_length: 3.0 * options.tool_diameter,
         },
-        None => (
-            options.tool_diameter,
-            options.flute_length.unwrap_or(3.0 * options.tool_diameter),
-        ),
     };
+    if let (None, Some(f)) = (&options.assembly, options.flute_length) {
+        cutter = with_flute_length(cutter, f);
+    }
+    cutter.validate().map_err(|e| {
+        Error::JobFile(JobError::Invalid {
+            key: "tool".into(),
+            reason: e.to_string(),
+        })
+    })?;
+    let (d, flutes) = (cutter.diameter(), cutter.flute_length());
     let non_cutting: Vec<crate::tool::Body> = options
         .assembly
         .as_ref()
@@ -460,7 +496,7 @@ pub fn simulate_program(
         return Err(Error::JobFile(JobError::Invalid {
             key: "tool".into(),
             reason: format!(
-                "a ball of {d} mm with {flutes} mm flutes: the diameter must be > 0 and the flutes at least the radius"
+                "a cutter of {d} mm with {flutes} mm flutes: the diameter must be > 0 and the flutes at least the radius"
             ),
         }));
     }
@@ -468,7 +504,7 @@ pub fn simulate_program(
         return Err(Error::JobFile(JobError::Invalid {
             key: "tolerance".into(),
             reason: format!(
-                "= {}: must be ≥ 0 mm and below the ball radius",
+                "= {}: must be ≥ 0 mm and below the cutter's radius",
                 options.tolerance
             ),
         }));
@@ -547,7 +583,7 @@ pub fn simulate_program(
         ));
     }
     let volume_before = stock.volume();
-    let body = BallEndBody::new(d, flutes);
+    let body = CuttingBody::of(&cutter);
     let t = Instant::now();
     observer.stage("simulate", toolpath.moves.len() as u64);
     let reported = std::sync::atomic::AtomicUsize::new(0);
@@ -627,7 +663,7 @@ pub fn simulate_program(
         program: file_name(Path::new(cl_name)),
         program_format: format,
         tool: options.assembly.as_ref().map_or_else(
-            || format!("ball:{d} (flutes {flutes} mm)"),
+            || format!("{} (flutes {flutes} mm)", cutter.describe()),
             |t| t.describe(),
         ),
         tolerance_mm: options.tolerance,

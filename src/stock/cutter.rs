@@ -20,6 +20,7 @@
 //!
 //! [`Stock::remove`]: super::Stock::remove
 
+use super::convex::{HullOfTwo, RevolvedBody};
 use super::sweep::{Capsule, Clipped, LineInterval, SphereSweptHull};
 use crate::geom::{Aabb, Point3, ToolPose, angle_between, slerp};
 
@@ -155,6 +156,187 @@ impl BallEndBody {
     }
 }
 
+/// Any cutter's cutting body up to its flute length, in the tool's frame (tip at the origin,
+/// axis +Z): discs at heights `h0`, `h1` of radii `r0`, `r1`, their hull thickened by `round`
+/// (see [`super::convex`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RevolvedCutter {
+    pub h0: f64,
+    pub r0: f64,
+    pub h1: f64,
+    pub r1: f64,
+    pub round: f64,
+}
+
+impl RevolvedCutter {
+    /// The body of `cutter` up to its flute length.
+    pub fn of(cutter: &crate::tool::Cutter) -> Self {
+        use crate::tool::Cutter;
+        match *cutter {
+            Cutter::Ball {
+                diameter,
+                flute_length,
+            } => {
+                let r = 0.5 * diameter;
+                RevolvedCutter {
+                    h0: r,
+                    r0: 0.0,
+                    h1: (flute_length - r).max(r),
+                    r1: 0.0,
+                    round: r,
+                }
+            }
+            Cutter::Flat {
+                diameter,
+                flute_length,
+            } => RevolvedCutter {
+                h0: 0.0,
+                r0: 0.5 * diameter,
+                h1: flute_length,
+                r1: 0.5 * diameter,
+                round: 0.0,
+            },
+            Cutter::BullNose {
+                diameter,
+                corner_radius,
+                flute_length,
+            } => {
+                let core = 0.5 * diameter - corner_radius;
+                RevolvedCutter {
+                    h0: corner_radius,
+                    r0: core,
+                    h1: (flute_length - corner_radius).max(corner_radius),
+                    r1: core,
+                    round: corner_radius,
+                }
+            }
+            Cutter::TaperedBall {
+                diameter,
+                taper_deg,
+                flute_length,
+            } => {
+                // A cone from the ball centre, thickened by the ball: the flank is the cone's
+                // offset, of the same half-angle, tangent to the ball.
+                let r = 0.5 * diameter;
+                let top = (flute_length - r).max(r);
+                RevolvedCutter {
+                    h0: r,
+                    r0: 0.0,
+                    h1: top,
+                    r1: (top - r) * taper_deg.to_radians().tan(),
+                    round: r,
+                }
+            }
+        }
+    }
+
+    /// The points more than `depth` inside the body (its inner parallel body): the rounding
+    /// shrinks first, then the core's radii and ends.
+    pub fn eroded(&self, depth: f64) -> Self {
+        if self.round >= depth {
+            return RevolvedCutter {
+                round: self.round - depth,
+                ..*self
+            };
+        }
+        let extra = depth - self.round;
+        RevolvedCutter {
+            h0: self.h0 + extra,
+            r0: (self.r0 - extra).max(0.0),
+            h1: (self.h1 - extra).max(self.h0 + extra),
+            r1: (self.r1 - extra).max(0.0),
+            round: 0.0,
+        }
+    }
+
+    /// The body at `pose`.
+    pub fn at(&self, pose: &ToolPose) -> RevolvedBody {
+        RevolvedBody {
+            tip: pose.tip,
+            axis: pose.axis.into_inner(),
+            h0: self.h0,
+            r0: self.r0,
+            h1: self.h1,
+            r1: self.r1,
+            round: self.round,
+        }
+    }
+
+    /// The farthest point of the body from the tip, mm.
+    pub fn reach(&self) -> f64 {
+        self.h0.hypot(self.r0).max(self.h1.hypot(self.r1)) + self.round
+    }
+
+    /// The body swept from `from` to `to`: hulls of its positions at the ends of steps short
+    /// enough that each differs from the exact sweep by less than `tolerance` (the bounds of
+    /// [`super::convex`]: Δθ·reach/2 for the hull, reach·(1 − cos Δθ/2) for the arcs).
+    pub fn sweep(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SweptSolid> {
+        let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
+        let turn = angle_between(&k0, &k1);
+        let steps = ((turn * self.reach()) / (2.0 * tolerance.max(1e-9)))
+            .ceil()
+            .clamp(1.0, 1e5) as usize;
+        let pose_at = |t: f64| ToolPose {
+            tip: from.tip + t * (to.tip - from.tip),
+            axis: nalgebra::Unit::new_normalize(slerp(&k0, &k1, t)),
+        };
+        let mut previous = self.at(from);
+        (1..=steps)
+            .map(|s| {
+                let next = self.at(&pose_at(s as f64 / steps as f64));
+                let solid = SweptSolid::Hull(HullOfTwo::new(previous, next));
+                previous = next;
+                solid
+            })
+            .collect()
+    }
+}
+
+/// The cutting body a simulation sweeps: a ball-end's closed forms, or any cutter's hulls.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CuttingBody {
+    Ball(BallEndBody),
+    Revolved(RevolvedCutter),
+}
+
+impl CuttingBody {
+    /// The body of `cutter`: ball-ends by their closed forms, the others by their hulls.
+    pub fn of(cutter: &crate::tool::Cutter) -> Self {
+        match *cutter {
+            crate::tool::Cutter::Ball {
+                diameter,
+                flute_length,
+            } => CuttingBody::Ball(BallEndBody::new(diameter, flute_length)),
+            ref other => CuttingBody::Revolved(RevolvedCutter::of(other)),
+        }
+    }
+
+    /// The points more than `depth` inside the body.
+    pub fn eroded(&self, depth: f64) -> Self {
+        match self {
+            CuttingBody::Ball(b) => CuttingBody::Ball(b.eroded(depth)),
+            CuttingBody::Revolved(r) => CuttingBody::Revolved(r.eroded(depth)),
+        }
+    }
+
+    /// The body swept along a move, within `tolerance`.
+    pub fn sweep(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SweptSolid> {
+        match self {
+            CuttingBody::Ball(b) => b.sweep(from, to, tolerance),
+            CuttingBody::Revolved(r) => r.sweep(from, to, tolerance),
+        }
+    }
+
+    /// The largest depth the body can be eroded by and keep a volume: the ball radius, or
+    /// the outer radius.
+    pub fn radius(&self) -> f64 {
+        match self {
+            CuttingBody::Ball(b) => b.radius,
+            CuttingBody::Revolved(r) => r.r0.max(r.r1) + r.round,
+        }
+    }
+}
+
 /// One convex piece of a swept cutter.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SweptSolid {
@@ -163,6 +345,8 @@ pub enum SweptSolid {
     /// The flutes over a step: the hull of the body's segment at its ends, cut below by a plane
     /// the swept flutes stay above.
     Flutes(Clipped<SphereSweptHull>),
+    /// Any cutter's body over a step: the hull of its two end positions.
+    Hull(HullOfTwo),
 }
 
 impl LineInterval for SweptSolid {
@@ -170,6 +354,7 @@ impl LineInterval for SweptSolid {
         match self {
             SweptSolid::Ball(c) => c.bounds(),
             SweptSolid::Flutes(f) => f.bounds(),
+            SweptSolid::Hull(h) => h.bounds(),
         }
     }
 
@@ -177,6 +362,7 @@ impl LineInterval for SweptSolid {
         match self {
             SweptSolid::Ball(c) => c.line_interval(axis, p),
             SweptSolid::Flutes(f) => f.line_interval(axis, p),
+            SweptSolid::Hull(h) => h.line_interval(axis, p),
         }
     }
 
@@ -184,6 +370,7 @@ impl LineInterval for SweptSolid {
         match self {
             SweptSolid::Ball(c) => c.row_range(axis, across, p),
             SweptSolid::Flutes(f) => f.row_range(axis, across, p),
+            SweptSolid::Hull(h) => h.row_range(axis, across, p),
         }
     }
 
@@ -191,6 +378,7 @@ impl LineInterval for SweptSolid {
         match self {
             SweptSolid::Ball(c) => c.range_over(axis, lo, hi),
             SweptSolid::Flutes(f) => f.range_over(axis, lo, hi),
+            SweptSolid::Hull(h) => h.range_over(axis, lo, hi),
         }
     }
 }
@@ -302,5 +490,126 @@ mod tests {
             "{with_planes} vs {without}"
         );
         assert_eq!(clipped, whole);
+    }
+
+    fn removed(cutter: &crate::tool::Cutter, from: &ToolPose, to: &ToolPose, spacing: f64) -> f64 {
+        removed_within(cutter, from, to, spacing, 0.01)
+    }
+
+    fn removed_within(
+        cutter: &crate::tool::Cutter,
+        from: &ToolPose,
+        to: &ToolPose,
+        spacing: f64,
+        tolerance: f64,
+    ) -> f64 {
+        let mut s = block(spacing);
+        RevolvedCutter::of(cutter)
+            .sweep(from, to, tolerance)
+            .iter()
+            .map(|solid| s.remove(solid))
+            .sum()
+    }
+
+    /// A translated body sweeps its volume plus the move's length times its shadow across the
+    /// move: for a flat end (radius R, flutes F) at angle φ to the move, πR²F + L(πR²|cos φ| +
+    /// 2RF sin φ): a slot (φ = 90°), a plunge (φ = 0) and a tilted move.
+    #[test]
+    fn a_flat_end_sweeps_the_closed_form_volume() {
+        use crate::tool::Cutter;
+        let (r, f, length) = (3.0, 9.0, 12.0);
+        let cutter = Cutter::Flat {
+            diameter: 2.0 * r,
+            flute_length: f,
+        };
+        for (axis, direction) in [
+            (Vector3::z(), Vector3::x()),
+            (Vector3::z(), -Vector3::z()),
+            (Vector3::new(0.5, 0.0, 1.0), Vector3::new(1.0, 0.3, 0.0)),
+        ] {
+            let (k, d) = (axis.normalize(), direction.normalize());
+            let from = pose([-4.0, -2.0, -8.0], k);
+            let to = pose(
+                [
+                    -4.0 + length * d.x,
+                    -2.0 + length * d.y,
+                    -8.0 + length * d.z,
+                ],
+                k,
+            );
+            let (cos, sin) = (k.dot(&d).abs(), k.cross(&d).norm());
+            let exact = PI * r * r * f + length * (PI * r * r * cos + 2.0 * r * f * sin);
+            let got = removed(&cutter, &from, &to, 0.1);
+            assert!(
+                (got - exact).abs() / exact < 0.005,
+                "{k:?} {d:?}: {got} vs {exact}"
+            );
+        }
+    }
+
+    /// A bull-nose body: a cylinder with two rounded discs, πR²H + 2π(a²ρ + (π/2)aρ² +
+    /// (2/3)ρ³) (a = R − ρ, H = F − 2ρ, by Pappus on the rounded caps); a plunge adds L·πR².
+    /// A tapered ball's plunge adds L·π(top radius)², whatever its body's volume.
+    #[test]
+    fn bull_nose_and_tapered_bodies_sweep_their_closed_form_volumes() {
+        use crate::tool::Cutter;
+        let (r, rho, f, length) = (4.0, 1.0, 12.0, 6.0);
+        let bull = Cutter::BullNose {
+            diameter: 2.0 * r,
+            corner_radius: rho,
+            flute_length: f,
+        };
+        let (a, h) = (r - rho, f - 2.0 * rho);
+        let body = PI * r * r * h
+            + 2.0 * PI * (a * a * rho + 0.5 * PI * a * rho * rho + 2.0 / 3.0 * rho.powi(3));
+        let at = |z: f64| pose([0.5, -1.0, z], Vector3::z());
+        let still = removed(&bull, &at(-6.0), &at(-6.0), 0.1);
+        assert!((still - body).abs() / body < 0.005, "{still} vs {body}");
+        let plunge = removed(&bull, &at(-6.0), &at(-6.0 - length), 0.1);
+        let exact = body + length * PI * r * r;
+        assert!(
+            (plunge - exact).abs() / exact < 0.005,
+            "{plunge} vs {exact}"
+        );
+
+        let taper = Cutter::TaperedBall {
+            diameter: 3.0,
+            taper_deg: 5.0,
+            flute_length: 15.0,
+        };
+        let shape = RevolvedCutter::of(&taper);
+        let top = shape.r1 + shape.round;
+        let still = removed(&taper, &at(-8.0), &at(-8.0), 0.1);
+        let plunge = removed(&taper, &at(-8.0), &at(-8.0 - length), 0.1);
+        let added = length * PI * top * top;
+        assert!(
+            ((plunge - still) - added).abs() / added < 0.01,
+            "{} vs {added}",
+            plunge - still
+        );
+    }
+
+    /// A ball-end turning while it moves, swept as a general body (hulls by GJK) and by its
+    /// closed forms: the two agree within the tolerance's share of the swept surface.
+    #[test]
+    fn a_turning_ball_end_as_a_general_body_matches_the_closed_forms() {
+        use crate::tool::Cutter;
+        let cutter = Cutter::Ball {
+            diameter: 4.0,
+            flute_length: 12.0,
+        };
+        let from = pose([0.0, 0.0, -6.0], Vector3::z());
+        let to = pose([2.0, 1.0, -6.5], Vector3::new(0.3, 0.1, 1.0));
+        let general = removed_within(&cutter, &from, &to, 0.2, 0.02);
+        let mut s = block(0.2);
+        let closed: f64 = BallEndBody::new(4.0, 12.0)
+            .sweep(&from, &to, 0.02)
+            .iter()
+            .map(|solid| s.remove(solid))
+            .sum();
+        assert!(
+            (general - closed).abs() / closed < 0.005,
+            "{general} vs {closed}"
+        );
     }
 }

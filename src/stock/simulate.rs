@@ -18,7 +18,7 @@
 
 use rayon::prelude::*;
 
-use super::cutter::{BallEndBody, SweptSolid};
+use super::cutter::{CuttingBody, SweptSolid};
 use super::replay::{BATCH, CutFrame, MoveWork, replay};
 use super::sweep::{Frustum, LineInterval};
 use super::{Stock, StockError};
@@ -112,12 +112,12 @@ pub struct Simulation {
     pub air_cut_fraction: f64,
 }
 
-/// Runs `toolpath` with a ball-end mill's `body` on `stock`, checking it against `part`.
+/// Runs `toolpath` with a cutter's `body` on `stock`, checking it against `part`.
 pub fn simulate(
     stock: &mut Stock,
     part: &Mesh,
     toolpath: &Toolpath,
-    body: &BallEndBody,
+    body: &CuttingBody,
     options: &SimulationOptions,
 ) -> Result<Simulation, StockError> {
     simulate_with_progress(stock, part, toolpath, body, options, &|_| {})
@@ -128,15 +128,15 @@ pub fn simulate_with_progress(
     stock: &mut Stock,
     part: &Mesh,
     toolpath: &Toolpath,
-    body: &BallEndBody,
+    body: &CuttingBody,
     options: &SimulationOptions,
     progress: &dyn Fn(usize),
 ) -> Result<Simulation, StockError> {
     let tolerance = options.tolerance;
-    if !(tolerance.is_finite() && tolerance >= 0.0 && tolerance < body.radius) {
+    if !(tolerance.is_finite() && tolerance >= 0.0 && tolerance < body.radius()) {
         return Err(StockError::Blank(format!(
-            "the gouge tolerance {tolerance} mm must be ≥ 0 and below the ball radius {}",
-            body.radius
+            "the gouge tolerance {tolerance} mm must be ≥ 0 and below the cutter's radius {}",
+            body.radius()
         )));
     }
     let mut part_model = Stock::from_mesh(part, stock.spacing(), options.max_dexels)?;
@@ -333,7 +333,7 @@ mod tests {
         let part = cuboid(20.0, 20.0, 10.0);
         let blank = Aabb::from_points(&[Point3::new(0.0, 0.0, 0.0), Point3::new(20.0, 20.0, 12.0)]);
         let mut stock = Stock::block(&blank, 0.1, super::super::DEFAULT_MAX_DEXELS).unwrap();
-        let body = BallEndBody::new(4.0, 12.0);
+        let body = CuttingBody::Ball(crate::stock::cutter::BallEndBody::new(4.0, 12.0));
         use MoveKind::*;
         let program = path(&[
             ([5.0, 5.0, 30.0], Rapid),
@@ -410,7 +410,7 @@ mod tests {
         let part = cuboid(10.0, 10.0, 1.0);
         let blank = Aabb::from_points(&[Point3::new(0.0, 0.0, 0.0), Point3::new(40.0, 40.0, 20.0)]);
         let mut stock = Stock::block(&blank, 0.1, super::super::DEFAULT_MAX_DEXELS).unwrap();
-        let body = BallEndBody::new(4.0, 4.0);
+        let body = CuttingBody::Ball(crate::stock::cutter::BallEndBody::new(4.0, 4.0));
         let non_cutting = vec![
             Body {
                 role: BodyRole::Shank,

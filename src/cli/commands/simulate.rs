@@ -29,8 +29,10 @@ pub struct SimulateArgs {
     /// shank and holder are checked against the material.
     #[arg(long)]
     pub job: Option<PathBuf>,
-    /// Ball-end mill, `ball:D` (with --job: replaces the job's ball diameter).
-    #[arg(long, value_name = "ball:D", value_parser = ball_spec, required_unless_present = "job")]
+    /// The cutter: `ball:D`, `flat:D`, `bull:D:R` (corner radius R) or `taper:D:DEG` (tapered
+    /// ball, tip diameter D, half-angle DEG), mm (with --job: a `ball:D` replaces the job's
+    /// ball diameter).
+    #[arg(long, value_name = "SPEC", value_parser = cutter_spec, required_unless_present = "job")]
     pub tool: Option<String>,
     /// Fluted length from the tip, mm [default: 3 × D; with --job: the job's].
     #[arg(long, value_parser = positive)]
@@ -69,6 +71,7 @@ const FLAGS: &[(&str, &str)] = &[
 pub fn run(args: &SimulateArgs) -> Result<()> {
     job::check_output_dir(&args.out, &job::OutputKind::SIMULATE)?;
     let mut machine: Option<job::Job> = None;
+    let mut cutter_given = None;
     let (diameter, assembly) = match &args.job {
         Some(path) => {
             let mut job = job::Job::load(path)?;
@@ -86,7 +89,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         }
         None => {
             let spec = args.tool.as_deref().unwrap_or_default();
-            (crate::cli::ball_diameter(spec)?, None)
+            let cutter = crate::tool::parse_cutter(spec)
+                .map_err(|e| Error::Usage(format!("--tool: {e}")))?;
+            cutter_given = Some(cutter);
+            (cutter.diameter(), None)
         }
     };
     let name = args.part.display().to_string();
@@ -99,6 +105,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let mut options = job::SimulateOptions::new(args.stock.clone(), diameter);
     options.flute_length = args.flute_length;
     options.assembly = assembly;
+    options.cutter = cutter_given;
     options.resolution = args.resolution;
     options.tolerance = args.tolerance;
     options.max_dexels = args.max_dexels;
