@@ -13,7 +13,7 @@
 //! reach the farthest body point from the tip): a hull point (1−s)·T₀(q₀) + s·T₁(q₁) lies within
 //! 2s(1−s)·Δθ·reach of the swept body's point T_s((1−s)q₀ + s·q₁); and it holds every chord
 //! between a point's two positions, which leaves the exact sweep's arcs by at most
-//! reach·(1 − cos Δθ/2). [`crate::stock::cutter::CutterBody::sweep`] splits a move so both stay
+//! reach·(1 − cos Δθ/2). [`crate::stock::cutter::RevolvedCutter::sweep`] splits a move so both stay
 //! within the tolerance; a step without turning is exact.
 //!
 //! Line intervals come from two ray casts, one from each end of the solid's box along the line
