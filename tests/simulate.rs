@@ -208,6 +208,17 @@ fn simulate_finds_gouges_and_rapids_and_refuses_bad_input() {
         "{err}"
     );
     assert!(!dir.join("broken/simulation.json").exists());
+    // A posted program without a single complete motion block is an error, not an empty run.
+    let empty = dir.join("empty.nc");
+    std::fs::write(&empty, "%\n(nothing)\nM30\n").unwrap();
+    let o = run(&empty, "empty", &[]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("empty.nc") && err.contains("nothing to run"),
+        "{err}"
+    );
+    assert!(!dir.join("empty/simulation.json").exists());
     let o = run(&clean, "huge", &["--resolution", "0.0001"]);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);

@@ -155,6 +155,13 @@ pub fn program_toolpath(
         }
         previous = Some(j1);
     }
+    if moves.is_empty() {
+        return Err(ProgramError {
+            line: program.lines().count(),
+            reason: "no motion block with X, Y, Z and both rotary axes known: nothing to run"
+                .into(),
+        });
+    }
     Ok((Toolpath { tool_id: 1, moves }, lines))
 }
 
