@@ -66,20 +66,12 @@ impl RevolvedBody {
 
     /// A box holding the body.
     pub fn bounds(&self) -> Aabb {
-        let mut b = Aabb::empty();
-        let k = self.axis;
-        for (h, r) in [(self.h0, self.r0), (self.h1, self.r1)] {
-            let c = self.tip + h * k;
-            for i in 0..3 {
-                let reach = r * (1.0 - k[i] * k[i]).max(0.0).sqrt();
-                let (mut lo, mut hi) = (c, c);
-                lo[i] -= reach;
-                hi[i] += reach;
-                b.grow(&lo);
-                b.grow(&hi);
-            }
-        }
-        b.inflated(self.round)
+        super::sweep::discs_bounds(
+            &self.tip,
+            &self.axis,
+            [(self.h0, self.r0), (self.h1, self.r1)],
+        )
+        .inflated(self.round)
     }
 }
 

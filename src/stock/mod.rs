@@ -71,6 +71,24 @@ pub enum StockError {
     },
 }
 
+/// The indices of the lattice points `origin + i·spacing`, `i < count`, lying in `[lo, hi]`.
+fn lattice_range(
+    origin: f64,
+    spacing: f64,
+    count: usize,
+    lo: f64,
+    hi: f64,
+) -> std::ops::Range<usize> {
+    let first = ((lo - origin) / spacing).ceil().max(0.0);
+    let last = ((hi - origin) / spacing).floor();
+    if !(first.is_finite() && last.is_finite()) || last < first {
+        return 0..0;
+    }
+    let first = first as usize;
+    let last = (last as usize).min(count.saturating_sub(1));
+    if first > last { 0..0 } else { first..last + 1 }
+}
+
 /// One of the three dexel grids: lines along `axis`, one per cell across it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DexelGrid {
@@ -131,14 +149,7 @@ impl DexelGrid {
 
     /// The index range of lines whose `across[k]` coordinate lies in `[lo, hi]`.
     fn index_range(&self, k: usize, lo: f64, hi: f64) -> std::ops::Range<usize> {
-        let first = ((lo - self.origin[k]) / self.spacing).ceil().max(0.0);
-        let last = ((hi - self.origin[k]) / self.spacing).floor();
-        if !(first.is_finite() && last.is_finite()) || last < first {
-            return 0..0;
-        }
-        let first = first as usize;
-        let last = (last as usize).min(self.counts[k].saturating_sub(1));
-        if first > last { 0..0 } else { first..last + 1 }
+        lattice_range(self.origin[k], self.spacing, self.counts[k], lo, hi)
     }
 
     /// The nearest line to `p` across, if `p` is over the grid.
@@ -240,20 +251,7 @@ impl Stock {
                 "cylinder of radius {radius} and length {length} along {axis:?}"
             )));
         }
-        let top = base + length * k;
-        // The box of a cylinder: the end discs' extents, √(1 − k_i²)·r each way.
-        let mut bounds = Aabb::empty();
-        for c in [base, &top] {
-            for i in 0..3 {
-                let reach = radius * (1.0 - k[i] * k[i]).max(0.0).sqrt();
-                let mut lo = *c;
-                let mut hi = *c;
-                lo[i] -= reach;
-                hi[i] += reach;
-                bounds.grow(&lo);
-                bounds.grow(&hi);
-            }
-        }
+        let bounds = sweep::discs_bounds(base, &k, [(0.0, radius), (length, radius)]);
         let mut stock = Self::empty(&bounds, spacing, max_dexels)?;
         let base = *base;
         stock.fill(|line_axis, p| {

@@ -204,14 +204,7 @@ impl<'a> Rows<'a> {
 
     /// Index range of lines whose `across[k]` coordinate lies in `[lo, hi]`.
     fn index_range(&self, k: usize, lo: f64, hi: f64) -> std::ops::Range<usize> {
-        let first = ((lo - self.origin[k]) / self.spacing).ceil().max(0.0);
-        let last = ((hi - self.origin[k]) / self.spacing).floor();
-        if !(first.is_finite() && last.is_finite()) || last < first {
-            return 0..0;
-        }
-        let first = first as usize;
-        let last = (last as usize).min(self.counts[k].saturating_sub(1));
-        if first > last { 0..0 } else { first..last + 1 }
+        super::lattice_range(self.origin[k], self.spacing, self.counts[k], lo, hi)
     }
 
     /// This stripe's rows with `j` in `range`: `(j, m)` pairs.

@@ -523,6 +523,24 @@ impl LineInterval for SphereSweptHull {
     }
 }
 
+/// The box of the hull of two discs about the line through `base` along the unit `axis`, each
+/// `(height along the axis, radius)`: a disc reaches √(1 − k_i²)·r each way along axis i.
+pub(crate) fn discs_bounds(base: &Point3, axis: &Vector3, discs: [(f64, f64); 2]) -> Aabb {
+    let mut b = Aabb::empty();
+    for (h, r) in discs {
+        let c = base + h * axis;
+        for i in 0..3 {
+            let reach = r * (1.0 - axis[i] * axis[i]).max(0.0).sqrt();
+            let (mut lo, mut hi) = (c, c);
+            lo[i] -= reach;
+            hi[i] += reach;
+            b.grow(&lo);
+            b.grow(&hi);
+        }
+    }
+    b
+}
+
 /// A solid frustum of a cone (or a cylinder) about the axis through `base` along the unit
 /// `axis`: the points at height `h ∈ [from, to]` above `base` within `radius(h)` of the axis,
 /// the radius linear from `radius_from` to `radius_to`. Convex, so a line meets it in one
@@ -552,20 +570,11 @@ impl Frustum {
 
 impl LineInterval for Frustum {
     fn bounds(&self) -> Aabb {
-        let mut b = Aabb::empty();
-        let k = self.axis;
-        for (h, r) in [(self.from, self.radius_from), (self.to, self.radius_to)] {
-            let c = self.base + h * k;
-            for i in 0..3 {
-                let reach = r * (1.0 - k[i] * k[i]).max(0.0).sqrt();
-                let (mut lo, mut hi) = (c, c);
-                lo[i] -= reach;
-                hi[i] += reach;
-                b.grow(&lo);
-                b.grow(&hi);
-            }
-        }
-        b
+        discs_bounds(
+            &self.base,
+            &self.axis,
+            [(self.from, self.radius_from), (self.to, self.radius_to)],
+        )
     }
 
     fn line_interval(&self, axis: usize, p: &Point3) -> Option<(f64, f64)> {
