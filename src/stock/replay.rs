@@ -15,7 +15,7 @@
 
 use rayon::prelude::*;
 
-use super::sweep::{Frustum, LineInterval};
+use super::sweep::{Frustum, LineInterval, SphereSweptHull};
 use super::{DexelGrid, Stock, Touch, spans};
 use crate::geom::Point3;
 use spans::Spans;
@@ -43,12 +43,24 @@ pub struct MoveWork<S> {
     pub cut: Vec<S>,
     /// Solids removed from the part model; what they take is a gouge.
     pub gouge: Vec<S>,
-    /// Bodies that must not touch the stock's material, with an index the caller groups them
-    /// by (one body sampled at several poses shares its index).
-    pub guards: Vec<(usize, Frustum)>,
+    /// Bodies that must not touch the stock's material.
+    pub guards: Vec<Guard>,
     /// The tool's frame at the move's end, to measure the depths of cut in: the tip, the
     /// axis, and the side direction (across the feed and the axis).
     pub frame: Option<CutFrame>,
+}
+
+/// A body that must not touch material, over one move: frusta that together hold it at every
+/// pose of the move, and one convex cover holding them all. The cover is tested first: most
+/// moves keep their shank and holder clear of material, and then one test on a stripe's rows
+/// stands for all the frusta.
+#[derive(Clone, Debug)]
+pub struct Guard {
+    /// What the caller groups the touches by (the outcome's `touches[index]`).
+    pub index: usize,
+    /// Holds every frustum.
+    pub cover: SphereSweptHull,
+    pub frusta: Vec<Frustum>,
 }
 
 /// Where depths of cut are measured from: a point and two unit directions.
@@ -308,6 +320,48 @@ impl<'a> Rows<'a> {
             .is_some_and(|(t0, t1)| t0 < hi && t1 > lo)
     }
 
+    /// Whether any material on these rows lies inside `solid` (by more than round-off).
+    fn meets(&self, solid: &dyn LineInterval) -> bool {
+        let b = solid.bounds();
+        let (axis, across) = (self.axis, self.across);
+        let is = self.index_range(0, b.min[across[0]], b.max[across[0]]);
+        let js = self.index_range(1, b.min[across[1]], b.max[across[1]]);
+        if is.is_empty() {
+            return false;
+        }
+        for (j, m) in self.rows_in(js) {
+            let mut i = is.start;
+            while i < is.end {
+                let segment = i..((i / TILE + 1) * TILE).min(is.end);
+                i = segment.end;
+                if !self.may_meet(solid, j, &segment) {
+                    continue;
+                }
+                for i in segment {
+                    let line = &self.rows[m][i];
+                    if line.is_empty() {
+                        continue;
+                    }
+                    let p = self.point(i, j);
+                    let Some((lo, hi)) = solid.range_over(axis, &p, &p) else {
+                        continue;
+                    };
+                    if !line.iter().any(|s| s.end > lo && s.start < hi) {
+                        continue;
+                    }
+                    if let Some((t0, t1)) = solid.line_interval(axis, &p)
+                        && line
+                            .iter()
+                            .any(|s| s.end.min(t1) - s.start.max(t0) > MIN_SPAN)
+                    {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+
     /// The deepest material inside `frustum` on these rows (see [`Stock::touching`]).
     fn touching(&self, frustum: &Frustum) -> Option<Touch> {
         let b = frustum.bounds();
@@ -433,12 +487,14 @@ pub fn replay<S: LineInterval>(
                             }
                         }
                     }
-                    for (index, frustum) in &w.guards {
-                        for rows in &stock_rows {
-                            if let Some(touch) = rows.touching(frustum) {
-                                let slot = &mut share.touches[*index];
-                                if slot.is_none_or(|t| touch.depth_mm > t.depth_mm) {
-                                    *slot = Some(touch);
+                    for guard in &w.guards {
+                        for rows in stock_rows.iter().filter(|rows| rows.meets(&guard.cover)) {
+                            for frustum in &guard.frusta {
+                                if let Some(touch) = rows.touching(frustum) {
+                                    let slot = &mut share.touches[guard.index];
+                                    if slot.is_none_or(|t| touch.depth_mm > t.depth_mm) {
+                                        *slot = Some(touch);
+                                    }
                                 }
                             }
                         }
@@ -520,7 +576,22 @@ mod tests {
                 MoveWork {
                     cut: body.sweep(&from, &to, 0.01),
                     gouge: body.eroded(0.5).sweep(&from, &to, 0.01),
-                    guards: vec![(0, shank(&from)), (1, shank(&to))],
+                    guards: [&from, &to]
+                        .iter()
+                        .enumerate()
+                        .map(|(index, pose)| {
+                            let frustum = shank(pose);
+                            let k = frustum.axis;
+                            Guard {
+                                index,
+                                cover: SphereSweptHull::new(
+                                    &[pose.tip + 6.0 * k, pose.tip + 30.0 * k],
+                                    2.5,
+                                ),
+                                frusta: vec![frustum],
+                            }
+                        })
+                        .collect(),
                     frame: None,
                 }
             })
@@ -557,11 +628,14 @@ mod tests {
             sort(&mut ends);
             sort(&mut got);
             assert_eq!(ends, got);
-            for (index, frustum) in &w.guards {
+            for guard in &w.guards {
+                let [frustum] = guard.frusta.as_slice() else {
+                    unreachable!("one frustum a guard here")
+                };
                 let depth = one_stock
                     .touching(frustum, |p| frustum.depth(p))
                     .map(|t| t.depth_mm);
-                assert_eq!(depth, outcome.touches[*index].map(|t| t.depth_mm));
+                assert_eq!(depth, outcome.touches[guard.index].map(|t| t.depth_mm));
             }
         }
         assert!(

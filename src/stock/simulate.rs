@@ -19,8 +19,8 @@
 use rayon::prelude::*;
 
 use super::cutter::{CuttingBody, SweptSolid};
-use super::replay::{BATCH, CutFrame, MoveWork, replay};
-use super::sweep::{Frustum, LineInterval};
+use super::replay::{BATCH, CutFrame, Guard, MoveWork, replay};
+use super::sweep::{Frustum, LineInterval, SphereSweptHull};
 use super::{Stock, StockError};
 use crate::geom::{MoveKind, Point3, ToolPose, Toolpath, angle_between, slerp};
 use crate::mesh::Mesh;
@@ -165,10 +165,8 @@ pub fn simulate_with_progress(
                         .non_cutting
                         .iter()
                         .enumerate()
-                        .flat_map(|(index, body)| {
-                            guard_poses(&material, body, from, to, step)
-                                .into_iter()
-                                .map(move |f| (index, f))
+                        .filter_map(|(index, body)| {
+                            guard_sweep(&material, index, body, from, to, step)
                         })
                         .collect(),
                     frame: cut_frame(from, to),
@@ -272,32 +270,74 @@ fn cut_frame(from: &ToolPose, to: &ToolPose) -> Option<CutFrame> {
     })
 }
 
-/// `body` moved from `from` to `to`, at poses sampled so no point of it moves more than `step`
-/// between them, leaving out the poses whose box misses the material's.
-fn guard_poses(
+/// Frusta whose union holds every point `body` passes through from `from` to `to` (tip along
+/// the chord, axis along the great circle, as the cutter moves), and their cover; `None` when
+/// the cover's box misses the material's.
+///
+/// Poses are taken so no point of the body moves more than `step` from one to the next (a
+/// point at height h and radius ρ moves |Δtip| + Δθ·√(h² + ρ²) at most over the move), so
+/// every pose in between is within `step / 2` of one taken; each frustum taken is grown by
+/// that much (radii by (step/2)·(√(1 + s²) + |s|) for a side of slope s, ends by step/2),
+/// which holds the body at every pose in between. A touch is therefore never missed between
+/// poses; one reported may be a near miss by up to `step / 2`.
+///
+/// The cover is the hull of the grown body's axis segments at the two ends, thickened by its
+/// larger radius and by h·(1 − cos Δθ/2) (h the farther end's height): the axis at a pose in
+/// between is off the chord between the end axes by at most 1 − cos Δθ/2, and the segment on
+/// that chord lies in the hull.
+fn guard_sweep(
     material: &crate::geom::Aabb,
+    index: usize,
     body: &Body,
     from: &ToolPose,
     to: &ToolPose,
     step: f64,
-) -> Vec<Frustum> {
+) -> Option<Guard> {
     let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
-    let travel = (to.tip - from.tip).norm() + angle_between(&k0, &k1) * body.to;
+    let reach = body
+        .from
+        .abs()
+        .hypot(body.radius_from)
+        .max(body.to.abs().hypot(body.radius_to));
+    let travel = (to.tip - from.tip).norm() + angle_between(&k0, &k1) * reach;
     let samples = ((travel / step).ceil() as usize).clamp(1, 100_000);
-    (0..=samples)
+    let grow = 0.5 * travel / samples as f64;
+    let slope = (body.radius_to - body.radius_from) / (body.to - body.from);
+    let widen = grow * ((1.0 + slope * slope).sqrt() + slope.abs());
+    let (h0, h1) = (body.from - grow, body.to + grow);
+    let (r0, r1) = (body.radius_from + widen, body.radius_to + widen);
+    let bow = h0.abs().max(h1.abs()) * (1.0 - (0.5 * angle_between(&k0, &k1)).cos());
+    let cover = SphereSweptHull::new(
+        &[
+            from.tip + h0 * k0,
+            from.tip + h1 * k0,
+            to.tip + h0 * k1,
+            to.tip + h1 * k1,
+        ],
+        r0.max(r1) + bow + 1e-9 * (1.0 + reach),
+    );
+    if cover.bounds().distance_squared_to_box(material) > 0.0 {
+        return None;
+    }
+    let frusta = (0..=samples)
         .map(|s| {
             let t = s as f64 / samples as f64;
             Frustum {
                 base: from.tip + t * (to.tip - from.tip),
                 axis: slerp(&k0, &k1, t),
-                from: body.from,
-                to: body.to,
-                radius_from: body.radius_from,
-                radius_to: body.radius_to,
+                from: h0,
+                to: h1,
+                radius_from: r0,
+                radius_to: r1,
             }
         })
         .filter(|f| f.bounds().distance_squared_to_box(material) <= 0.0)
-        .collect()
+        .collect();
+    Some(Guard {
+        index,
+        cover,
+        frusta,
+    })
 }
 
 #[cfg(test)]
@@ -399,6 +439,60 @@ mod tests {
             "{:?}",
             sim
         );
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// Every point of a shank or holder at any pose of a move, turning and travelling, lies
+        /// in one of the frusta its check sweeps (so no touch between them is missed).
+        #[test]
+        fn the_guard_frusta_hold_the_body_at_every_pose_between(
+            tip in proptest::array::uniform3(-5.0..5.0f64),
+            travel in proptest::array::uniform3(-3.0..3.0f64),
+            lean0 in proptest::array::uniform2(-0.6..0.6f64),
+            lean1 in proptest::array::uniform2(-0.6..0.6f64),
+            (from, length, r0, r1) in (0.0..30.0f64, 1.0..40.0f64, 0.5..12.0f64, 0.5..12.0f64),
+            t in 0.0..1.0f64,
+            (height, around, out) in (0.0..1.0f64, 0.0..std::f64::consts::TAU, 0.0..1.0f64),
+        ) {
+            let pose = |tip: [f64; 3], lean: [f64; 2]| ToolPose {
+                tip: Point3::from(tip),
+                axis: nalgebra::Unit::new_normalize(Vector3::new(lean[0], lean[1], 1.0)),
+            };
+            let end = [tip[0] + travel[0], tip[1] + travel[1], tip[2] + travel[2]];
+            let (a, b) = (pose(tip, lean0), pose(end, lean1));
+            let body = Body {
+                role: BodyRole::Holder,
+                from,
+                to: from + length,
+                radius_from: r0,
+                radius_to: r1,
+            };
+            let everywhere = Aabb::from_points(&[Point3::new(-1e3, -1e3, -1e3), Point3::new(1e3, 1e3, 1e3)]);
+            let guard = guard_sweep(&everywhere, 0, &body, &a, &b, 0.05).unwrap();
+            let frusta = guard.frusta;
+            // A point of the body at time t: at its height, on its side or inside.
+            let axis = slerp(&a.axis.into_inner(), &b.axis.into_inner(), t);
+            let (u, v) = crate::geom::orthonormal_frame(&axis);
+            let h = from + height * length;
+            let radius = out * (r0 + height * (r1 - r0));
+            let point = a.tip + t * (b.tip - a.tip) + h * axis
+                + radius * (around.cos() * u + around.sin() * v);
+            let deepest = frusta.iter().map(|f| f.depth(&point)).fold(f64::NEG_INFINITY, f64::max);
+            proptest::prop_assert!(deepest >= -1e-9, "{deepest}");
+            // The cover holds every frustum: a point of one, as above.
+            let f = &frusta[((t * frusta.len() as f64) as usize).min(frusta.len() - 1)];
+            let (u, v) = crate::geom::orthonormal_frame(&f.axis);
+            let h = f.from + height * (f.to - f.from);
+            let radius = out * (f.radius_from + height * (f.radius_to - f.radius_from));
+            let point = f.base + h * f.axis + radius * (around.cos() * u + around.sin() * v);
+            let cover = guard.cover.line_interval(2, &point);
+            proptest::prop_assert!(
+                cover.is_some_and(|(t0, t1)| t0 <= point.z + 1e-9 && point.z <= t1 + 1e-9),
+                "{cover:?} {point:?}"
+            );
+        }
     }
 
     /// A ball of 4 mm with 4 mm flutes on a 6 mm shank and a 20 mm holder, plunged into a
