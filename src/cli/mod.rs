@@ -71,8 +71,9 @@ pub enum Command {
     /// Propose tools from a library, largest first: which tool finishes which region of the
     /// part (curvature, the largest ball that fits, accessibility of the whole assembly).
     Tools(ToolsArgs),
-    /// Run a program (CL data) on a blank with a ball-end mill: material removed per move,
-    /// gouges into the part, rapids through material (tri-dexel stock).
+    /// Run a program (CL data or posted G-code) on a blank with a ball, flat, bull-nose or
+    /// tapered cutter: material removed per move, gouges into the part, rapids through
+    /// material, shank and holder collisions, rest material (tri-dexel stock).
     Simulate(SimulateArgs),
 }
 

@@ -381,7 +381,7 @@ impl<'a> Rows<'a> {
                     continue;
                 }
                 for i in segment {
-                    self.touch_line(frustum, i, j, m, &mut best);
+                    self.touch_line(frustum, &b, i, j, m, &mut best);
                 }
             }
         }
@@ -392,12 +392,12 @@ impl<'a> Rows<'a> {
     fn touch_line(
         &self,
         frustum: &Frustum,
+        b: &crate::geom::Aabb,
         i: usize,
         j: usize,
         m: usize,
         best: &mut Option<Touch>,
     ) {
-        let b = frustum.bounds();
         let axis = self.axis;
         {
             {
