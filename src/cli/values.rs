@@ -123,38 +123,5 @@ pub(crate) fn stock(text: &str) -> std::result::Result<job::StockSpec, String> {
 
 /// A blank: `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1`, `offset:M` or `mesh:FILE` (mm).
 pub(crate) fn blank(text: &str) -> std::result::Result<job::BlankSpec, String> {
-    let bad = || {
-        format!(
-            "`{text}`: expected box:X0,Y0,Z0,X1,Y1,Z1 (X0 < X1, …), cylinder:R,Z0,Z1 (R > 0, \
-             Z0 < Z1), offset:M (M > 0) or mesh:FILE"
-        )
-    };
-    let (kind, value) = text.split_once(':').ok_or_else(bad)?;
-    let numbers = || -> std::result::Result<Vec<f64>, String> {
-        value
-            .split(',')
-            .map(|v| v.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
-            .collect::<Option<Vec<f64>>>()
-            .ok_or_else(bad)
-    };
-    match kind.trim() {
-        "box" => match numbers()?.as_slice() {
-            &[x0, y0, z0, x1, y1, z1] if x0 < x1 && y0 < y1 && z0 < z1 => {
-                Ok(job::BlankSpec::Box([x0, y0, z0, x1, y1, z1]))
-            }
-            _ => Err(bad()),
-        },
-        "cylinder" => match numbers()?.as_slice() {
-            &[radius, z0, z1] if radius > 0.0 && z0 < z1 => {
-                Ok(job::BlankSpec::Cylinder { radius, z0, z1 })
-            }
-            _ => Err(bad()),
-        },
-        "offset" => match numbers()?.as_slice() {
-            &[m] if m > 0.0 => Ok(job::BlankSpec::Offset(m)),
-            _ => Err(bad()),
-        },
-        "mesh" if !value.trim().is_empty() => Ok(job::BlankSpec::Mesh(PathBuf::from(value))),
-        _ => Err(bad()),
-    }
+    job::BlankSpec::parse(text)
 }

@@ -31,6 +31,7 @@ pub struct Job {
     pub feeds: FeedSection,
     pub safety: SafetySection,
     pub limits: LimitsSection,
+    pub stock: StockSection,
     /// The operations, in order (`[[operation]]` tables); empty: the ones today's
     /// `[strategy]` keys describe (see [`Job::operations`]).
     #[serde(rename = "operation", skip_serializing_if = "Vec::is_empty")]
@@ -55,6 +56,34 @@ impl Default for LimitsSection {
         Self {
             max_drive_points: 2_000_000,
         }
+    }
+}
+
+/// `[stock]`: the blank the job starts from. With a `blank`, every operation's moves are run
+/// on the in-process stock (a tri-dexel model, [`crate::stock`]) in order, and a shank, neck or
+/// holder touching material, a rapid through it or a gouge fails the plan; without one the part
+/// is taken as already roughed and nothing is simulated.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StockSection {
+    /// `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1` (about the vertical line through the part's
+    /// box centre), `offset:M` (the part grown by M) or `mesh:FILE` (relative to the job
+    /// file), mm, in the part's frame as planned.
+    pub blank: Option<String>,
+    /// Distance between dexel lines, mm; leave out for the part's box diagonal / 400, within
+    /// 0.05 to 1 mm.
+    pub resolution: Option<f64>,
+}
+
+impl StockSection {
+    /// The blank, read; `None` without one.
+    pub fn blank_spec(&self) -> Result<Option<super::simulate::BlankSpec>, JobError> {
+        self.blank
+            .as_deref()
+            .map(|text| {
+                super::simulate::BlankSpec::parse(text).map_err(|e| invalid("stock.blank", e))
+            })
+            .transpose()
     }
 }
 
@@ -341,6 +370,12 @@ impl Job {
         {
             job.part.path = Some(path.parent().unwrap_or(Path::new(".")).join(p));
         }
+        if let Some(super::simulate::BlankSpec::Mesh(p)) = job.stock.blank_spec()?
+            && p.is_relative()
+        {
+            let resolved = path.parent().unwrap_or(Path::new(".")).join(p);
+            job.stock.blank = Some(format!("mesh:{}", resolved.display()));
+        }
         Ok(job)
     }
 
@@ -365,6 +400,10 @@ impl Job {
             .validate()
             .map_err(|e| JobError::Tool(e.to_string()))?;
         positive("surface.tolerance", self.surface.tolerance)?;
+        self.stock.blank_spec()?;
+        if let Some(r) = self.stock.resolution {
+            positive("stock.resolution", r)?;
+        }
         if let Some(e) = self.surface.base_max_error {
             non_negative("surface.base_max_error", e)?;
         }
@@ -748,6 +787,41 @@ mod tests {
     #[test]
     fn empty_file_gives_the_defaults() {
         assert_eq!(Job::from_toml("", "empty.toml").unwrap(), Job::default());
+    }
+
+    /// A `[stock]` blank is read with the simulate command's syntax; a bad one names the key
+    /// and what was expected, and a relative mesh is found beside the job file.
+    #[test]
+    fn the_stock_blank_is_checked_and_a_mesh_found_beside_the_job() {
+        let job = Job::from_toml(
+            "[stock]\nblank = \"offset:0.5\"\nresolution = 0.2\n",
+            "j.toml",
+        )
+        .unwrap();
+        assert_eq!(
+            job.stock.blank_spec().unwrap(),
+            Some(super::super::simulate::BlankSpec::Offset(0.5))
+        );
+        let e = Job::from_toml("[stock]\nblank = \"offset:-1\"\n", "j.toml").unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains("stock.blank") && text.contains("offset:M"),
+            "{text}"
+        );
+        let e = Job::from_toml("[stock]\nresolution = 0\n", "j.toml").unwrap_err();
+        assert!(e.to_string().contains("stock.resolution"), "{e}");
+        let dir = std::env::temp_dir().join(format!("wavemill-job-stock-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("job.toml");
+        std::fs::write(&file, "[stock]\nblank = \"mesh:blank.stl\"\n").unwrap();
+        let job = Job::load(&file).unwrap();
+        assert_eq!(
+            job.stock.blank_spec().unwrap(),
+            Some(super::super::simulate::BlankSpec::Mesh(
+                dir.join("blank.stl")
+            ))
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

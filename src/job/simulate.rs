@@ -18,13 +18,13 @@ use super::output::{OutputKind, write_output_set};
 use super::pipeline::Observer;
 use super::render;
 use crate::error::{Error, JobError, Result};
-use crate::geom::{Aabb, MoveKind, Point3, Vector3};
+use crate::geom::{Aabb, MoveKind, Point3, Toolpath, Vector3};
 use crate::mesh::io::RawMesh;
 use crate::mesh::{Mesh, PrepareOptions, prepare};
 use crate::post::read_cl_csv;
 use crate::stock::cutter::CuttingBody;
 use crate::stock::rest::{Rest, rest_over};
-use crate::stock::simulate::{SimulationOptions, simulate_with_progress};
+use crate::stock::simulate::{Simulation, SimulationOptions, simulate_with_progress};
 use crate::stock::{DEFAULT_MAX_DEXELS, Stock, StockError};
 
 /// The blank a simulation starts from.
@@ -41,7 +41,47 @@ pub enum BlankSpec {
 }
 
 impl BlankSpec {
-    fn describe(&self) -> String {
+    /// Reads `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1`, `offset:M` or `mesh:FILE` (mm); the
+    /// error says what was expected.
+    pub fn parse(text: &str) -> std::result::Result<BlankSpec, String> {
+        let bad = || {
+            format!(
+                "`{text}`: expected box:X0,Y0,Z0,X1,Y1,Z1 (X0 < X1, …), cylinder:R,Z0,Z1 (R > 0, \
+                 Z0 < Z1), offset:M (M > 0) or mesh:FILE"
+            )
+        };
+        let (kind, value) = text.split_once(':').ok_or_else(bad)?;
+        let numbers = || -> std::result::Result<Vec<f64>, String> {
+            value
+                .split(',')
+                .map(|v| v.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+                .collect::<Option<Vec<f64>>>()
+                .ok_or_else(bad)
+        };
+        match kind.trim() {
+            "box" => match numbers()?.as_slice() {
+                &[x0, y0, z0, x1, y1, z1] if x0 < x1 && y0 < y1 && z0 < z1 => {
+                    Ok(BlankSpec::Box([x0, y0, z0, x1, y1, z1]))
+                }
+                _ => Err(bad()),
+            },
+            "cylinder" => match numbers()?.as_slice() {
+                &[radius, z0, z1] if radius > 0.0 && z0 < z1 => {
+                    Ok(BlankSpec::Cylinder { radius, z0, z1 })
+                }
+                _ => Err(bad()),
+            },
+            "offset" => match numbers()?.as_slice() {
+                &[m] if m > 0.0 => Ok(BlankSpec::Offset(m)),
+                _ => Err(bad()),
+            },
+            "mesh" if !value.trim().is_empty() => Ok(BlankSpec::Mesh(PathBuf::from(value))),
+            _ => Err(bad()),
+        }
+    }
+
+    /// The spec as a user writes it (a mesh by its file name).
+    pub fn describe(&self) -> String {
         match self {
             BlankSpec::Box(b) => {
                 format!("box:{},{},{},{},{},{}", b[0], b[1], b[2], b[3], b[4], b[5])
@@ -172,11 +212,30 @@ pub struct CollisionReport {
 }
 
 /// Removed volume per mm of cut, over the feed moves that removed material, mm³/mm.
-#[derive(Clone, Debug, Serialize)]
-pub struct EngagementReport {
-    pub max: f64,
-    pub p99: f64,
-    pub mean: f64,
+pub type EngagementReport = Spread;
+
+/// The engagement and the depths of cut of a simulated program's feed moves that removed
+/// material.
+pub fn cutting_spreads(sim: &Simulation, toolpath: &Toolpath) -> (Spread, DepthOfCutReport) {
+    let cutting = || {
+        sim.moves
+            .iter()
+            .zip(&toolpath.moves)
+            .filter(|(r, m)| m.kind != MoveKind::Rapid && r.removed_mm3 > 0.0)
+            .map(|(r, _)| r)
+    };
+    (
+        Spread::of(
+            cutting()
+                .filter(|r| r.removed_per_mm > 0.0)
+                .map(|r| r.removed_per_mm)
+                .collect(),
+        ),
+        DepthOfCutReport {
+            axial_mm: Spread::of(cutting().map(|r| r.axial_depth_mm).collect()),
+            radial_mm: Spread::of(cutting().map(|r| r.radial_width_mm).collect()),
+        },
+    )
 }
 
 /// A distribution over the cutting moves that removed material.
@@ -300,8 +359,21 @@ const PICTURE_VOXELS: usize = 4_000_000;
 /// Output files by name, with their bytes.
 type Files = Vec<(String, Vec<u8>)>;
 
-/// `stock.glb` and `stock.png`, and the legend of their colours.
-fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<String>)> {
+/// The stock's surface coloured by its signed distance to the part.
+struct ColouredStock {
+    /// `stock.glb`.
+    glb: Vec<u8>,
+    surface: Mesh,
+    colours: Vec<[f32; 4]>,
+    /// What the colours mean, a line each.
+    legend: Vec<String>,
+    /// Green within this distance of the part, mm.
+    band: f64,
+    /// The darkest blue from this much material, mm.
+    deep: f64,
+}
+
+fn coloured_stock(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<ColouredStock> {
     use rayon::prelude::*;
     let (surface, voxel) = stock.surface_mesh(PICTURE_VOXELS);
     let distance = crate::mesh::distance::SurfaceDistance::new(part);
@@ -331,6 +403,31 @@ fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<St
             file: "stock.glb".into(),
             error,
         })?;
+    Ok(ColouredStock {
+        glb: glb.build(),
+        surface,
+        colours,
+        legend,
+        band,
+        deep,
+    })
+}
+
+/// The stock after an operation of a plan as `stock.glb` (see [`pictures`]).
+pub fn stock_model_glb(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<Vec<u8>> {
+    Ok(coloured_stock(stock, part, tolerance)?.glb)
+}
+
+/// `stock.glb` and `stock.png`, and the legend of their colours.
+fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<String>)> {
+    let ColouredStock {
+        glb,
+        surface,
+        colours,
+        legend,
+        band,
+        deep,
+    } = coloured_stock(stock, part, tolerance)?;
     let panel = 600;
     let mut canvas = render::Canvas::new(2 * panel, panel + 40);
     for (k, (eye, up)) in render::VIEWS.iter().enumerate() {
@@ -367,12 +464,12 @@ fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<St
         .png()
         .map_err(|e| Error::Internal(format!("stock.png: {e}")))?;
     Ok((
-        vec![("stock.glb".into(), glb.build()), ("stock.png".into(), png)],
+        vec![("stock.glb".into(), glb), ("stock.png".into(), png)],
         legend,
     ))
 }
 
-fn stock_error(e: StockError) -> Error {
+pub(crate) fn stock_error(e: StockError) -> Error {
     match e {
         StockError::TooLarge {
             size,
@@ -412,10 +509,43 @@ fn closed_part(raw: &RawMesh, name: &str) -> Result<Mesh> {
     Ok(mesh)
 }
 
-fn blank(part: &Mesh, options: &SimulateOptions, spacing: f64) -> Result<Stock> {
-    let max = options.max_dexels;
+/// A warning when the stock does not enclose the part (it is simulated all the same), saying
+/// where.
+pub fn enclosure_warning(stock: &Stock, part: &Mesh) -> Option<String> {
+    let outside: Vec<&Point3> = part
+        .positions
+        .iter()
+        .filter(|p| stock.bounds().inflated(1e-9).distance_squared(p) > 0.0)
+        .collect();
+    outside.first().map(|first| {
+        format!(
+            "the stock does not enclose the part: {} of its {} vertices lie outside the stock's \
+             box, the first at ({:.3}, {:.3}, {:.3})",
+            outside.len(),
+            part.positions.len(),
+            first.x,
+            first.y,
+            first.z
+        )
+    })
+}
+
+/// The default distance between dexel lines for `part`: its box diagonal / 400, within 0.05
+/// to 1 mm.
+pub fn default_resolution(part: &Mesh) -> f64 {
+    (part.aabb().diagonal() / 400.0).clamp(0.05, 1.0)
+}
+
+/// The blank `spec` as a stock model of `part` (a mesh blank is read in `units`).
+pub fn blank_stock(
+    part: &Mesh,
+    spec: &BlankSpec,
+    units: &str,
+    spacing: f64,
+    max: usize,
+) -> Result<Stock> {
     let b = part.aabb();
-    match &options.blank {
+    match spec {
         BlankSpec::Box(c) => {
             let bounds =
                 Aabb::from_points(&[Point3::new(c[0], c[1], c[2]), Point3::new(c[3], c[4], c[5])]);
@@ -445,7 +575,7 @@ fn blank(part: &Mesh, options: &SimulateOptions, spacing: f64) -> Result<Stock> 
             Stock::from_mesh(&shape.1.mesh, spacing, max).map_err(stock_error)
         }
         BlankSpec::Mesh(path) => {
-            let raw = super::load_part(path, &options.units)?;
+            let raw = super::load_part(path, units)?;
             let mesh = closed_part(&raw, &path.display().to_string())?;
             Stock::from_mesh(&mesh, spacing, max).map_err(stock_error)
         }
@@ -560,28 +690,19 @@ pub fn simulate_program(
                 reason: format!("= {r}: must be a positive number of mm"),
             }));
         }
-        None => (part.aabb().diagonal() / 400.0).clamp(0.05, 1.0),
+        None => default_resolution(&part),
     };
     let t = Instant::now();
-    let mut stock = blank(&part, options, spacing)?;
+    let mut stock = blank_stock(
+        &part,
+        &options.blank,
+        &options.units,
+        spacing,
+        options.max_dexels,
+    )?;
     let blank_ms = elapsed_ms(t);
     let mut warnings = raw.warnings.clone();
-    let outside: Vec<&Point3> = part
-        .positions
-        .iter()
-        .filter(|p| stock.bounds().inflated(1e-9).distance_squared(p) > 0.0)
-        .collect();
-    if let Some(first) = outside.first() {
-        warnings.push(format!(
-            "the stock does not enclose the part: {} of its {} vertices lie outside the stock's \
-             box, the first at ({:.3}, {:.3}, {:.3})",
-            outside.len(),
-            part.positions.len(),
-            first.x,
-            first.y,
-            first.z
-        ));
-    }
+    warnings.extend(enclosure_warning(&stock, &part));
     let volume_before = stock.volume();
     let body = CuttingBody::of(&cutter);
     let t = Instant::now();
@@ -618,37 +739,7 @@ pub fn simulate_program(
     let (pictures, colours) = pictures(&stock, &part, options.tolerance)?;
     let pictures_ms = elapsed_ms(t);
     observer.finish();
-    let cutting = || {
-        sim.moves
-            .iter()
-            .zip(&toolpath.moves)
-            .filter(|(r, m)| m.kind != MoveKind::Rapid && r.removed_mm3 > 0.0)
-            .map(|(r, _)| r)
-    };
-    let depth_of_cut = DepthOfCutReport {
-        axial_mm: Spread::of(cutting().map(|r| r.axial_depth_mm).collect()),
-        radial_mm: Spread::of(cutting().map(|r| r.radial_width_mm).collect()),
-    };
-    let mut engaged: Vec<f64> = sim
-        .moves
-        .iter()
-        .zip(&toolpath.moves)
-        .filter(|(r, m)| m.kind != MoveKind::Rapid && r.removed_per_mm > 0.0)
-        .map(|(r, _)| r.removed_per_mm)
-        .collect();
-    engaged.sort_by(f64::total_cmp);
-    let engagement = EngagementReport {
-        max: engaged.last().copied().unwrap_or(0.0),
-        p99: engaged
-            .get(((engaged.len() as f64 * 0.99) as usize).min(engaged.len().saturating_sub(1)))
-            .copied()
-            .unwrap_or(0.0),
-        mean: if engaged.is_empty() {
-            0.0
-        } else {
-            engaged.iter().sum::<f64>() / engaged.len() as f64
-        },
-    };
+    let (engagement, depth_of_cut) = cutting_spreads(&sim, &toolpath);
     // Posted programs name a move by its line (a block may be several moves).
     let label = |k: usize| lines.as_ref().map_or(k, |l| l[k]);
     let mut rapids: Vec<usize> = sim
@@ -703,7 +794,7 @@ pub fn simulate_program(
         },
         checked: {
             let mut checked = vec![
-                "material removed by the ball-end cutting body (flutes included)",
+                "material removed by the cutter's cutting body (flutes included)",
                 "gouges: the body deeper into the part than the tolerance",
                 "rapids through material",
             ];
