@@ -6,6 +6,7 @@
 //!
 //! [`plan`] is what `wavemill plan` runs and what other planners call: it takes a raw part mesh
 //! and a [`Job`] and returns every output in memory; [`write_outputs`] writes them atomically.
+//! With a `[stock]` blank, [`run_operations`] runs the plan's operations on it in order.
 
 mod access;
 mod budget;
@@ -24,6 +25,7 @@ mod samples;
 mod semi_finish;
 mod setup;
 mod simulate;
+mod stock_run;
 mod tools;
 
 pub use access::{
@@ -32,7 +34,8 @@ pub use access::{
 pub use budget::ToleranceBudget;
 pub use config::{
     FeedSection, Job, JobError, LimitsSection, MachineSection, Operation, OperationKind,
-    OperationSection, PartSection, SafetySection, StrategySection, ToolSection, unit_direction,
+    OperationSection, PartSection, SafetySection, StockSection, StrategySection, ToolSection,
+    unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,
@@ -56,7 +59,10 @@ pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};
 pub use simulate::{
-    BlankSpec, DepthOfCutReport, EngagementReport, GougeReport, ProgramFormat, SimulateOptions,
-    SimulationReport, SimulationRun, Spread, StockReport, simulate_program, write_simulation,
+    BlankSpec, CollisionReport, DepthOfCutReport, EngagementReport, GougeReport, ProgramFormat,
+    SimulateOptions, SimulationReport, SimulationRun, Spread, StockReport, blank_stock,
+    cutting_spreads, default_resolution, enclosure_warning, simulate_program, stock_model_glb,
+    write_simulation,
 };
+pub use stock_run::{OperationStockReport, PlanStockReport, StockRun, run_operations};
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

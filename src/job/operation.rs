@@ -5,12 +5,12 @@
 
 use super::config::Operation;
 
-/// The material on the part between operations, as far as the planner knows it.
-///
-/// A placeholder for the tri-dexel stock model (issue 19), which will replace these
-/// variants with the material itself; the runner already passes it from one operation to the
-/// next, so operations that need it (roughing from the blank, rest roughing) plug in without
-/// changing the runner.
+/// What an operation's planner knows of the material the operations before it leave: the
+/// stock to leave they were planned to. The material itself, when the job names a `[stock]`
+/// blank, is a tri-dexel model the planned operations are run on afterwards, in order
+/// ([`super::stock_run`]: what each removes, and whether its shank or holder touches what is
+/// left). Planning *from* that material (roughing the blank, rest roughing where it stands)
+/// is the roughing work still to come; it will pass the model here.
 #[derive(Clone, Debug, PartialEq)]
 pub enum InProcessStock {
     /// The blank as clamped: nothing is modelled about it yet.

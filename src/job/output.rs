@@ -62,7 +62,10 @@ fn numbered(name: &str, prefix: &str, suffix: &str) -> bool {
 impl OutputKind {
     pub const PLAN: OutputKind = OutputKind {
         command: "plan",
-        owns: |n| matches!(n, "job.nc" | "cl.csv" | "report.json" | "paths.glb"),
+        owns: |n| {
+            matches!(n, "job.nc" | "cl.csv" | "report.json" | "paths.glb")
+                || numbered(n, "stock-", ".glb")
+        },
     };
     pub const LEVELS: OutputKind = OutputKind {
         command: "levels",
@@ -278,8 +281,8 @@ pub(crate) fn json_bytes(name: &str, value: &impl serde::Serialize) -> Result<Ve
         .into_bytes())
 }
 
-/// Writes `job.nc`, `cl.csv`, `report.json` and `paths.glb` into `dir` as one set (see the
-/// module docs). With `timings = false` the report leaves out the per-stage timings, the only
+/// Writes `job.nc`, `cl.csv`, `report.json`, `paths.glb` and, with a `[stock]` blank, the
+/// `stock-N.glb` after each operation into `dir` as one set (see the module docs). With `timings = false` the report leaves out the per-stage timings, the only
 /// part of the outputs that differs between runs. A path that failed verification gets only
 /// its report (for diagnosis; the folder then holds nothing else) and an
 /// [`Error::Verification`].
@@ -295,16 +298,14 @@ pub fn write_outputs(dir: &Path, output: &PlanOutput, timings: bool) -> Result<(
             dir.join("report.json").display()
         )));
     }
-    write_output_set(
-        dir,
-        &OutputKind::PLAN,
-        &[
-            ("job.nc".into(), output.gcode.clone().into_bytes()),
-            ("cl.csv".into(), output.cl_csv.clone().into_bytes()),
-            ("paths.glb".into(), output.preview_glb.clone()),
-            report,
-        ],
-    )
+    let mut files = vec![
+        ("job.nc".into(), output.gcode.clone().into_bytes()),
+        ("cl.csv".into(), output.cl_csv.clone().into_bytes()),
+        ("paths.glb".into(), output.preview_glb.clone()),
+        report,
+    ];
+    files.extend(output.stock_models.iter().cloned());
+    write_output_set(dir, &OutputKind::PLAN, &files)
 }
 
 #[cfg(test)]

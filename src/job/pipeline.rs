@@ -65,6 +65,8 @@ pub struct PlanOutput {
     pub cl_csv: String,
     pub report: PlanReport,
     pub preview_glb: Vec<u8>,
+    /// `stock-N.glb`: the stock after each operation, with a `[stock]` blank.
+    pub stock_models: Vec<(String, Vec<u8>)>,
     /// What the independent re-check of the finished path found wrong, if anything. A path
     /// that fails must not be run; [`super::write_outputs`] then writes only the report.
     pub verification_failure: Option<String>,
@@ -465,9 +467,21 @@ pub fn plan(
         },
     );
     timings.back_simulation = ms(t);
+    let t = Instant::now();
+    let stock_run = super::stock_run::run_operations(
+        part,
+        units,
+        job,
+        &toolpath,
+        &spans,
+        &operations,
+        observer,
+    )?;
+    timings.stock = ms(t);
     let verification_failure = pose_failure
         .or_else(|| posted_failure(&posted, budget, rapid_margin))
-        .or_else(|| planned.iter().find_map(|p| p.failure.clone()));
+        .or_else(|| planned.iter().find_map(|p| p.failure.clone()))
+        .or_else(|| stock_run.as_ref().and_then(|run| run.failure.clone()));
     let posted = posted.ok();
 
     let t = Instant::now();
@@ -594,6 +608,7 @@ pub fn plan(
         },
         linking: link_report,
         nc_blocks: program.len(),
+        stock: stock_run.as_ref().map(|run| run.report.clone()),
         timings_ms: Some(timings),
     };
     Ok(PlanOutput {
@@ -604,6 +619,7 @@ pub fn plan(
         cl_csv,
         report,
         preview_glb,
+        stock_models: stock_run.map(|run| run.models).unwrap_or_default(),
         verification_failure,
     })
 }

@@ -39,6 +39,9 @@ pub struct PlanReport {
     pub linking: LinkReport,
     /// Blocks in `job.nc` after linearisation.
     pub nc_blocks: usize,
+    /// The operations run on the job's `[stock]` blank (absent without one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stock: Option<super::stock_run::PlanStockReport>,
     /// Milliseconds per stage; the only part of the outputs that changes between runs.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings_ms: Option<StageTimings>,
@@ -168,6 +171,8 @@ pub struct StageTimings {
     pub verification: f64,
     pub post: f64,
     pub back_simulation: f64,
+    /// The operations run on the stock (0 without a `[stock]` blank).
+    pub stock: f64,
     pub preview: f64,
     pub total: f64,
 }
