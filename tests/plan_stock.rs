@@ -1,0 +1,126 @@
+//! `plan` with a `[stock]` blank: the planned operations run on the in-process stock.
+//!
+//! Two cases on the bundled sample impeller (a coarse job, so a debug build stays quick):
+//! a blank that is the part itself, which a finishing program within tolerance leaves as it
+//! is (nothing removed beyond the tolerance's skin, no rest, no collision), and a box over the
+//! whole part, through which the same program rapids and drags its shank and holder, which
+//! must fail the plan with only the report written.
+
+mod common;
+
+use common::repo_file;
+use wavemill::job::{self, Job, PlanOutput, Quiet};
+
+fn coarse_job(blank: &str) -> Job {
+    let mut job = Job::load(&repo_file("data/impeller.toml")).expect("data/impeller.toml");
+    job.strategy.scallop_height = 0.4;
+    job.strategy.max_step = 2.0;
+    job.stock.blank = Some(blank.to_string());
+    job.stock.resolution = Some(0.4);
+    job
+}
+
+fn plan(job: &Job) -> PlanOutput {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").unwrap();
+    job::plan(&raw, "data/impeller.glb", "mm", job, &Quiet).unwrap()
+}
+
+fn out_dir(name: &str) -> std::path::PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("wavemill-plan-stock-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn a_blank_that_is_the_part_is_finished_without_removing_the_part() {
+    let blank = format!("mesh:{}", repo_file("data/impeller.glb").display());
+    let job = coarse_job(&blank);
+    let out = plan(&job);
+    assert_eq!(out.verification_failure, None);
+    let stock = out.report.stock.as_ref().expect("the stock section");
+    assert_eq!(stock.operations.len(), out.operations.len());
+    let finish = stock.operations.last().unwrap();
+    // Only the tolerance's skin of the part may go: at most its area × (tolerance + the
+    // lines' own error), far less than any real cut.
+    let skin = out.part.surface_area() * (job.strategy.tolerance + 0.05);
+    assert!(
+        finish.removed_volume_mm3 < skin,
+        "{} mm³ removed from a blank equal to the part (skin {skin})",
+        finish.removed_volume_mm3
+    );
+    assert_eq!(finish.gouge.count, 0);
+    assert_eq!(finish.collision_count, 0, "{:?}", finish.collisions);
+    assert_eq!(finish.rapids_through_material, 0);
+    assert!(
+        finish.rest.max_mm <= stock.resolution_mm,
+        "{:?}",
+        finish.rest
+    );
+    // Volume is conserved through the operations.
+    let removed: f64 = stock.operations.iter().map(|o| o.removed_volume_mm3).sum();
+    assert!(
+        (stock.blank_volume_mm3 - removed - finish.volume_after_mm3).abs()
+            < 1e-9 * stock.blank_volume_mm3,
+        "{} − {removed} ≠ {}",
+        stock.blank_volume_mm3,
+        finish.volume_after_mm3
+    );
+    // The stock after each operation is written with the program.
+    let dir = out_dir("part");
+    job::write_outputs(&dir, &out, false).unwrap();
+    for (k, _) in stock.operations.iter().enumerate() {
+        let glb = std::fs::read(dir.join(format!("stock-{}.glb", k + 1))).unwrap();
+        assert_eq!(&glb[..4], b"glTF");
+    }
+    assert!(dir.join("job.nc").is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_finishing_program_run_on_a_raw_box_fails_with_its_collisions() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").unwrap();
+    let b = raw.mesh.aabb();
+    let blank = format!(
+        "box:{},{},{},{},{},{}",
+        b.min.x - 2.0,
+        b.min.y - 2.0,
+        b.min.z,
+        b.max.x + 2.0,
+        b.max.y + 2.0,
+        b.max.z + 5.0
+    );
+    let out = plan(&coarse_job(&blank));
+    let failure = out.verification_failure.clone().expect("a failure");
+    assert!(
+        failure.contains("operation 'finish' on the stock"),
+        "{failure}"
+    );
+    let finish = out
+        .report
+        .stock
+        .as_ref()
+        .unwrap()
+        .operations
+        .last()
+        .unwrap();
+    assert!(finish.collision_count > 0, "{failure}");
+    assert!(finish.rapids_through_material > 0, "{failure}");
+    // The first collision is a real one: its depth is beyond the tolerance and it lies inside
+    // the blank.
+    let first = &finish.collisions[0];
+    assert!(first.depth_mm > 0.01);
+    assert!(first.at[2] <= b.max.z + 5.0 + 1e-6, "{first:?}");
+    // Only the report is written, and it carries the stock section.
+    let dir = out_dir("box");
+    let e = job::write_outputs(&dir, &out, false).unwrap_err();
+    assert!(matches!(e, wavemill::Error::Verification(_)), "{e}");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["report.json".to_string()]);
+    let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    assert!(report.contains("\"collision_count\""));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
