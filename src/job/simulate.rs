@@ -413,7 +413,7 @@ fn coloured_stock(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<Coloured
     })
 }
 
-/// The stock after an operation of a plan as `stock.glb` (see [`pictures`]).
+/// The stock after an operation of a plan as a GLB, coloured as `simulate`'s `stock.glb`.
 pub fn stock_model_glb(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<Vec<u8>> {
     Ok(coloured_stock(stock, part, tolerance)?.glb)
 }
