@@ -8,9 +8,9 @@ use super::config::Operation;
 /// What an operation's planner knows of the material the operations before it leave: the
 /// stock to leave they were planned to. The material itself, when the job names a `[stock]`
 /// blank, is a tri-dexel model the planned operations are run on afterwards, in order
-/// ([`crate::job::run_operations`]: what each removes, and whether its shank or holder touches what is
-/// left). Planning *from* that material (roughing the blank, rest roughing where it stands)
-/// is the roughing work still to come; it will pass the model here.
+/// ([`crate::job::run_operations`]: what each removes, and whether its shank or holder
+/// touches what is left). Planning *from* that material (roughing the blank, rest roughing
+/// where it stands) is the roughing work still to come; it will pass the model here.
 #[derive(Clone, Debug, PartialEq)]
 pub enum InProcessStock {
     /// The blank as clamped: nothing is modelled about it yet.
