@@ -77,12 +77,10 @@ pub struct StockSection {
 
 impl StockSection {
     /// The blank, read; `None` without one.
-    pub fn blank_spec(&self) -> Result<Option<super::simulate::BlankSpec>, JobError> {
+    pub fn blank_spec(&self) -> Result<Option<super::blank::BlankSpec>, JobError> {
         self.blank
             .as_deref()
-            .map(|text| {
-                super::simulate::BlankSpec::parse(text).map_err(|e| invalid("stock.blank", e))
-            })
+            .map(|text| super::blank::BlankSpec::parse(text).map_err(|e| invalid("stock.blank", e)))
             .transpose()
     }
 }
@@ -370,7 +368,7 @@ impl Job {
         {
             job.part.path = Some(path.parent().unwrap_or(Path::new(".")).join(p));
         }
-        if let Some(super::simulate::BlankSpec::Mesh(p)) = job.stock.blank_spec()?
+        if let Some(super::blank::BlankSpec::Mesh(p)) = job.stock.blank_spec()?
             && p.is_relative()
         {
             let resolved = path.parent().unwrap_or(Path::new(".")).join(p);
@@ -800,7 +798,7 @@ mod tests {
         .unwrap();
         assert_eq!(
             job.stock.blank_spec().unwrap(),
-            Some(super::super::simulate::BlankSpec::Offset(0.5))
+            Some(super::super::blank::BlankSpec::Offset(0.5))
         );
         let e = Job::from_toml("[stock]\nblank = \"offset:-1\"\n", "j.toml").unwrap_err();
         let text = e.to_string();
@@ -817,9 +815,7 @@ mod tests {
         let job = Job::load(&file).unwrap();
         assert_eq!(
             job.stock.blank_spec().unwrap(),
-            Some(super::super::simulate::BlankSpec::Mesh(
-                dir.join("blank.stl")
-            ))
+            Some(super::super::blank::BlankSpec::Mesh(dir.join("blank.stl")))
         );
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -9,11 +9,13 @@
 //! With a `[stock]` blank, [`run_operations`] runs the plan's operations on it in order.
 
 mod access;
+mod blank;
 mod budget;
 mod config;
 mod contour;
 mod contour_picture;
 mod levels;
+mod observer;
 mod offsets;
 mod operation;
 mod output;
@@ -25,12 +27,14 @@ mod samples;
 mod semi_finish;
 mod setup;
 mod simulate;
+mod stock_model;
 mod stock_run;
 mod tools;
 
 pub use access::{
     AccessOptions, AccessOutput, AccessReport, access, parse_query_csv, write_access_outputs,
 };
+pub use blank::BlankSpec;
 pub use budget::ToleranceBudget;
 pub use config::{
     FeedSection, Job, JobError, LimitsSection, MachineSection, Operation, OperationKind,
@@ -59,10 +63,12 @@ pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};
 pub use simulate::{
-    BlankSpec, CollisionReport, DepthOfCutReport, EngagementReport, GougeReport, ProgramFormat,
-    SimulateOptions, SimulationReport, SimulationRun, Spread, StockReport, blank_stock,
-    cutting_spreads, default_resolution, enclosure_warning, simulate_program, stock_model_glb,
+    ProgramFormat, SimulateOptions, SimulationReport, SimulationRun, StockReport, simulate_program,
     write_simulation,
+};
+pub use stock_model::{
+    CollisionReport, DepthOfCutReport, EngagementReport, GougeReport, Spread, blank_stock,
+    cutting_spreads, default_resolution, enclosure_warning, stock_model_glb,
 };
 pub use stock_run::{OperationStockReport, PlanStockReport, StockRun, run_operations};
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

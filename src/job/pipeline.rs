@@ -36,22 +36,7 @@ use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
-/// Hears about progress; the CLI shows it as progress bars, libraries can ignore it.
-pub trait Observer: Sync {
-    /// A stage starts; `work` units of [`Observer::advance`] will follow (0 if unknown).
-    fn stage(&self, name: &str, work: u64);
-    fn advance(&self);
-    fn finish(&self);
-}
-
-/// An observer that ignores everything.
-pub struct Quiet;
-
-impl Observer for Quiet {
-    fn stage(&self, _: &str, _: u64) {}
-    fn advance(&self) {}
-    fn finish(&self) {}
-}
+pub use super::observer::{Observer, Quiet};
 
 /// Everything a plan produces, in memory.
 pub struct PlanOutput {
@@ -468,12 +453,13 @@ pub fn plan(
     );
     timings.back_simulation = ms(t);
     let t = Instant::now();
+    let ranges: Vec<std::ops::Range<usize>> = spans.iter().map(|s| s.moves.clone()).collect();
     let stock_run = super::stock_run::run_operations(
         part,
         units,
         job,
         &toolpath,
-        &spans,
+        &ranges,
         &operations,
         observer,
     )?;

@@ -9,93 +9,29 @@
 //! (`verify::program_toolpath`); the cutter is a ball, flat, bull-nose or tapered-ball end
 //! mill. The report names only what was checked.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
 
+pub use super::blank::BlankSpec;
+use super::observer::Observer;
 use super::output::{OutputKind, write_output_set};
-use super::pipeline::Observer;
 use super::render;
+use super::stock_model::{
+    CollisionReport, ColouredStock, DepthOfCutReport, EngagementReport, GougeReport, blank_stock,
+    closed_part, coloured_stock, cutting_spreads, default_resolution, distance_colour,
+    enclosure_warning, stock_error,
+};
 use crate::error::{Error, JobError, Result};
-use crate::geom::{Aabb, MoveKind, Point3, Toolpath, Vector3};
+use crate::geom::Vector3;
+use crate::mesh::Mesh;
 use crate::mesh::io::RawMesh;
-use crate::mesh::{Mesh, PrepareOptions, prepare};
 use crate::post::read_cl_csv;
 use crate::stock::cutter::CuttingBody;
 use crate::stock::rest::{Rest, rest_over};
-use crate::stock::simulate::{Simulation, SimulationOptions, simulate_with_progress};
-use crate::stock::{DEFAULT_MAX_DEXELS, Stock, StockError};
-
-/// The blank a simulation starts from.
-#[derive(Clone, Debug, PartialEq)]
-pub enum BlankSpec {
-    /// A box `[x0, y0, z0, x1, y1, z1]`, mm.
-    Box([f64; 6]),
-    /// A cylinder about the vertical line through the part's box centre: radius, `z0`, `z1`.
-    Cylinder { radius: f64, z0: f64, z1: f64 },
-    /// The part grown by this many mm (its verified enclosing offset shape).
-    Offset(f64),
-    /// A closed mesh file (in the part's units).
-    Mesh(PathBuf),
-}
-
-impl BlankSpec {
-    /// Reads `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1`, `offset:M` or `mesh:FILE` (mm); the
-    /// error says what was expected.
-    pub fn parse(text: &str) -> std::result::Result<BlankSpec, String> {
-        let bad = || {
-            format!(
-                "`{text}`: expected box:X0,Y0,Z0,X1,Y1,Z1 (X0 < X1, …), cylinder:R,Z0,Z1 (R > 0, \
-                 Z0 < Z1), offset:M (M > 0) or mesh:FILE"
-            )
-        };
-        let (kind, value) = text.split_once(':').ok_or_else(bad)?;
-        let numbers = || -> std::result::Result<Vec<f64>, String> {
-            value
-                .split(',')
-                .map(|v| v.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
-                .collect::<Option<Vec<f64>>>()
-                .ok_or_else(bad)
-        };
-        match kind.trim() {
-            "box" => match numbers()?.as_slice() {
-                &[x0, y0, z0, x1, y1, z1] if x0 < x1 && y0 < y1 && z0 < z1 => {
-                    Ok(BlankSpec::Box([x0, y0, z0, x1, y1, z1]))
-                }
-                _ => Err(bad()),
-            },
-            "cylinder" => match numbers()?.as_slice() {
-                &[radius, z0, z1] if radius > 0.0 && z0 < z1 => {
-                    Ok(BlankSpec::Cylinder { radius, z0, z1 })
-                }
-                _ => Err(bad()),
-            },
-            "offset" => match numbers()?.as_slice() {
-                &[m] if m > 0.0 => Ok(BlankSpec::Offset(m)),
-                _ => Err(bad()),
-            },
-            "mesh" if !value.trim().is_empty() => Ok(BlankSpec::Mesh(PathBuf::from(value))),
-            _ => Err(bad()),
-        }
-    }
-
-    /// The spec as a user writes it (a mesh by its file name).
-    pub fn describe(&self) -> String {
-        match self {
-            BlankSpec::Box(b) => {
-                format!("box:{},{},{},{},{},{}", b[0], b[1], b[2], b[3], b[4], b[5])
-            }
-            BlankSpec::Cylinder { radius, z0, z1 } => format!("cylinder:{radius},{z0},{z1}"),
-            BlankSpec::Offset(m) => format!("offset:{m}"),
-            BlankSpec::Mesh(p) => format!(
-                "mesh:{}",
-                p.file_name()
-                    .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
-            ),
-        }
-    }
-}
+use crate::stock::simulate::{SimulationOptions, simulate_with_progress};
+use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
 
 /// How the program text is read.
 #[derive(Clone, Debug, PartialEq)]
@@ -192,87 +128,6 @@ impl SimulateOptions {
     }
 }
 
-/// Gouges in `simulation.json`.
-#[derive(Clone, Debug, Serialize)]
-pub struct GougeReport {
-    pub count: usize,
-    pub max_depth_mm: f64,
-    pub volume_mm3: f64,
-    pub first_move: Option<usize>,
-}
-
-/// A non-cutting body in material, in `simulation.json`.
-#[derive(Clone, Debug, Serialize)]
-pub struct CollisionReport {
-    #[serde(rename = "move")]
-    pub move_index: usize,
-    pub body: crate::tool::BodyRole,
-    pub depth_mm: f64,
-    pub at: [f64; 3],
-}
-
-/// Removed volume per mm of cut, over the feed moves that removed material, mm³/mm.
-pub type EngagementReport = Spread;
-
-/// The engagement and the depths of cut of a simulated program's feed moves that removed
-/// material.
-pub fn cutting_spreads(sim: &Simulation, toolpath: &Toolpath) -> (Spread, DepthOfCutReport) {
-    let cutting = || {
-        sim.moves
-            .iter()
-            .zip(&toolpath.moves)
-            .filter(|(r, m)| m.kind != MoveKind::Rapid && r.removed_mm3 > 0.0)
-            .map(|(r, _)| r)
-    };
-    (
-        Spread::of(
-            cutting()
-                .filter(|r| r.removed_per_mm > 0.0)
-                .map(|r| r.removed_per_mm)
-                .collect(),
-        ),
-        DepthOfCutReport {
-            axial_mm: Spread::of(cutting().map(|r| r.axial_depth_mm).collect()),
-            radial_mm: Spread::of(cutting().map(|r| r.radial_width_mm).collect()),
-        },
-    )
-}
-
-/// A distribution over the cutting moves that removed material.
-#[derive(Clone, Debug, Serialize)]
-pub struct Spread {
-    pub max: f64,
-    pub p99: f64,
-    pub mean: f64,
-}
-
-impl Spread {
-    fn of(mut values: Vec<f64>) -> Spread {
-        values.sort_by(f64::total_cmp);
-        let n = values.len();
-        Spread {
-            max: values.last().copied().unwrap_or(0.0),
-            p99: values
-                .get(((n as f64 * 0.99) as usize).min(n.saturating_sub(1)))
-                .copied()
-                .unwrap_or(0.0),
-            mean: if n == 0 {
-                0.0
-            } else {
-                values.iter().sum::<f64>() / n as f64
-            },
-        }
-    }
-}
-
-/// Depths of cut in `simulation.json`: the extent of the stock each move removed along the
-/// tool axis (axial) and across the feed and the axis (radial), mm.
-#[derive(Clone, Debug, Serialize)]
-pub struct DepthOfCutReport {
-    pub axial_mm: Spread,
-    pub radial_mm: Spread,
-}
-
 /// The stock in `simulation.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct StockReport {
@@ -338,85 +193,8 @@ pub struct SimulationRun {
     pub pictures: Files,
 }
 
-/// The colours of the stock's surface by its signed distance `d` to the part (mm, negative
-/// inside): red deeper than `band` into the part (a gouge), green within `band`, blue above,
-/// light at `band` to dark at `deep` and beyond.
-fn distance_colour(d: f64, band: f64, deep: f64) -> [f32; 4] {
-    if d < -band {
-        [0.85, 0.1, 0.1, 1.0]
-    } else if d <= band {
-        [0.15, 0.75, 0.2, 1.0]
-    } else {
-        let f = ((d - band) / (deep - band).max(1e-9)).clamp(0.0, 1.0) as f32;
-        [0.55 - 0.45 * f, 0.75 - 0.55 * f, 1.0 - 0.3 * f, 1.0]
-    }
-}
-
-/// The voxel budget of the pictures' stock mesh: about 4 M lattice points (a few hundred
-/// thousand triangles on an impeller).
-const PICTURE_VOXELS: usize = 4_000_000;
-
 /// Output files by name, with their bytes.
 type Files = Vec<(String, Vec<u8>)>;
-
-/// The stock's surface coloured by its signed distance to the part.
-struct ColouredStock {
-    /// `stock.glb`.
-    glb: Vec<u8>,
-    surface: Mesh,
-    colours: Vec<[f32; 4]>,
-    /// What the colours mean, a line each.
-    legend: Vec<String>,
-    /// Green within this distance of the part, mm.
-    band: f64,
-    /// The darkest blue from this much material, mm.
-    deep: f64,
-}
-
-fn coloured_stock(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<ColouredStock> {
-    use rayon::prelude::*;
-    let (surface, voxel) = stock.surface_mesh(PICTURE_VOXELS);
-    let distance = crate::mesh::distance::SurfaceDistance::new(part);
-    // Surface nets places a vertex within about half a lattice step of the model's surface.
-    let band = tolerance.max(0.5 * voxel);
-    let deep = 2.0_f64.max(4.0 * band);
-    let colours: Vec<[f32; 4]> = surface
-        .positions
-        .par_iter()
-        .map(|p| {
-            let d = distance
-                .signed_distance(p)
-                .map_or(f64::INFINITY, |(d, _)| d);
-            distance_colour(d, band, deep)
-        })
-        .collect();
-    let legend = vec![
-        format!("red: more than {band:.3} mm inside the part (a gouge, as far as the mesh shows)"),
-        format!(
-            "green: within {band:.3} mm of the part (the tolerance or half the mesh's {voxel:.3} mm lattice, the larger)"
-        ),
-        format!("light to dark blue: material left, {band:.3} mm to {deep:.3} mm and more"),
-    ];
-    let mut glb = crate::mesh::io::GlbBuilder::new();
-    glb.add_triangles("stock", &surface, [1.0, 1.0, 1.0, 1.0], Some(&colours))
-        .map_err(|error| Error::Glb {
-            file: "stock.glb".into(),
-            error,
-        })?;
-    Ok(ColouredStock {
-        glb: glb.build(),
-        surface,
-        colours,
-        legend,
-        band,
-        deep,
-    })
-}
-
-/// The stock after an operation of a plan as a GLB, coloured as `simulate`'s `stock.glb`.
-pub fn stock_model_glb(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<Vec<u8>> {
-    Ok(coloured_stock(stock, part, tolerance)?.glb)
-}
 
 /// `stock.glb` and `stock.png`, and the legend of their colours.
 fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<String>)> {
@@ -467,119 +245,6 @@ fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<St
         vec![("stock.glb".into(), glb), ("stock.png".into(), png)],
         legend,
     ))
-}
-
-pub(crate) fn stock_error(e: StockError) -> Error {
-    match e {
-        StockError::TooLarge {
-            size,
-            spacing,
-            dexels,
-            limit,
-        } => Error::TooLarge {
-            what: format!("a {size} mm stock at a {spacing} mm resolution"),
-            estimate: format!("{dexels} dexel lines"),
-            limit: format!("{limit} lines"),
-            advice: "use a coarser resolution".into(),
-            limit_key: "max_dexels".into(),
-        },
-        other => Error::JobFile(JobError::Invalid {
-            key: "stock".into(),
-            reason: other.to_string(),
-        }),
-    }
-}
-
-/// The part's mesh, welded and checked closed (the part model needs an inside).
-fn closed_part(raw: &RawMesh, name: &str) -> Result<Mesh> {
-    let (mesh, report) =
-        prepare(&raw.mesh, &PrepareOptions::default()).map_err(|e| Error::Mesh {
-            file: name.to_string(),
-            reason: e.to_string(),
-        })?;
-    if !report.watertight {
-        return Err(Error::Mesh {
-            file: name.to_string(),
-            reason: format!(
-                "the part must be closed to tell inside from outside; found: {}",
-                report.problems().join("; ")
-            ),
-        });
-    }
-    Ok(mesh)
-}
-
-/// A warning when the stock does not enclose the part (it is simulated all the same), saying
-/// where.
-pub fn enclosure_warning(stock: &Stock, part: &Mesh) -> Option<String> {
-    let outside: Vec<&Point3> = part
-        .positions
-        .iter()
-        .filter(|p| stock.bounds().inflated(1e-9).distance_squared(p) > 0.0)
-        .collect();
-    outside.first().map(|first| {
-        format!(
-            "the stock does not enclose the part: {} of its {} vertices lie outside the stock's \
-             box, the first at ({:.3}, {:.3}, {:.3})",
-            outside.len(),
-            part.positions.len(),
-            first.x,
-            first.y,
-            first.z
-        )
-    })
-}
-
-/// The default distance between dexel lines for `part`: its box diagonal / 400, within 0.05
-/// to 1 mm.
-pub fn default_resolution(part: &Mesh) -> f64 {
-    (part.aabb().diagonal() / 400.0).clamp(0.05, 1.0)
-}
-
-/// The blank `spec` as a stock model of `part` (a mesh blank is read in `units`).
-pub fn blank_stock(
-    part: &Mesh,
-    spec: &BlankSpec,
-    units: &str,
-    spacing: f64,
-    max: usize,
-) -> Result<Stock> {
-    let b = part.aabb();
-    match spec {
-        BlankSpec::Box(c) => {
-            let bounds =
-                Aabb::from_points(&[Point3::new(c[0], c[1], c[2]), Point3::new(c[3], c[4], c[5])]);
-            Stock::block(&bounds, spacing, max).map_err(stock_error)
-        }
-        BlankSpec::Cylinder { radius, z0, z1 } => {
-            let centre = b.center();
-            Stock::cylinder(
-                &Point3::new(centre.x, centre.y, *z0),
-                &Vector3::z(),
-                *radius,
-                z1 - z0,
-                spacing,
-                max,
-            )
-            .map_err(stock_error)
-        }
-        BlankSpec::Offset(margin) => {
-            let shapes = super::offsets::stock_shapes(
-                part,
-                &crate::multires::RemeshOptions::default(),
-                &[*margin],
-            )?;
-            let shape = shapes
-                .last()
-                .ok_or_else(|| Error::Internal("no offset shape for the offset blank".into()))?;
-            Stock::from_mesh(&shape.1.mesh, spacing, max).map_err(stock_error)
-        }
-        BlankSpec::Mesh(path) => {
-            let raw = super::load_part(path, units)?;
-            let mesh = closed_part(&raw, &path.display().to_string())?;
-            Stock::from_mesh(&mesh, spacing, max).map_err(stock_error)
-        }
-    }
 }
 
 /// Runs the program `cl_text` (named `cl_name`; CL data or posted G-code, as

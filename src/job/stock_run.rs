@@ -9,8 +9,8 @@
 use serde::Serialize;
 
 use super::config::{Job, Operation};
-use super::pipeline::{Observer, OperationSpan};
-use super::simulate::{
+use super::observer::Observer;
+use super::stock_model::{
     CollisionReport, DepthOfCutReport, GougeReport, Spread, blank_stock, cutting_spreads,
     default_resolution, enclosure_warning, stock_error, stock_model_glb,
 };
@@ -78,7 +78,7 @@ pub struct StockRun {
     pub stock: Stock,
 }
 
-/// Runs each of `operations` (its moves `spans[k]` of `toolpath`) on the job's `[stock]` blank
+/// Runs each of `operations` (its moves `spans[k]`, indices into `toolpath`) on the job's `[stock]` blank
 /// of `part` (as planned; a mesh blank is read in `units`), in order; `None` when the job names
 /// no blank.
 pub fn run_operations(
@@ -86,7 +86,7 @@ pub fn run_operations(
     units: &str,
     job: &Job,
     toolpath: &Toolpath,
-    spans: &[OperationSpan],
+    spans: &[std::ops::Range<usize>],
     operations: &[Operation],
     observer: &dyn Observer,
 ) -> Result<Option<StockRun>> {
@@ -120,10 +120,10 @@ pub fn run_operations(
     let mut failure = None;
     for (k, (operation, span)) in operations.iter().zip(spans).enumerate() {
         // From the pose the operation starts at (the last of the one before).
-        let first = span.moves.start.saturating_sub(1);
+        let first = span.start.saturating_sub(1);
         let moves = Toolpath {
             tool_id: operation.tool.id,
-            moves: toolpath.moves[first..span.moves.end].to_vec(),
+            moves: toolpath.moves[first..span.end].to_vec(),
         };
         let assembly = operation.tool.assembly();
         let options = SimulationOptions {
