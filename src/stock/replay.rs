@@ -320,70 +320,56 @@ impl<'a> Rows<'a> {
             .is_some_and(|(t0, t1)| t0 < hi && t1 > lo)
     }
 
+    /// The lines `(i, j, m)` (the `m`-th row here) under `solid`'s box, a tile at a time,
+    /// leaving out the tiles whose material its extent over them misses.
+    fn lines_near<'s>(
+        &'s self,
+        solid: &'s dyn LineInterval,
+    ) -> impl Iterator<Item = (usize, usize, usize)> + 's {
+        let b = solid.bounds();
+        let is = self.index_range(0, b.min[self.across[0]], b.max[self.across[0]]);
+        let js = self.index_range(1, b.min[self.across[1]], b.max[self.across[1]]);
+        let tiles = if is.is_empty() {
+            0..0
+        } else {
+            is.start / TILE..(is.end - 1) / TILE + 1
+        };
+        self.rows_in(js).flat_map(move |(j, m)| {
+            let is = is.clone();
+            tiles
+                .clone()
+                .map(move |t| (t * TILE).max(is.start)..((t + 1) * TILE).min(is.end))
+                .filter(move |segment| self.may_meet(solid, j, segment))
+                .flat_map(move |segment| segment.map(move |i| (i, j, m)))
+        })
+    }
+
     /// Whether any material on these rows lies inside `solid` (by more than round-off).
     fn meets(&self, solid: &dyn LineInterval) -> bool {
-        let b = solid.bounds();
-        let (axis, across) = (self.axis, self.across);
-        let is = self.index_range(0, b.min[across[0]], b.max[across[0]]);
-        let js = self.index_range(1, b.min[across[1]], b.max[across[1]]);
-        if is.is_empty() {
-            return false;
-        }
-        for (j, m) in self.rows_in(js) {
-            let mut i = is.start;
-            while i < is.end {
-                let segment = i..((i / TILE + 1) * TILE).min(is.end);
-                i = segment.end;
-                if !self.may_meet(solid, j, &segment) {
-                    continue;
-                }
-                for i in segment {
-                    let line = &self.rows[m][i];
-                    if line.is_empty() {
-                        continue;
-                    }
-                    let p = self.point(i, j);
-                    let Some((lo, hi)) = solid.range_over(axis, &p, &p) else {
-                        continue;
-                    };
-                    if !line.iter().any(|s| s.end > lo && s.start < hi) {
-                        continue;
-                    }
-                    if let Some((t0, t1)) = solid.line_interval(axis, &p)
-                        && line
-                            .iter()
-                            .any(|s| s.end.min(t1) - s.start.max(t0) > MIN_SPAN)
-                    {
-                        return true;
-                    }
-                }
+        let axis = self.axis;
+        self.lines_near(solid).any(|(i, j, m)| {
+            let line = &self.rows[m][i];
+            if line.is_empty() {
+                return false;
             }
-        }
-        false
+            let p = self.point(i, j);
+            let Some((lo, hi)) = solid.range_over(axis, &p, &p) else {
+                return false;
+            };
+            line.iter().any(|s| s.end > lo && s.start < hi)
+                && solid.line_interval(axis, &p).is_some_and(|(t0, t1)| {
+                    line.iter()
+                        .any(|s| s.end.min(t1) - s.start.max(t0) > MIN_SPAN)
+                })
+        })
     }
 
     /// The deepest material inside `frustum` on these rows (see [`Stock::touching`]).
     fn touching(&self, frustum: &Frustum) -> Option<Touch> {
         let b = frustum.bounds();
-        let across = self.across;
-        let is = self.index_range(0, b.min[across[0]], b.max[across[0]]);
-        let js = self.index_range(1, b.min[across[1]], b.max[across[1]]);
         let mut best: Option<Touch> = None;
-        if is.is_empty() {
-            return None;
-        }
-        for (j, m) in self.rows_in(js) {
-            let mut i = is.start;
-            while i < is.end {
-                let segment = i..((i / TILE + 1) * TILE).min(is.end);
-                i = segment.end;
-                if !self.may_meet(frustum, j, &segment) {
-                    continue;
-                }
-                for i in segment {
-                    self.touch_line(frustum, &b, i, j, m, &mut best);
-                }
-            }
+        for (i, j, m) in self.lines_near(frustum) {
+            self.touch_line(frustum, &b, i, j, m, &mut best);
         }
         best
     }
@@ -399,29 +385,25 @@ impl<'a> Rows<'a> {
         best: &mut Option<Touch>,
     ) {
         let axis = self.axis;
+        let line = &self.rows[m][i];
+        if !line
+            .iter()
+            .any(|s| s.end > b.min[axis] && s.start < b.max[axis])
         {
-            {
-                let line = &self.rows[m][i];
-                if !line
-                    .iter()
-                    .any(|s| s.end > b.min[axis] && s.start < b.max[axis])
-                {
-                    return;
-                }
-                let p = self.point(i, j);
-                let Some((t0, t1)) = frustum.line_interval(axis, &p) else {
-                    return;
-                };
-                for s in line {
-                    let (lo, hi) = (s.start.max(t0), s.end.min(t1));
-                    if hi - lo > MIN_SPAN {
-                        let mut at = p;
-                        at[axis] = 0.5 * (lo + hi);
-                        let depth_mm = frustum.depth(&at);
-                        if best.is_none_or(|t| depth_mm > t.depth_mm) {
-                            *best = Some(Touch { depth_mm, at });
-                        }
-                    }
+            return;
+        }
+        let p = self.point(i, j);
+        let Some((t0, t1)) = frustum.line_interval(axis, &p) else {
+            return;
+        };
+        for s in line {
+            let (lo, hi) = (s.start.max(t0), s.end.min(t1));
+            if hi - lo > MIN_SPAN {
+                let mut at = p;
+                at[axis] = 0.5 * (lo + hi);
+                let depth_mm = frustum.depth(&at);
+                if best.is_none_or(|t| depth_mm > t.depth_mm) {
+                    *best = Some(Touch { depth_mm, at });
                 }
             }
         }
