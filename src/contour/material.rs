@@ -62,6 +62,18 @@ impl MaterialMap {
     /// The stock minus the part on cells of `cell` mm (coarsened if the grid would exceed
     /// [`MAX_CELLS`]) for a flat end mill of radius `tool_radius`.
     pub fn new(part: &Shape, stock: &Shape, tool_radius: f64, cell: f64) -> Result<Self> {
+        validate_shape(part, "part")?;
+        Self::of_stock(stock, Some(part), tool_radius, cell)
+    }
+
+    /// As [`MaterialMap::new`], with no part inside the stock when `part` is `None` (a facing
+    /// layer above everything the part has).
+    pub fn of_stock(
+        stock: &Shape,
+        part: Option<&Shape>,
+        tool_radius: f64,
+        cell: f64,
+    ) -> Result<Self> {
         require_positive(
             "tool_radius",
             tool_radius,
@@ -72,10 +84,9 @@ impl MaterialMap {
             cell,
             "the material map's cell must be a positive finite number of mm",
         )?;
-        validate_shape(part, "part")?;
         validate_shape(stock, "stock")?;
         let stock_index = RegionIndex::new(stock);
-        let part_index = RegionIndex::new(part);
+        let part_index = part.map(RegionIndex::new);
         let bounds = stock_index
             .boundary()
             .bounds()
@@ -98,7 +109,7 @@ impl MaterialMap {
             for (a, b) in inside_spans(&stock_index, y) {
                 map.fill_row(j, a, b, MATERIAL);
             }
-            for (a, b) in inside_spans(&part_index, y) {
+            for (a, b) in part_index.iter().flat_map(|part| inside_spans(part, y)) {
                 map.fill_row(j, a, b, AIR);
             }
         }
@@ -191,6 +202,22 @@ impl MaterialMap {
             }
         }
         count
+    }
+
+    /// The area of uncut material within r of `p`, mm², clearing nothing: what a plunge there
+    /// would meet.
+    pub fn material_within(&self, p: Point2) -> f64 {
+        let mut count = 0;
+        for j in self.rows_near(p, self.radius) {
+            if let Some((lo, hi)) = self.row_span(j, p, self.radius) {
+                let row = j * self.width;
+                count += self.state[row + lo..=row + hi]
+                    .iter()
+                    .filter(|&&c| c == MATERIAL)
+                    .count();
+            }
+        }
+        count as f64 * self.cell * self.cell
     }
 
     /// The tool plunges at `p`: clears the disc there and returns the area it cleared.

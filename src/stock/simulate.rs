@@ -104,7 +104,9 @@ pub struct Simulation {
     pub removed_volume_mm3: f64,
     /// The gouges.
     pub gouge: GougeSummary,
-    /// Rapid moves that removed material (indices).
+    /// Rapid moves that removed material (indices): more than one dexel cell of the tolerance's
+    /// depth (tolerance × spacing²), so a rapid grazing a wall the program has just cut to the
+    /// tool's radius, where round-off leaves 10⁻⁷ mm³ on a dexel end, is not one.
     pub rapids_through_material: Vec<usize>,
     /// Non-cutting bodies touching material, one per move and body (the deepest).
     pub collisions: Vec<Collision>,
@@ -146,6 +148,7 @@ pub fn simulate_with_progress(
     let mut moves = vec![MoveRecord::default(); toolpath.moves.len()];
     let (mut feed_length, mut air_length) = (0.0, 0.0);
     let mut rapids_through_material = Vec::new();
+    let rapid_allowance = tolerance * stock.spacing() * stock.spacing();
     let mut gouge = GougeSummary::default();
     let mut collisions = Vec::new();
     // Material only shrinks: what is outside this box now stays clear.
@@ -229,7 +232,9 @@ pub fn simulate_with_progress(
                 }
             }
             match pair[1].kind {
-                MoveKind::Rapid if record.removed_mm3 > 0.0 => rapids_through_material.push(k + 1),
+                MoveKind::Rapid if record.removed_mm3 > rapid_allowance => {
+                    rapids_through_material.push(k + 1)
+                }
                 MoveKind::Rapid => {}
                 _ => {
                     feed_length += travel;

@@ -42,12 +42,17 @@ pub enum MachineModel {
         /// Where the part frame's origin sits in the table frame, mm.
         part_origin_in_table: Vector3,
     },
+    /// Three linear axes, the tool along +Z, the work offset at the part's origin: machine X, Y,
+    /// Z are the part's.
+    ThreeAxis,
 }
 
 impl MachineModel {
     fn axis_letters(&self) -> [char; 5] {
         match self {
-            MachineModel::TableTableAc { .. } => ['X', 'Y', 'Z', 'A', 'C'],
+            MachineModel::TableTableAc { .. } | MachineModel::ThreeAxis => {
+                ['X', 'Y', 'Z', 'A', 'C']
+            }
         }
     }
 
@@ -57,6 +62,7 @@ impl MachineModel {
             MachineModel::TableTableAc {
                 part_origin_in_table,
             } => Point3::from(-part_origin_in_table),
+            MachineModel::ThreeAxis => Point3::origin(),
         }
     }
 
@@ -67,6 +73,7 @@ impl MachineModel {
             MachineModel::TableTableAc {
                 part_origin_in_table,
             } => Point3::from(self.rotate_into_part(u, a, c) - part_origin_in_table),
+            MachineModel::ThreeAxis => Point3::from(*u),
         }
     }
 
@@ -80,6 +87,7 @@ impl MachineModel {
                 let (sc, cc) = c.sin_cos();
                 Vector3::new(cc * w.x + sc * w.y, -sc * w.x + cc * w.y, w.z)
             }
+            MachineModel::ThreeAxis => *u,
         }
     }
 
@@ -113,7 +121,11 @@ pub fn program_toolpath(
     let blocks = read_program(program, machine.axis_letters())?;
     let joints = |b: &MotionBlock| -> Option<[f64; 5]> {
         let [x, y, z, a, c] = b.axes;
-        Some([x?, y?, z?, a?, c?])
+        match machine {
+            // No rotary words on a 3-axis machine: its rotaries stand at zero.
+            MachineModel::ThreeAxis => Some([x?, y?, z?, 0.0, 0.0]),
+            MachineModel::TableTableAc { .. } => Some([x?, y?, z?, a?, c?]),
+        }
     };
     let mut moves = Vec::new();
     let mut lines = Vec::new();
