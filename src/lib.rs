@@ -8,6 +8,7 @@
 //! sample (generated parts)              job (job file + the pipeline that wires the stages)
 //!
 //! stock: the in-process material (tri-dexel), removed by swept cutters
+//! rough: layer roughing of the blank down to an offset shape (through the contour engine)
 //! ```
 //!
 //! Every stage takes plain data and returns plain data; the CLI (`wavemill`) is a thin shell
@@ -30,6 +31,7 @@ pub mod offset;
 pub mod orient;
 pub mod path;
 pub mod post;
+pub mod rough;
 pub mod sample;
 pub mod stock;
 pub mod tool;

@@ -20,6 +20,7 @@ const LAYERS: &[&str] = &[
     "offset",      // stock-to-leave shapes
     "stock",       // in-process material (tri-dexel) and its removal
     "contour",     // 2.5D contour paths
+    "rough",       // layer roughing down to an offset shape
     "collide",     // tool bodies against part and table (parry3d)
     "orient",      // tool axes
     "path",        // finishing passes and linking

@@ -1,0 +1,743 @@
+//! Layer roughing with a fixed vertical tool axis: the blank cleared down to a shape that
+//! encloses the part (a verified offset shape S₀, so roughing can never overcut the part), one
+//! 2.5D pocket per layer (DESIGN.md §3.12; seed 002 §4; seed 004 ch. 5, "rough-cuts can be
+//! made with the low-resolution models").
+//!
+//! The stages, each plain data in and out:
+//!
+//! * [`envelope`] — the shape's top envelope on a grid, exact per cell (seed 002's z-mapped
+//!   boxes): a vertical tool outside every box taller than its tip is outside the shape;
+//! * [`layers`] — seed 002's non-uniform layers: a slicing plane at each flat of the shape,
+//!   layers deeper than the maximum depth of cut subdivided, thinner than the minimum merged;
+//! * [`region`] — per layer, the boxes taller than it traced as an outline, and the blank's;
+//! * the contour engine ([`crate::contour::contour_parallel`]) clears the blank's section
+//!   minus that outline, far side first (a facing layer above the shape is cleared by the
+//!   blank's inward offsets);
+//! * [`moves`] — the passes as moves: arcs circumscribed (never inside), and every entry into
+//!   material ramped along its pass at a bounded angle instead of plunged, as a 2D material map
+//!   of the layer tells ([`crate::contour::material::MaterialMap`]); the tool moves between
+//!   regions just above the layer when the straight way is clear, else over the blank;
+//! * [`check`] — the program checked against the shape exactly, by code that shares nothing
+//!   with the planning.
+
+pub mod check;
+pub mod envelope;
+pub mod layers;
+pub mod moves;
+pub mod region;
+
+use serde::Serialize;
+
+use crate::contour::geometry::{Contour, Point2, Segment, Shape};
+use crate::contour::material::{MaterialMap, Window};
+use crate::contour::region::RegionIndex;
+use crate::contour::toolpath::{CenterPath, Link, Pass};
+use crate::contour::{ContourError, ParallelOptions, contour_parallel};
+use crate::geom::{Direction, Move, MoveKind, Point3, ToolPose, Toolpath, Vector3};
+use crate::mesh::Mesh;
+use crate::tool::ToolAssembly;
+use envelope::TopEnvelope;
+pub use layers::{Layer, LayerOptions};
+
+/// What can stop a layer roughing plan.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum RoughError {
+    #[error("roughing option `{name}` = {value} is invalid: {reason}")]
+    InvalidOption {
+        name: &'static str,
+        value: f64,
+        reason: String,
+    },
+    #[error("the blank: {0}")]
+    Blank(String),
+    #[error("layer at z = {z:.3} mm: {error}")]
+    Layer {
+        z: f64,
+        #[source]
+        error: ContourError,
+    },
+}
+
+/// A blank the layers can clear: an upright prism, its outline extruded from `bottom` to
+/// `top` (a cylinder or a box).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Blank {
+    pub outline: Shape,
+    pub bottom: f64,
+    pub top: f64,
+}
+
+impl Blank {
+    /// A cylinder about the vertical line through `center`.
+    pub fn cylinder(center: Point2, radius: f64, bottom: f64, top: f64) -> Blank {
+        Blank {
+            outline: Shape {
+                contours: vec![region::circle(center, radius)],
+            },
+            bottom,
+            top,
+        }
+    }
+
+    /// An axis-aligned box.
+    pub fn cuboid(min: Point3, max: Point3) -> Blank {
+        Blank {
+            outline: Shape {
+                contours: vec![region::rectangle(
+                    Point2::new(min.x, min.y),
+                    Point2::new(max.x, max.y),
+                )],
+            },
+            bottom: min.z,
+            top: max.z,
+        }
+    }
+}
+
+/// What the planner needs of the tool: how wide it is below the holder and how deep it can go.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RoughingTool {
+    /// The widest radius of the flutes, neck and shank, mm: the path keeps this far from the
+    /// shape, so no part of the tool below the holder can touch it.
+    pub radius: f64,
+    /// Fluted length, mm: no layer is deeper.
+    pub flute_length: f64,
+    /// How far below the blank's top the tip may go with the holder still above it by the
+    /// margin, mm.
+    pub reach: f64,
+}
+
+impl RoughingTool {
+    /// The roughing view of `tool`, keeping its holder `holder_margin` mm above the blank.
+    pub fn of(tool: &ToolAssembly, holder_margin: f64) -> RoughingTool {
+        let radius = tool
+            .bodies()
+            .iter()
+            .filter(|b| b.role != crate::tool::BodyRole::Holder)
+            .map(|b| b.radius_from.max(b.radius_to))
+            .fold(tool.cutter.diameter() / 2.0, f64::max);
+        RoughingTool {
+            radius,
+            flute_length: tool.cutter.flute_length(),
+            reach: tool.stickout - holder_margin,
+        }
+    }
+}
+
+/// Feed rates of a roughing program, mm/min.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RoughingFeeds {
+    pub cut: f64,
+    /// Ramped entries and straight descents into air.
+    pub entry: f64,
+    /// Rapid rate, for the time estimate of rapids and traverses through air at depth.
+    pub rapid: f64,
+}
+
+/// How the layers are planned.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughingOptions {
+    pub layers: LayerOptions,
+    /// Stepover between passes, mm (0 < s ≤ tool radius, so nothing reachable is left between
+    /// passes and the column above every pass is clear: that is what lets the tool drop to
+    /// just above a layer).
+    pub stepover: f64,
+    /// Side of the envelope's cells, mm.
+    pub cell: f64,
+    /// Steepest descent of a ramped entry, degrees from the horizontal.
+    pub ramp_angle_deg: f64,
+    /// Longest leg of a ramp along its pass, mm.
+    pub max_ramp_leg: f64,
+    /// A descent meeting more uncut material than this share of the tool's disc is ramped.
+    pub max_plunge_share: f64,
+    /// Height above the layer above, and above the blank for the safe moves, mm.
+    pub clearance: f64,
+    /// Arcs are replaced by straight moves at most this far outside them, mm.
+    pub tolerance: f64,
+    /// Lowest layer (the floor the part stands on, or above it), mm; `None`: the blank's bottom
+    /// or the shape's lowest point, whichever is higher.
+    pub floor: Option<f64>,
+    pub feeds: RoughingFeeds,
+}
+
+impl RoughingOptions {
+    /// Options for a tool of radius `r`: layers of at most r deep (at least r/5), stepover
+    /// 0.8 r, cells of r/8, 3° ramps.
+    pub fn for_radius(r: f64) -> RoughingOptions {
+        RoughingOptions {
+            layers: LayerOptions {
+                max_depth: r,
+                min_depth: 0.2 * r,
+                flat_band: 0.02 * r,
+                flat_area: std::f64::consts::PI * r * r,
+            },
+            stepover: 0.8 * r,
+            cell: r / 8.0,
+            ramp_angle_deg: 3.0,
+            max_ramp_leg: 8.0 * r,
+            max_plunge_share: 0.05,
+            clearance: 1.0,
+            tolerance: 0.01,
+            floor: None,
+            feeds: RoughingFeeds {
+                cut: 2000.0,
+                entry: 800.0,
+                rapid: 15000.0,
+            },
+        }
+    }
+
+    fn validate(&self, tool: &RoughingTool) -> Result<(), RoughError> {
+        let bad = |name, value, reason: &str| {
+            Err(RoughError::InvalidOption {
+                name,
+                value,
+                reason: reason.to_string(),
+            })
+        };
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !(positive(tool.radius) && positive(tool.flute_length)) {
+            return bad(
+                "tool radius",
+                tool.radius,
+                "the tool needs a positive radius and flute length",
+            );
+        }
+        if !(positive(self.stepover) && self.stepover <= tool.radius) {
+            return bad(
+                "stepover",
+                self.stepover,
+                &format!("must lie in (0, {}] (the tool radius)", tool.radius),
+            );
+        }
+        let l = &self.layers;
+        if !(positive(l.max_depth) && l.min_depth >= 0.0 && l.min_depth <= l.max_depth) {
+            return bad(
+                "max_depth",
+                l.max_depth,
+                "needs 0 ≤ min_depth ≤ max_depth, max_depth > 0",
+            );
+        }
+        if l.max_depth > tool.flute_length {
+            return bad(
+                "max_depth",
+                l.max_depth,
+                &format!("is deeper than the flutes ({} mm)", tool.flute_length),
+            );
+        }
+        if !positive(l.flat_band) || l.flat_area.is_nan() || l.flat_area < 0.0 {
+            return bad(
+                "flat_band",
+                l.flat_band,
+                "flats need a positive band and an area ≥ 0",
+            );
+        }
+        if !positive(self.cell) {
+            return bad("cell", self.cell, "must be a positive number of mm");
+        }
+        if !(self.ramp_angle_deg > 0.0 && self.ramp_angle_deg <= 45.0) {
+            return bad("ramp_angle_deg", self.ramp_angle_deg, "must lie in (0, 45]");
+        }
+        if !positive(self.max_ramp_leg) || !(0.0..=1.0).contains(&self.max_plunge_share) {
+            return bad(
+                "max_ramp_leg",
+                self.max_ramp_leg,
+                "needs a positive leg and a plunge share in [0, 1]",
+            );
+        }
+        if !positive(self.clearance) || !positive(self.tolerance) {
+            return bad(
+                "clearance",
+                self.clearance,
+                "clearance and tolerance must be positive",
+            );
+        }
+        let f = &self.feeds;
+        if !(positive(f.cut) && positive(f.entry) && positive(f.rapid)) {
+            return bad("feeds", f.cut, "feeds must be positive");
+        }
+        Ok(())
+    }
+}
+
+/// What one layer did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LayerReport {
+    #[serde(flatten)]
+    pub layer: Layer,
+    pub passes: usize,
+    /// Entries into material ramped along their pass, and descents made straight (into air, or
+    /// onto less than the allowed share of the tool's disc).
+    pub ramped_entries: usize,
+    pub straight_entries: usize,
+    /// Entries that had to go straight down into material (a pass too short to ramp along).
+    pub plunges_into_material: usize,
+    /// Material area the layer cleared (its 2D map), mm².
+    pub cleared_area_mm2: f64,
+    /// Widest radial engagement along the passes (averaged over one tool radius of travel),
+    /// mm, and at the feed links.
+    pub max_engagement_mm: f64,
+    /// Where the widest engagement's window ended.
+    pub max_engagement_at: [f64; 2],
+    pub max_link_engagement_mm: f64,
+    pub cut_length_mm: f64,
+}
+
+/// Layers the tool cannot reach.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NotReached {
+    /// The deepest layer cut and the floor that was asked for, mm.
+    pub deepest_cut_z: f64,
+    pub floor_z: f64,
+    pub reason: String,
+}
+
+/// A layer roughing program and what planning it measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Roughing {
+    /// The moves, axis +Z, starting and ending on the safe height.
+    pub toolpath: Toolpath,
+    pub layers: Vec<LayerReport>,
+    pub safe_z: f64,
+    pub not_reached: Option<NotReached>,
+}
+
+/// Plans layer roughing of `blank` down to `shape` with `tool` (its T number `tool_id`).
+pub fn rough_layers(
+    shape: &Mesh,
+    blank: &Blank,
+    tool: &RoughingTool,
+    tool_id: u32,
+    options: &RoughingOptions,
+) -> Result<Roughing, RoughError> {
+    options.validate(tool)?;
+    if blank.bottom.partial_cmp(&blank.top) != Some(std::cmp::Ordering::Less)
+        || blank.outline.contours.is_empty()
+    {
+        return Err(RoughError::Blank(format!(
+            "needs an outline and bottom < top (got {} and {})",
+            blank.bottom, blank.top
+        )));
+    }
+    let r = tool.radius;
+    let envelope = TopEnvelope::of_mesh(shape, options.cell);
+    let shape_bottom = shape.aabb().min.z;
+    let floor = options
+        .floor
+        .unwrap_or_else(|| blank.bottom.max(shape_bottom));
+    let reach_floor = blank.top - tool.reach;
+    let cell_area = options.cell * options.cell;
+    let planned = layers::layer_heights(
+        &envelope.top,
+        cell_area,
+        blank.top,
+        floor.max(reach_floor),
+        &options.layers,
+    );
+    let not_reached = (reach_floor > floor).then(|| NotReached {
+        deepest_cut_z: reach_floor,
+        floor_z: floor,
+        reason: format!(
+            "the tool reaches {:.1} mm below the blank's top with its holder {:.1} mm above it; \
+             the material below z = {reach_floor:.3} is left for a longer tool",
+            tool.reach,
+            blank.top - reach_floor - tool.reach
+        ),
+    });
+
+    let axis = Direction::new_normalize(Vector3::z());
+    let safe_z = blank.top + options.clearance;
+    let mut writer = Writer {
+        moves: Vec::new(),
+        axis,
+    };
+    let start = blank_anchor(&blank.outline);
+    writer.push(
+        Point3::new(start.x, start.y, safe_z),
+        MoveKind::Rapid,
+        options.feeds.rapid,
+    );
+
+    let slope = options.ramp_angle_deg.to_radians().tan();
+    let mut reports = Vec::with_capacity(planned.len());
+    let mut above: Option<RegionIndex> = None;
+    let mut z_above = blank.top;
+    for layer in planned {
+        let z = layer.z;
+        let err = |error| RoughError::Layer { z, error };
+        let forbidden = region::cells_above(&envelope, z, 0.0);
+        let path = match &forbidden {
+            Some(part) => contour_parallel(
+                part,
+                &blank.outline,
+                &ParallelOptions::new(r, options.stepover),
+            )
+            .map_err(err)?,
+            None => facing(&blank.outline, r, options.stepover).map_err(err)?,
+        };
+        let mut map =
+            MaterialMap::of_stock(&blank.outline, forbidden.as_ref(), r, r / 8.0).map_err(err)?;
+        let mut report = LayerReport {
+            layer,
+            passes: path.passes().len(),
+            ramped_entries: 0,
+            straight_entries: 0,
+            plunges_into_material: 0,
+            cleared_area_mm2: map.material_area(),
+            max_engagement_mm: 0.0,
+            max_engagement_at: [0.0, 0.0],
+            max_link_engagement_mm: 0.0,
+            cut_length_mm: 0.0,
+        };
+        for (i, pass) in path.passes().iter().enumerate() {
+            let points = moves::pass_points(pass, options.tolerance);
+            let entering = i == 0 || matches!(path.links()[i - 1], Link::Rapid { .. });
+            if entering {
+                let to = points[0];
+                writer.transit(
+                    to,
+                    z_above + options.clearance,
+                    safe_z,
+                    above.as_ref(),
+                    r,
+                    options.feeds.rapid,
+                );
+                let plunge_limit = options.max_plunge_share * std::f64::consts::PI * r * r;
+                let ramp = if map.material_within(to) > plunge_limit {
+                    moves::ramp_along(
+                        &points,
+                        z_above + 0.1 * options.clearance,
+                        z,
+                        slope,
+                        options.max_ramp_leg,
+                    )
+                } else {
+                    Vec::new()
+                };
+                if ramp.is_empty() {
+                    if map.material_within(to) > plunge_limit {
+                        report.plunges_into_material += 1;
+                    } else {
+                        report.straight_entries += 1;
+                    }
+                    writer.push(
+                        Point3::new(to.x, to.y, z),
+                        MoveKind::Approach,
+                        options.feeds.entry,
+                    );
+                    map.plunge(to);
+                } else {
+                    report.ramped_entries += 1;
+                    writer.push(
+                        Point3::new(to.x, to.y, z_above + 0.1 * options.clearance),
+                        MoveKind::Approach,
+                        options.feeds.entry,
+                    );
+                    map.plunge(to);
+                    let mut window = Window::without_values(r);
+                    let mut from = to;
+                    for p in ramp {
+                        let q = Point2::new(p.x, p.y);
+                        map.cut(
+                            &Segment::Line {
+                                start: from,
+                                end: q,
+                            },
+                            &mut window,
+                        );
+                        writer.push(p, MoveKind::Cut, options.feeds.entry);
+                        from = q;
+                    }
+                }
+            } else {
+                let link = path.links()[i - 1];
+                let mut window = Window::new(r);
+                map.cut(
+                    &Segment::Line {
+                        start: link.from(),
+                        end: link.to(),
+                    },
+                    &mut window,
+                );
+                window.finish();
+                report.max_link_engagement_mm = report.max_link_engagement_mm.max(window.max);
+                let (kind, feed) = match link {
+                    Link::Traverse { .. } => (MoveKind::Approach, options.feeds.rapid),
+                    _ => (MoveKind::Cut, options.feeds.cut),
+                };
+                writer.push(Point3::new(points[0].x, points[0].y, z), kind, feed);
+            }
+            let mut window = Window::new(r);
+            for w in points.windows(2) {
+                map.cut(
+                    &Segment::Line {
+                        start: w[0],
+                        end: w[1],
+                    },
+                    &mut window,
+                );
+                writer.push(
+                    Point3::new(w[1].x, w[1].y, z),
+                    MoveKind::Cut,
+                    options.feeds.cut,
+                );
+            }
+            window.finish();
+            if window.max > report.max_engagement_mm {
+                report.max_engagement_mm = window.max;
+                report.max_engagement_at = [window.max_at.x, window.max_at.y];
+            }
+            report.cut_length_mm += moves::polyline_length(&points);
+        }
+        report.cleared_area_mm2 -= map.material_area();
+        if report.passes > 0 {
+            reports.push(report);
+            above = forbidden.as_ref().map(RegionIndex::new);
+            z_above = z;
+        }
+    }
+    let last = writer.last();
+    writer.push(
+        Point3::new(last.x, last.y, safe_z),
+        MoveKind::Retract,
+        options.feeds.rapid,
+    );
+    Ok(Roughing {
+        toolpath: Toolpath {
+            tool_id,
+            moves: writer.moves,
+        },
+        layers: reports,
+        safe_z,
+        not_reached,
+    })
+}
+
+/// A point on the blank's outline, where the program starts above.
+fn blank_anchor(outline: &Shape) -> Point2 {
+    outline
+        .contours
+        .first()
+        .and_then(|c| c.vertices.first())
+        .map_or(Point2::origin(), |v| v.point)
+}
+
+/// Clears a whole section with no part in it: loops of the section's inward offsets, the first
+/// one stepover in from where the tool's edge meets the outline, outermost first, each
+/// entered afresh.
+fn facing(outline: &Shape, r: f64, s: f64) -> Result<CenterPath, ContourError> {
+    let mut passes = Vec::new();
+    let mut depth = s - r;
+    loop {
+        let loops = crate::contour::cavc::offset_region(outline, -depth, "blank")?;
+        if loops.is_empty() {
+            break;
+        }
+        for c in loops
+            .into_iter()
+            .filter(|c: &Contour| c.signed_area() > 0.0)
+        {
+            passes.push(Pass::closed(c.vertices, depth)?);
+        }
+        depth += s;
+    }
+    CenterPath::with_rapid_links(r, passes)
+}
+
+/// The moves being written.
+struct Writer {
+    moves: Vec<Move>,
+    axis: Direction,
+}
+
+impl Writer {
+    fn push(&mut self, tip: Point3, kind: MoveKind, feed: f64) {
+        self.moves.push(Move {
+            pose: ToolPose {
+                tip,
+                axis: self.axis,
+            },
+            kind,
+            feed,
+        });
+    }
+
+    fn last(&self) -> Point3 {
+        self.moves.last().map_or(Point3::origin(), |m| m.pose.tip)
+    }
+
+    /// Goes from where the tool is to above `to` at `low` (just above the layer above): up to
+    /// `low`, then straight across when that way keeps the tool `r` clear of what stands above
+    /// the layer above (`above`; nothing when that layer was the blank's top or a facing
+    /// layer), else over the blank at `safe_z`.
+    fn transit(
+        &mut self,
+        to: Point2,
+        low: f64,
+        safe_z: f64,
+        above: Option<&RegionIndex>,
+        r: f64,
+        rapid: f64,
+    ) {
+        let at = self.last();
+        let from = Point2::new(at.x, at.y);
+        if at.z < low {
+            self.push(Point3::new(at.x, at.y, low), MoveKind::Retract, rapid);
+        }
+        let clear = match above {
+            None => true,
+            Some(index) => {
+                let seg = Segment::Line {
+                    start: from,
+                    end: to,
+                };
+                !index.contains(from)
+                    && !index.contains(to)
+                    && index
+                        .boundary()
+                        .nearest(&seg)
+                        .is_none_or(|n| n.distance >= r + 1e-6)
+            }
+        };
+        let height = self.last().z;
+        if clear && height <= low + 1e-9 {
+            self.push(Point3::new(to.x, to.y, low), MoveKind::Rapid, rapid);
+        } else {
+            if height < safe_z {
+                self.push(Point3::new(at.x, at.y, safe_z), MoveKind::Retract, rapid);
+            }
+            self.push(Point3::new(to.x, to.y, safe_z), MoveKind::Rapid, rapid);
+            self.push(Point3::new(to.x, to.y, low), MoveKind::Rapid, rapid);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::fixtures::cuboid;
+
+    /// A 20 × 20 × 10 block on the floor in a 40 × 40 × 12 box blank, roughed with r = 3.
+    fn block_job() -> (Mesh, Blank, RoughingTool, RoughingOptions) {
+        let mut block = cuboid(20.0, 20.0, 10.0);
+        for p in &mut block.positions {
+            p.x -= 10.0;
+            p.y -= 10.0;
+        }
+        let blank = Blank::cuboid(
+            Point3::new(-20.0, -20.0, 0.0),
+            Point3::new(20.0, 20.0, 12.0),
+        );
+        let tool = RoughingTool {
+            radius: 3.0,
+            flute_length: 20.0,
+            reach: 50.0,
+        };
+        let mut options = RoughingOptions::for_radius(3.0);
+        options.floor = Some(0.0);
+        (block, blank, tool, options)
+    }
+
+    /// The block's top is a flat: a layer at its height (a facing layer, the tool resting on
+    /// it), then the 10 mm below split evenly within the 3 mm depth of cut; no move comes
+    /// nearer the block than the radius, and the layers below its top run within a cell's
+    /// diagonal of that, leaving no more than the grid's rounding.
+    #[test]
+    fn a_block_is_roughed_in_layers_to_its_walls() {
+        let (block, blank, tool, options) = block_job();
+        let rough = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        let zs: Vec<f64> = rough.layers.iter().map(|l| l.layer.z).collect();
+        assert_eq!(zs, vec![10.0, 7.5, 5.0, 2.5, 0.0]);
+        assert!(rough.layers[0].layer.at_flat);
+        let check = check::overcuts(&block, &rough.toolpath, tool.radius, 1e-9);
+        assert!(check.overcuts.is_empty(), "{:?}", &check.overcuts[..1]);
+        assert!(
+            check.min_clearance_mm >= -1e-9,
+            "{}",
+            check.min_clearance_mm
+        );
+        let nearest = |z: f64| {
+            rough
+                .toolpath
+                .moves
+                .iter()
+                .filter(|m| m.kind == MoveKind::Cut && (m.pose.tip.z - z).abs() < 1e-9)
+                .map(|m| {
+                    let dx = (m.pose.tip.x.abs() - 10.0).max(0.0);
+                    let dy = (m.pose.tip.y.abs() - 10.0).max(0.0);
+                    dx.hypot(dy)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        for z in [7.5, 5.0, 2.5, 0.0] {
+            let d = nearest(z);
+            assert!(
+                d >= 3.0 - 1e-9 && d <= 3.0 + options.cell * 2f64.sqrt() + 1e-9,
+                "z {z}: {d}"
+            );
+        }
+        // The facing layer clears the whole section, the others the section minus the block
+        // and its grid margin.
+        let faced = rough.layers[0].cleared_area_mm2;
+        assert!((faced - 1600.0).abs() < 16.0, "{faced}");
+        let walled = rough.layers[1].cleared_area_mm2;
+        assert!(walled > 1600.0 - 21.0 * 21.0 && walled < 1200.0, "{walled}");
+    }
+
+    /// Every descent into material is a ramp no steeper than the ramp angle; straight descents
+    /// happen only into air; the tool starts and ends at the safe height; planning twice gives
+    /// the same program.
+    #[test]
+    fn entries_are_ramped_and_the_program_is_deterministic() {
+        let (block, blank, tool, options) = block_job();
+        let rough = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        let slope = options.ramp_angle_deg.to_radians().tan();
+        for w in rough.toolpath.moves.windows(2) {
+            let d = w[1].pose.tip - w[0].pose.tip;
+            if w[1].kind == MoveKind::Cut && d.z < -1e-12 {
+                assert!(
+                    -d.z <= slope * d.xy().norm() + 1e-9,
+                    "too steep: {:?}",
+                    w[1]
+                );
+            }
+        }
+        assert!(rough.layers.iter().all(|l| l.plunges_into_material == 0));
+        assert!(rough.layers.iter().any(|l| l.ramped_entries > 0));
+        let moves = &rough.toolpath.moves;
+        assert_eq!(moves[0].pose.tip.z, rough.safe_z);
+        assert_eq!(moves[moves.len() - 1].pose.tip.z, rough.safe_z);
+        let again = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        assert_eq!(again.toolpath, rough.toolpath);
+    }
+
+    #[test]
+    fn bad_options_and_blanks_are_refused_by_name() {
+        let (block, blank, tool, options) = block_job();
+        let mut o = options.clone();
+        o.stepover = 4.0;
+        let err = rough_layers(&block, &blank, &tool, 7, &o).expect_err("stepover");
+        assert!(err.to_string().contains("stepover"), "{err}");
+        let mut o = options.clone();
+        o.layers.max_depth = 25.0;
+        let err = rough_layers(&block, &blank, &tool, 7, &o).expect_err("depth");
+        assert!(err.to_string().contains("deeper than the flutes"), "{err}");
+        let flat = Blank { top: 0.0, ..blank };
+        assert!(matches!(
+            rough_layers(&block, &flat, &tool, 7, &options),
+            Err(RoughError::Blank(_))
+        ));
+    }
+
+    /// A tool too short for the blank cuts the layers it reaches and says what is left.
+    #[test]
+    fn layers_beyond_the_reach_are_reported() {
+        let (block, blank, mut tool, options) = block_job();
+        tool.reach = 6.0;
+        let rough = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        let lowest = rough.layers.last().expect("layers").layer.z;
+        assert!((lowest - 6.0).abs() < 1e-12, "{lowest}");
+        let left = rough.not_reached.expect("reported");
+        assert_eq!((left.deepest_cut_z, left.floor_z), (6.0, 0.0));
+    }
+}
