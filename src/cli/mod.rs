@@ -26,6 +26,7 @@ pub use commands::info::InfoArgs;
 pub use commands::levels::LevelsArgs;
 pub use commands::offsets::OffsetsArgs;
 pub use commands::plan::PlanArgs;
+pub use commands::rough::RoughArgs;
 pub use commands::sample::{SampleArgs, SampleKind};
 pub use commands::simulate::SimulateArgs;
 pub use commands::subdivide::SubdivideArgs;
@@ -75,6 +76,10 @@ pub enum Command {
     /// tapered cutter: material removed per move, gouges into the part, rapids through
     /// material, shank and holder collisions, rest material (tri-dexel stock).
     Simulate(SimulateArgs),
+    /// Rough a part from its blank in layers (3-axis) down to its verified offset shape with a
+    /// library tool: ramped entries, posted, read back and checked (shape, part, tri-dexel
+    /// stock with the whole tool).
+    Rough(RoughArgs),
 }
 
 /// Runs the parsed command; returns the process exit code.
@@ -90,6 +95,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Access(a) => commands::access::run(&a),
         Command::Tools(a) => commands::tools::run(&a),
         Command::Simulate(a) => commands::simulate::run(&a),
+        Command::Rough(a) => commands::rough::run(&a),
     };
     match result {
         Ok(()) => 0,

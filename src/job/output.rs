@@ -83,6 +83,10 @@ impl OutputKind {
         command: "simulate",
         owns: |n| matches!(n, "simulation.json" | "stock.glb" | "stock.png"),
     };
+    pub const ROUGH: OutputKind = OutputKind {
+        command: "rough",
+        owns: |n| matches!(n, "rough.nc" | "cl.csv" | "rough.json" | "stock.glb"),
+    };
     pub const TOOLS: OutputKind = OutputKind {
         command: "tools",
         owns: |n| matches!(n, "tools.glb" | "tools.json"),

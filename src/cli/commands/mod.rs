@@ -6,6 +6,7 @@ pub mod info;
 pub mod levels;
 pub mod offsets;
 pub mod plan;
+pub mod rough;
 pub mod sample;
 pub mod simulate;
 pub mod subdivide;

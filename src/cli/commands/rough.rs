@@ -1,0 +1,108 @@
+//! `wavemill rough`: 3-axis layer roughing of a part from its blank, down to the part's
+//! verified offset shape, with a tool of a library; posted, read back and checked.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::cli::load;
+use crate::cli::values::*;
+use crate::error::Result;
+use crate::job::{self};
+
+#[derive(Args, Debug)]
+pub struct RoughArgs {
+    /// Part mesh (.stl, .obj, .gltf, .glb), closed, standing on its lowest point with its axis
+    /// along +Z.
+    pub part: PathBuf,
+    /// Tool library (TOML, one `[[tool]]` table per tool; see data/tools.toml).
+    #[arg(long)]
+    pub library: PathBuf,
+    /// The library tool to rough with [default: the largest flat or bull-nose end mill, the
+    /// first that reaches the part's floor if any does].
+    #[arg(long)]
+    pub tool_id: Option<u32>,
+    /// Material left on the part: roughing stops at its verified offset shape by this much, mm.
+    #[arg(long, default_value_t = 0.5, value_parser = positive)]
+    pub allowance: f64,
+    /// The blank: `box:X0,Y0,Z0,X1,Y1,Z1` or `cylinder:R,Z0,Z1` (about the vertical line
+    /// through the part's box centre), mm [default: a cylinder 2 mm wider than the part and
+    /// 1 mm above it].
+    #[arg(long, value_name = "SPEC", value_parser = blank)]
+    pub blank: Option<job::BlankSpec>,
+    /// Cutting feed, mm/min.
+    #[arg(long, default_value_t = 2000.0, value_parser = positive)]
+    pub feed: f64,
+    /// Feed of ramped entries, mm/min.
+    #[arg(long, default_value_t = 800.0, value_parser = positive)]
+    pub entry_feed: f64,
+    /// Spindle speed, rev/min.
+    #[arg(long, default_value_t = 8000)]
+    pub spindle_rpm: u32,
+    /// Distance between dexel lines of the stock model the program is run on, mm [default: the
+    /// part's box diagonal / 400, within 0.05 to 1 mm].
+    #[arg(long, value_parser = positive)]
+    pub resolution: Option<f64>,
+    /// Units of the part file: mm, m or in.
+    #[arg(long, default_value = "mm", value_parser = units)]
+    pub units: String,
+    /// Leave the run-dependent timings out of rough.json (byte-identical reports).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Output folder: rough.nc, cl.csv, rough.json, stock.glb (only rough.json when a check
+    /// fails; exit 3).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Runs the command.
+pub fn run(args: &RoughArgs) -> Result<()> {
+    job::check_output_dir(&args.out, &job::OutputKind::ROUGH)?;
+    let library = crate::tool::ToolLibrary::read(&args.library)?;
+    let name = args.part.display().to_string();
+    let raw = load(&args.part, &args.units)?;
+    let defaults = job::RoughOptions::default();
+    let options = job::RoughOptions {
+        allowance: args.allowance,
+        blank: args.blank.clone(),
+        tool_id: args.tool_id,
+        spindle_rpm: args.spindle_rpm,
+        feeds: crate::rough::RoughingFeeds {
+            cut: args.feed,
+            entry: args.entry_feed,
+            ..defaults.feeds.clone()
+        },
+        resolution: args.resolution,
+        ..defaults
+    };
+    let output = job::rough(&raw, &name, &args.units, &library, &options)?;
+    job::write_rough_outputs(&args.out, &output, !args.no_timings)?;
+    let r = &output.report;
+    say!(
+        "{name}: T{} {} from {}, {} layers, {} moves, {:.1} min",
+        r.tool.id,
+        r.tool.description,
+        r.blank,
+        r.layers.len(),
+        r.moves,
+        r.estimated_time_s / 60.0
+    );
+    say!(
+        "  removed {:.0} of {:.0} mm³; rest over the part mean {:.2} mm, max {:.2} mm",
+        r.stock.removed_volume_mm3,
+        r.stock.blank_volume_mm3,
+        r.stock.rest.mean_mm,
+        r.stock.rest.max_mm
+    );
+    say!(
+        "  checks: closest to the offset shape {:.4} mm, to the part {:.3} mm; 0 gouges, 0 rapids \
+         through material, 0 shank or holder touches",
+        r.overcut_vs_shape.min_clearance_mm,
+        r.overcut_vs_part.min_clearance_mm
+    );
+    if let Some(n) = &r.not_reached {
+        say!("  not reached: {}", n.reason);
+    }
+    say!("  wrote {}", args.out.display());
+    Ok(())
+}

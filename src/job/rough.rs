@@ -1,0 +1,438 @@
+//! `wavemill rough`: layer roughing of a part from its blank with a library tool, down to the
+//! part's verified offset shape S₀ (the part plus an allowance), 3-axis ([`crate::rough`]).
+//!
+//! What is written is what is checked: the program is posted for a 3-axis machine, read back
+//! from the G-code as the control would run it, checked against S₀ exactly
+//! ([`crate::rough::check`]) and run on a tri-dexel model of the blank with the tool's whole
+//! assembly ([`crate::stock::simulate`]): gouges into the part, rapids through material, and
+//! the shank or holder touching it fail the run (exit 3, only `rough.json` written).
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::blank::BlankSpec;
+use super::offsets::stock_shapes;
+use super::output::{OutputKind, write_output_set};
+use super::stock_model::{blank_stock, default_resolution, stock_error, stock_model_glb};
+use crate::contour::geometry::Point2;
+use crate::error::{Error, Result};
+use crate::geom::{MoveKind, Point3};
+use crate::mesh::io::RawMesh;
+use crate::post::{GcodeOptions, LineariseOptions, ProgramHeader, ThreeAxis};
+use crate::rough::check::{OvercutReport, overcuts};
+use crate::rough::{Blank, LayerReport, NotReached, RoughingFeeds, RoughingOptions, RoughingTool};
+use crate::stock::cutter::CuttingBody;
+use crate::stock::rest::{Rest, rest_over};
+use crate::stock::simulate::{SimulationOptions, simulate};
+use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
+use crate::tool::{BodyRole, Cutter, ToolAssembly, ToolLibrary};
+use crate::verify::{MachineModel, program_toolpath};
+
+/// What `rough` is asked to do.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughOptions {
+    /// Material S₀ leaves on the part, mm.
+    pub allowance: f64,
+    /// The blank; `None`: a cylinder about the part's vertical axis, `margin` mm wider than the
+    /// part and 1 mm above it, standing on the part's lowest point.
+    pub blank: Option<BlankSpec>,
+    pub margin: f64,
+    /// The library tool to rough with; `None`: the largest flat or bull-nose end mill, the
+    /// first that reaches the floor if any does.
+    pub tool_id: Option<u32>,
+    /// The holder stays this far above the blank, mm.
+    pub holder_margin: f64,
+    pub spindle_rpm: u32,
+    pub feeds: RoughingFeeds,
+    /// Distance between dexel lines of the stock model, mm; `None`: the part's default.
+    pub resolution: Option<f64>,
+    /// Chord and post tolerance, and the depth a touch must exceed to count, mm.
+    pub tolerance: f64,
+}
+
+impl Default for RoughOptions {
+    fn default() -> Self {
+        RoughOptions {
+            allowance: 0.5,
+            blank: None,
+            margin: 2.0,
+            tool_id: None,
+            holder_margin: 2.0,
+            spindle_rpm: 8000,
+            feeds: RoughingFeeds {
+                cut: 2000.0,
+                entry: 800.0,
+                rapid: 15000.0,
+            },
+            resolution: None,
+            tolerance: 0.01,
+        }
+    }
+}
+
+/// The tool `rough` used and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoughToolReport {
+    pub id: u32,
+    pub name: String,
+    pub description: String,
+    pub chosen: String,
+    pub planning: RoughingTool,
+}
+
+/// What the tri-dexel run of the posted program found.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoughStockReport {
+    pub resolution_mm: f64,
+    pub blank_volume_mm3: f64,
+    pub removed_volume_mm3: f64,
+    pub volume_after_mm3: f64,
+    pub air_cut_fraction: f64,
+    pub gouges: usize,
+    pub rapids_through_material: usize,
+    pub collisions: usize,
+    /// Material left over the part.
+    pub rest: Rest,
+}
+
+/// `rough.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoughReport {
+    pub wavemill_version: &'static str,
+    pub part: String,
+    pub blank: String,
+    pub allowance_mm: f64,
+    pub shape_triangles: usize,
+    pub tool: RoughToolReport,
+    pub layers: Vec<LayerReport>,
+    pub not_reached: Option<NotReached>,
+    pub moves: usize,
+    pub cutting_length_mm: f64,
+    /// At the programmed feeds and the rapid rate, s.
+    pub estimated_time_s: f64,
+    /// The program as read back from the G-code, checked against S₀ and against the part.
+    pub overcut_vs_shape: OvercutReport,
+    pub overcut_vs_part: OvercutReport,
+    pub stock: RoughStockReport,
+    pub timings_ms: Option<std::collections::BTreeMap<&'static str, f64>>,
+}
+
+/// What `rough` produced.
+pub struct RoughOutput {
+    pub report: RoughReport,
+    pub gcode: String,
+    pub cl_csv: String,
+    pub stock_glb: Vec<u8>,
+    /// Why the program must not be run, if it must not.
+    pub failure: Option<String>,
+}
+
+/// Plans, posts, reads back and checks layer roughing of `raw` (in mm) from its blank with a
+/// tool of `library`.
+pub fn rough(
+    raw: &RawMesh,
+    part_name: &str,
+    units: &str,
+    library: &ToolLibrary,
+    options: &RoughOptions,
+) -> Result<RoughOutput> {
+    let mut timings = std::collections::BTreeMap::new();
+    let t = Instant::now();
+    let (part, _) =
+        crate::mesh::prepare(&raw.mesh, &Default::default()).map_err(|e| Error::Mesh {
+            file: part_name.to_string(),
+            reason: e.to_string(),
+        })?;
+    let bounds = part.aabb();
+    let floor = bounds.min.z;
+    let centre = bounds.center();
+    let spec = match &options.blank {
+        Some(spec) => spec.clone(),
+        None => {
+            let radius = part
+                .positions
+                .iter()
+                .map(|p| (p.x - centre.x).hypot(p.y - centre.y))
+                .fold(0.0, f64::max);
+            BlankSpec::Cylinder {
+                radius: radius + options.margin,
+                z0: floor,
+                z1: bounds.max.z + 1.0,
+            }
+        }
+    };
+    let blank = match &spec {
+        BlankSpec::Cylinder { radius, z0, z1 } => {
+            Blank::cylinder(Point2::new(centre.x, centre.y), *radius, *z0, *z1)
+        }
+        BlankSpec::Box(b) => {
+            Blank::cuboid(Point3::new(b[0], b[1], b[2]), Point3::new(b[3], b[4], b[5]))
+        }
+        other => {
+            return Err(Error::Usage(format!(
+                "blank `{}`: layer roughing clears a box or a cylinder blank",
+                other.describe()
+            )));
+        }
+    };
+    let (assembly, chosen) = choose_tool(
+        library,
+        options.tool_id,
+        blank.top - floor,
+        options.holder_margin,
+    )?;
+    let tool = RoughingTool::of(&assembly, options.holder_margin);
+    timings.insert("prepare", ms(t));
+
+    let t = Instant::now();
+    let shapes = stock_shapes(&part, &Default::default(), &[options.allowance])?;
+    let shape = &shapes
+        .first()
+        .ok_or_else(|| Error::Internal("no offset shape was built".into()))?
+        .1
+        .mesh;
+    timings.insert("offset_shape", ms(t));
+
+    let t = Instant::now();
+    let mut roughing_options = RoughingOptions::for_radius(tool.radius);
+    roughing_options.floor = Some(floor);
+    roughing_options.feeds = options.feeds.clone();
+    roughing_options.tolerance = options.tolerance;
+    let planned = crate::rough::rough_layers(shape, &blank, &tool, assembly.id, &roughing_options)
+        .map_err(|e| Error::Usage(format!("{part_name}: roughing: {e}")))?;
+    if !planned
+        .toolpath
+        .moves
+        .iter()
+        .any(|m| m.kind == MoveKind::Cut)
+    {
+        return Err(Error::NothingToCut(format!(
+            "{part_name}: the blank `{}` holds no material outside the part's offset shape that \
+             the tool can reach",
+            spec.describe()
+        )));
+    }
+    timings.insert("layers", ms(t));
+
+    let t = Instant::now();
+    let header = ProgramHeader {
+        program_name: "wavemill layer roughing".into(),
+        part_name: part_name.to_string(),
+        tool_description: vec![assembly.describe()],
+        tool_number: assembly.id,
+        spindle_rpm: options.spindle_rpm,
+        coolant: true,
+        comments: vec![format!(
+            "roughing to the part + {} mm from {}, 3-axis, work offset at the part's origin",
+            options.allowance,
+            spec.describe()
+        )],
+    };
+    let linearise = LineariseOptions {
+        tolerance_mm: options.tolerance,
+        ..Default::default()
+    };
+    let gcode = crate::post::post_gcode(
+        &ThreeAxis,
+        &planned.toolpath,
+        &header,
+        &linearise,
+        &GcodeOptions::default(),
+    )
+    .map_err(|e| Error::Internal(format!("posting the roughing program: {e}")))?;
+    let cl_csv = crate::post::write_cl_csv(&planned.toolpath);
+    let (posted, _) = program_toolpath(&gcode, &MachineModel::ThreeAxis, options.tolerance)
+        .map_err(|e| {
+            Error::Internal(format!(
+                "the posted roughing program does not read back: {e}"
+            ))
+        })?;
+    // Rounding to the posted decimals may bring a move 5e-5 mm nearer; the check allows that.
+    let rounding = 1e-4;
+    let overcut_vs_shape = overcuts(shape, &posted, tool.radius, rounding);
+    let overcut_vs_part = overcuts(&part, &posted, tool.radius, rounding);
+    timings.insert("post_and_check", ms(t));
+
+    let t = Instant::now();
+    let spacing = options
+        .resolution
+        .unwrap_or_else(|| default_resolution(&part));
+    let mut stock = blank_stock(&part, &spec, units, spacing, DEFAULT_MAX_DEXELS)?;
+    let blank_volume = stock.volume();
+    let sim = simulate(
+        &mut stock,
+        &part,
+        &posted,
+        &CuttingBody::of(&assembly.cutter),
+        &SimulationOptions {
+            tolerance: options.tolerance,
+            max_dexels: DEFAULT_MAX_DEXELS,
+            non_cutting: assembly
+                .bodies()
+                .into_iter()
+                .filter(|b| b.role != BodyRole::Flutes)
+                .collect(),
+        },
+    )
+    .map_err(stock_error)?;
+    let part_model = Stock::from_mesh(&part, spacing, DEFAULT_MAX_DEXELS).map_err(stock_error)?;
+    let rest = rest_over(&stock, &part, &part_model, stock.bounds().diagonal());
+    let stock_glb = stock_model_glb(&stock, &part, options.tolerance)?;
+    timings.insert("stock", ms(t));
+
+    let moves = &planned.toolpath.moves;
+    let cutting_length_mm = moves
+        .windows(2)
+        .filter(|w| w[1].kind == MoveKind::Cut)
+        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+        .sum();
+    let estimated_time_s = moves
+        .windows(2)
+        .map(|w| 60.0 * (w[1].pose.tip - w[0].pose.tip).norm() / w[1].feed)
+        .sum();
+    let mut problems = Vec::new();
+    if let Some(o) = overcut_vs_shape.overcuts.first() {
+        problems.push(format!(
+            "{} move(s) into the offset shape, the first move {} by {:.4} mm",
+            overcut_vs_shape.overcuts.len(),
+            o.move_index,
+            o.depth_mm
+        ));
+    }
+    if sim.gouge.count > 0 {
+        problems.push(format!("{} gouging move(s)", sim.gouge.count));
+    }
+    if let Some(first) = sim.rapids_through_material.first() {
+        problems.push(format!(
+            "{} rapid(s) through material, the first move {first}",
+            sim.rapids_through_material.len()
+        ));
+    }
+    if let Some(c) = sim.collisions.first() {
+        problems.push(format!(
+            "{} move(s) with the shank or holder in material, the first move {} ({:?})",
+            sim.collisions.len(),
+            c.move_index,
+            c.role
+        ));
+    }
+    let failure = (!problems.is_empty()).then(|| format!("{part_name}: {}", problems.join("; ")));
+    let report = RoughReport {
+        wavemill_version: env!("CARGO_PKG_VERSION"),
+        part: part_name.to_string(),
+        blank: spec.describe(),
+        allowance_mm: options.allowance,
+        shape_triangles: shape.triangles.len(),
+        tool: RoughToolReport {
+            id: assembly.id,
+            name: assembly.name.clone(),
+            description: assembly.describe(),
+            chosen,
+            planning: tool,
+        },
+        layers: planned.layers,
+        not_reached: planned.not_reached,
+        moves: moves.len(),
+        cutting_length_mm,
+        estimated_time_s,
+        overcut_vs_shape,
+        overcut_vs_part,
+        stock: RoughStockReport {
+            resolution_mm: spacing,
+            blank_volume_mm3: blank_volume,
+            removed_volume_mm3: sim.removed_volume_mm3,
+            volume_after_mm3: stock.volume(),
+            air_cut_fraction: sim.air_cut_fraction,
+            gouges: sim.gouge.count,
+            rapids_through_material: sim.rapids_through_material.len(),
+            collisions: sim.collisions.len(),
+            rest,
+        },
+        timings_ms: Some(timings),
+    };
+    Ok(RoughOutput {
+        report,
+        gcode,
+        cl_csv,
+        stock_glb,
+        failure,
+    })
+}
+
+/// The tool to rough with: `id` if given, else the largest flat or bull-nose end mill of the
+/// library, the first of them that reaches `depth` below the blank's top if any does. Also
+/// why it was chosen.
+fn choose_tool(
+    library: &ToolLibrary,
+    id: Option<u32>,
+    depth: f64,
+    holder_margin: f64,
+) -> Result<(ToolAssembly, String)> {
+    if let Some(id) = id {
+        let tool = library
+            .tools
+            .iter()
+            .find(|t| t.id == id)
+            .ok_or_else(|| Error::Usage(format!("the library has no tool with id {id}")))?;
+        return Ok((tool.clone(), format!("asked for (T{id})")));
+    }
+    let roughers: Vec<&ToolAssembly> = library
+        .largest_first()
+        .into_iter()
+        .map(|i| &library.tools[i])
+        .filter(|t| matches!(t.cutter, Cutter::Flat { .. } | Cutter::BullNose { .. }))
+        .collect();
+    let Some(largest) = roughers.first() else {
+        return Err(Error::Usage(
+            "the library has no flat or bull-nose end mill to rough with".into(),
+        ));
+    };
+    Ok(
+        match roughers
+            .iter()
+            .find(|t| t.stickout - holder_margin >= depth)
+        {
+            Some(t) => (
+                (*t).clone(),
+                format!("the largest flat or bull-nose end mill reaching {depth:.1} mm deep"),
+            ),
+            None => (
+                (*largest).clone(),
+                format!("the largest flat or bull-nose end mill; none reaches {depth:.1} mm deep"),
+            ),
+        },
+    )
+}
+
+fn ms(since: Instant) -> f64 {
+    (since.elapsed().as_secs_f64() * 1e4).round() / 10.0
+}
+
+/// Writes `rough.nc`, `cl.csv`, `rough.json` and `stock.glb` into `dir`, all or nothing; when
+/// the program failed its checks, only `rough.json`, and returns the failure (exit 3); without timings when `timings` is
+/// false (byte-identical reports).
+pub fn write_rough_outputs(
+    dir: &std::path::Path,
+    output: &RoughOutput,
+    timings: bool,
+) -> Result<()> {
+    let mut report = output.report.clone();
+    if !timings {
+        report.timings_ms = None;
+    }
+    let json = serde_json::to_vec_pretty(&report)
+        .map_err(|e| Error::Internal(format!("rough.json: {e}")))?;
+    let mut files = vec![("rough.json".to_string(), json)];
+    if let Some(problem) = &output.failure {
+        write_output_set(dir, &OutputKind::ROUGH, &files)?;
+        return Err(Error::Verification(format!(
+            "{problem} (see {})",
+            dir.join("rough.json").display()
+        )));
+    }
+    files.push(("rough.nc".into(), output.gcode.clone().into_bytes()));
+    files.push(("cl.csv".into(), output.cl_csv.clone().into_bytes()));
+    files.push(("stock.glb".into(), output.stock_glb.clone()));
+    write_output_set(dir, &OutputKind::ROUGH, &files)
+}

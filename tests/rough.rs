@@ -1,0 +1,162 @@
+//! `wavemill rough` on the bundled sample impeller: layer roughing from the default cylinder
+//! blank with the library's flat D10, posted, read back, checked exactly against the offset
+//! shape and run on the tri-dexel blank with the whole tool. A coarse stock model (1 mm) keeps
+//! the run short; the checks do not depend on it.
+
+mod common;
+
+use std::process::Command;
+
+use common::repo_file;
+use wavemill::job::{self, RoughOptions};
+use wavemill::tool::ToolLibrary;
+
+fn library() -> ToolLibrary {
+    ToolLibrary::read(&repo_file("data/tools.toml")).expect("data/tools.toml")
+}
+
+#[test]
+fn the_sample_is_roughed_to_its_offset_shape_without_a_touch() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
+    let options = RoughOptions {
+        tool_id: Some(3),
+        resolution: Some(1.0),
+        ..Default::default()
+    };
+    let out = job::rough(&raw, "data/impeller.glb", "mm", &library(), &options).expect("rough");
+    let r = &out.report;
+    assert_eq!(out.failure, None);
+    // The program as read back from its G-code stays outside S₀ (up to the posted rounding)
+    // and so at least the allowance off the part.
+    assert!(r.overcut_vs_shape.overcuts.is_empty());
+    assert!(r.overcut_vs_shape.min_clearance_mm > -1e-4);
+    assert!(r.overcut_vs_part.min_clearance_mm > options.allowance - 1e-4);
+    // The tri-dexel run: nothing touched that must not be, and the volume adds up.
+    let s = &r.stock;
+    assert_eq!(
+        (s.gouges, s.rapids_through_material, s.collisions),
+        (0, 0, 0)
+    );
+    let balance = s.blank_volume_mm3 - s.removed_volume_mm3 - s.volume_after_mm3;
+    assert!(balance.abs() < 1e-6 * s.blank_volume_mm3, "{balance}");
+    // Roughing takes most of what stands outside the part.
+    let part_volume = wavemill::mesh::prepare(&raw.mesh, &Default::default())
+        .expect("prepare")
+        .0
+        .signed_volume();
+    let excess = s.blank_volume_mm3 - part_volume;
+    assert!(
+        s.removed_volume_mm3 > 0.6 * excess,
+        "{} of {excess}",
+        s.removed_volume_mm3
+    );
+    // Layers within the depth of cut, entries ramped.
+    assert!(r.layers.iter().all(|l| l.layer.depth <= 5.0 + 1e-9));
+    assert!(r.layers.iter().all(|l| l.plunges_into_material == 0));
+    assert!(out.gcode.contains("\nT3 M6\n"));
+    a_real_control_reads_the_program(&out.gcode, &out.cl_csv);
+}
+
+/// LinuxCNC's interpreter reads the program into one straight motion per planned move (after
+/// the first, Z-only block), ending where the plan does to the posted decimals. Skipped,
+/// saying so, where `rs274` is not installed.
+fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str) {
+    let Ok(rs274) = common::plan_checks::which("rs274") else {
+        eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("wavemill-rs274-rough-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (program, canon) = (dir.join("rough.nc"), dir.join("rough.canon"));
+    std::fs::write(&program, gcode).unwrap();
+    let run = Command::new(rs274)
+        .arg("-g")
+        .arg(&program)
+        .arg(&canon)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run rs274");
+    assert!(
+        run.status.success(),
+        "rs274: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(&canon).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let ends: Vec<[f64; 3]> = text
+        .lines()
+        .filter_map(|l| {
+            let rest = l
+                .split_once("STRAIGHT_FEED(")
+                .or_else(|| l.split_once("STRAIGHT_TRAVERSE("))?
+                .1;
+            let v: Vec<f64> = rest
+                .trim_end_matches(')')
+                .split(',')
+                .map(|x| x.trim().parse().unwrap())
+                .collect();
+            Some([v[0], v[1], v[2]])
+        })
+        .collect();
+    let planned = wavemill::post::read_cl_csv(cl_csv, "cl.csv").expect("cl.csv");
+    // Moves too short to show at 4 decimals are not posted.
+    let mut posted = planned.moves.iter().map(|m| m.pose.tip).peekable();
+    let mut last: Option<[f64; 3]> = None;
+    let mut matched = 0usize;
+    for e in &ends[1..] {
+        let tip = loop {
+            let tip = posted
+                .next()
+                .expect("rs274 read more motions than were planned");
+            let same = last.is_some_and(|l| (0..3).all(|i| (l[i] - tip[i]).abs() < 5e-5));
+            if !same {
+                break tip;
+            }
+        };
+        for i in 0..3 {
+            assert!((e[i] - tip[i]).abs() <= 5e-5 + 1e-9, "{e:?} vs {tip:?}");
+        }
+        last = Some(*e);
+        matched += 1;
+    }
+    // Whatever rs274 did not read is no motion at the posted decimals.
+    let last = last.expect("rs274 read no motion");
+    for tip in posted {
+        assert!(
+            (0..3).all(|i| (last[i] - tip[i]).abs() < 5e-5),
+            "unread {tip:?}"
+        );
+    }
+    assert!(matched > 1000, "{matched} motions");
+}
+
+#[test]
+fn a_library_without_end_mills_and_a_mesh_blank_are_refused() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
+    let balls = ToolLibrary {
+        tools: library()
+            .tools
+            .into_iter()
+            .filter(|t| t.cutter.ball_radius().is_some())
+            .collect(),
+    };
+    let err = job::rough(&raw, "sample", "mm", &balls, &RoughOptions::default())
+        .err()
+        .expect("no end mill");
+    assert!(
+        err.to_string().contains("no flat or bull-nose end mill"),
+        "{err}"
+    );
+    let options = RoughOptions {
+        blank: Some(job::BlankSpec::Offset(2.0)),
+        ..Default::default()
+    };
+    let err = job::rough(&raw, "sample", "mm", &library(), &options)
+        .err()
+        .expect("offset blank");
+    assert!(
+        err.to_string().contains("a box or a cylinder blank"),
+        "{err}"
+    );
+    assert_eq!(err.exit_code(), 2);
+}
