@@ -466,11 +466,14 @@ impl Stock {
                     for s in line {
                         let (lo, hi) = (s.start.max(t0), s.end.min(t1));
                         if hi - lo > 1e-6 {
-                            let mut at = p;
-                            at[axis] = 0.5 * (lo + hi);
-                            let d = depth(&at);
-                            if best.is_none_or(|t| d > t.depth_mm) {
-                                best = Some(Touch { depth_mm: d, at });
+                            // As the replay does: the deepest of the overlap's ends and middle.
+                            for t in [lo, 0.5 * (lo + hi), hi] {
+                                let mut at = p;
+                                at[axis] = t;
+                                let d = depth(&at);
+                                if best.is_none_or(|b| d > b.depth_mm) {
+                                    best = Some(Touch { depth_mm: d, at });
+                                }
                             }
                         }
                     }
@@ -493,13 +496,34 @@ impl Stock {
         body: &cutter::BallEndBody,
         tolerance: f64,
     ) -> Vec<f64> {
+        self.remove_sweeps(toolpath, &|from, to| body.sweep(from, to, tolerance))
+    }
+
+    /// [`Stock::remove_toolpath`] for any cutting body (flat, bull-nose, tapered).
+    pub fn remove_cutting(
+        &mut self,
+        toolpath: &crate::geom::Toolpath,
+        body: &cutter::CuttingBody,
+        tolerance: f64,
+    ) -> Vec<f64> {
+        self.remove_sweeps(toolpath, &|from, to| body.sweep(from, to, tolerance))
+    }
+
+    fn remove_sweeps(
+        &mut self,
+        toolpath: &crate::geom::Toolpath,
+        sweep: &(
+             dyn Fn(&crate::geom::ToolPose, &crate::geom::ToolPose) -> Vec<cutter::SweptSolid>
+                 + Sync
+         ),
+    ) -> Vec<f64> {
         let mut removed = vec![0.0; toolpath.moves.len()];
         let pairs: Vec<_> = toolpath.moves.windows(2).collect();
         for (c, batch) in pairs.chunks(replay::BATCH).enumerate() {
             let work: Vec<replay::MoveWork<cutter::SweptSolid>> = batch
                 .par_iter()
                 .map(|pair| replay::MoveWork {
-                    cut: body.sweep(&pair[0].pose, &pair[1].pose, tolerance),
+                    cut: sweep(&pair[0].pose, &pair[1].pose),
                     ..Default::default()
                 })
                 .collect();
