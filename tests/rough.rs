@@ -20,47 +20,76 @@ fn the_sample_is_roughed_to_its_offset_shape_without_a_touch() {
     let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
     let options = RoughOptions {
         tool_id: Some(3),
+        rest_tools: 1,
         resolution: Some(1.0),
         ..Default::default()
     };
     let out = job::rough(&raw, "data/impeller.glb", "mm", &library(), &options).expect("rough");
     let r = &out.report;
     assert_eq!(out.failure, None);
-    // The program as read back from its G-code stays outside S₀ (up to the posted rounding)
-    // and so at least the allowance off the part.
-    assert!(r.overcut_vs_shape.overcuts.is_empty());
-    assert!(r.overcut_vs_shape.min_clearance_mm > -1e-4);
-    assert!(r.overcut_vs_part.min_clearance_mm > options.allowance - 1e-4);
-    // The tri-dexel run: nothing touched that must not be, and the volume adds up.
-    let s = &r.stock;
+    let ids: Vec<u32> = r.tools.iter().map(|t| t.tool.id).collect();
     assert_eq!(
-        (s.gouges, s.rapids_through_material, s.collisions),
-        (0, 0, 0)
+        ids,
+        vec![3, 7],
+        "the flat D10, then the flat D6 on the rest"
     );
-    let balance = s.blank_volume_mm3 - s.removed_volume_mm3 - s.volume_after_mm3;
-    assert!(balance.abs() < 1e-6 * s.blank_volume_mm3, "{balance}");
-    // Roughing takes most of what stands outside the part.
+    for t in &r.tools {
+        // Each tool's moves as read back from the G-code stay outside S₀ (up to the posted
+        // rounding), so at least the allowance off the part.
+        assert!(t.overcut_vs_shape.overcuts.is_empty(), "T{}", t.tool.id);
+        assert!(t.overcut_vs_shape.min_clearance_mm > -1e-4);
+        assert!(t.overcut_vs_part.min_clearance_mm > options.allowance - 1e-4);
+        // The tri-dexel run: nothing touched that must not be.
+        let s = &t.stock;
+        assert_eq!(
+            (s.gouges, s.rapids_through_material, s.collisions),
+            (0, 0, 0),
+            "T{}",
+            t.tool.id
+        );
+        // Layers within the depth of cut, entries ramped.
+        assert!(
+            t.layers
+                .iter()
+                .all(|l| l.layer.depth <= t.tool.planning.radius + 1e-9)
+        );
+        assert!(t.layers.iter().all(|l| l.plunges_into_material == 0));
+        assert!(out.gcode.contains(&format!("\nT{} M6\n", t.tool.id)));
+    }
+    // The volume adds up, and roughing takes most of what stands outside the part.
+    let removed: f64 = r.tools.iter().map(|t| t.stock.removed_volume_mm3).sum();
+    let balance = r.blank_volume_mm3 - removed - r.volume_after_mm3;
+    assert!(balance.abs() < 1e-6 * r.blank_volume_mm3, "{balance}");
     let part_volume = wavemill::mesh::prepare(&raw.mesh, &Default::default())
         .expect("prepare")
         .0
         .signed_volume();
-    let excess = s.blank_volume_mm3 - part_volume;
+    let excess = r.blank_volume_mm3 - part_volume;
+    assert!(removed > 0.6 * excess, "{removed} of {excess}");
+    // The rest tool works only where material stood: it removes something, less than the
+    // first, and leaves less rest over the part.
+    let (first, rest) = (&r.tools[0], &r.tools[1]);
+    assert!(rest.stock.removed_volume_mm3 > 0.0);
+    assert!(rest.stock.removed_volume_mm3 < first.stock.removed_volume_mm3);
+    assert!(rest.stock.rest.mean_mm < first.stock.rest.mean_mm);
     assert!(
-        s.removed_volume_mm3 > 0.6 * excess,
-        "{} of {excess}",
-        s.removed_volume_mm3
+        rest.stock.air_cut_fraction < 0.9,
+        "{}",
+        rest.stock.air_cut_fraction
     );
-    // Layers within the depth of cut, entries ramped.
-    assert!(r.layers.iter().all(|l| l.layer.depth <= 5.0 + 1e-9));
-    assert!(r.layers.iter().all(|l| l.plunges_into_material == 0));
-    assert!(out.gcode.contains("\nT3 M6\n"));
-    a_real_control_reads_the_program(&out.gcode, &out.cl_csv);
+    let table: String = library()
+        .tools
+        .iter()
+        .map(|t| format!("T{0} P{0} D{1} ;{2}\n", t.id, t.cutter.diameter(), t.name))
+        .collect();
+    a_real_control_reads_the_program(&out.gcode, &out.cl_csv, &table);
 }
 
-/// LinuxCNC's interpreter reads the program into one straight motion per planned move (after
-/// the first, Z-only block), ending where the plan does to the posted decimals. Skipped,
-/// saying so, where `rs274` is not installed.
-fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str) {
+/// LinuxCNC's interpreter, given the library as its tool table, reads the program into one
+/// straight motion per planned move (after the first, Z-only block, and the Z-only block after
+/// each tool change), ending where the plan does to the posted decimals. Skipped, saying so,
+/// where `rs274` is not installed.
+fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str, tool_table: &str) {
     let Ok(rs274) = common::plan_checks::which("rs274") else {
         eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
         return;
@@ -68,8 +97,12 @@ fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str) {
     let dir = std::env::temp_dir().join(format!("wavemill-rs274-rough-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (program, canon) = (dir.join("rough.nc"), dir.join("rough.canon"));
+    let table = dir.join("tools.tbl");
     std::fs::write(&program, gcode).unwrap();
+    std::fs::write(&table, tool_table).unwrap();
     let run = Command::new(rs274)
+        .arg("-t")
+        .arg(&table)
         .arg("-g")
         .arg(&program)
         .arg(&canon)
@@ -98,18 +131,30 @@ fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str) {
             Some([v[0], v[1], v[2]])
         })
         .collect();
-    let planned = wavemill::post::read_cl_csv(cl_csv, "cl.csv").expect("cl.csv");
-    // Moves too short to show at 4 decimals are not posted.
-    let mut posted = planned.moves.iter().map(|m| m.pose.tip).peekable();
+    // The planned tips, every tool's, in order (cl.csv: x, y, z first on each row).
+    let planned: Vec<[f64; 3]> = cl_csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').take(3).map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    // Moves too short to show at 4 decimals are not posted; a tool change repeats the safe
+    // height.
+    let mut posted = planned.iter().copied();
     let mut last: Option<[f64; 3]> = None;
     let mut matched = 0usize;
+    let same = |a: [f64; 3], b: [f64; 3]| (0..3).all(|i| (a[i] - b[i]).abs() < 5e-5);
     for e in &ends[1..] {
+        if last.is_some_and(|l| same(l, *e)) {
+            continue; // the Z-only block after a tool change, where the tool already is
+        }
         let tip = loop {
             let tip = posted
                 .next()
                 .expect("rs274 read more motions than were planned");
-            let same = last.is_some_and(|l| (0..3).all(|i| (l[i] - tip[i]).abs() < 5e-5));
-            if !same {
+            if !last.is_some_and(|l| same(l, tip)) {
                 break tip;
             }
         };
@@ -122,10 +167,7 @@ fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str) {
     // Whatever rs274 did not read is no motion at the posted decimals.
     let last = last.expect("rs274 read no motion");
     for tip in posted {
-        assert!(
-            (0..3).all(|i| (last[i] - tip[i]).abs() < 5e-5),
-            "unread {tip:?}"
-        );
+        assert!(same(last, tip), "unread {tip:?}");
     }
     assert!(matched > 1000, "{matched} motions");
 }

@@ -60,7 +60,7 @@ pub use pipeline::{
     program_header, stock_to_leave_shapes,
 };
 pub use report::{PlanReport, PoseCounts, StageTimings};
-pub use rough::{RoughOptions, RoughOutput, RoughReport, rough, write_rough_outputs};
+pub use rough::{RoughOptions, RoughOutput, RoughReport, RoughToolRun, rough, write_rough_outputs};
 pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};

@@ -14,14 +14,21 @@ use serde::Serialize;
 use super::blank::BlankSpec;
 use super::offsets::stock_shapes;
 use super::output::{OutputKind, write_output_set};
-use super::stock_model::{blank_stock, default_resolution, stock_error, stock_model_glb};
+use super::stock_model::{
+    CollisionReport, blank_stock, default_resolution, stock_error, stock_model_glb,
+};
 use crate::contour::geometry::Point2;
 use crate::error::{Error, Result};
 use crate::geom::{MoveKind, Point3};
 use crate::mesh::io::RawMesh;
-use crate::post::{GcodeOptions, LineariseOptions, ProgramHeader, ThreeAxis};
+use crate::post::{
+    GcodeOptions, GcodeWriter, LineariseOptions, ProgramHeader, ProgramSink, ThreeAxis,
+};
 use crate::rough::check::{OvercutReport, overcuts};
-use crate::rough::{Blank, LayerReport, NotReached, RoughingFeeds, RoughingOptions, RoughingTool};
+use crate::rough::{
+    Blank, LayerReport, Material, NotReached, RoughingFeeds, RoughingOptions, RoughingTool,
+    rough_layers,
+};
 use crate::stock::cutter::CuttingBody;
 use crate::stock::rest::{Rest, rest_over};
 use crate::stock::simulate::{SimulationOptions, simulate};
@@ -41,6 +48,8 @@ pub struct RoughOptions {
     /// The library tool to rough with; `None`: the largest flat or bull-nose end mill, the
     /// first that reaches the floor if any does.
     pub tool_id: Option<u32>,
+    /// How many smaller end mills rest-rough after it, each only where material stands.
+    pub rest_tools: usize,
     /// The holder stays this far above the blank, mm.
     pub holder_margin: f64,
     pub spindle_rpm: u32,
@@ -58,6 +67,7 @@ impl Default for RoughOptions {
             blank: None,
             margin: 2.0,
             tool_id: None,
+            rest_tools: 1,
             holder_margin: 2.0,
             spindle_rpm: 8000,
             feeds: RoughingFeeds {
@@ -71,7 +81,7 @@ impl Default for RoughOptions {
     }
 }
 
-/// The tool `rough` used and why.
+/// A tool `rough` used and why.
 #[derive(Clone, Debug, Serialize)]
 pub struct RoughToolReport {
     pub id: u32,
@@ -81,19 +91,38 @@ pub struct RoughToolReport {
     pub planning: RoughingTool,
 }
 
-/// What the tri-dexel run of the posted program found.
+/// What the tri-dexel run of one tool's posted moves found.
 #[derive(Clone, Debug, Serialize)]
 pub struct RoughStockReport {
-    pub resolution_mm: f64,
-    pub blank_volume_mm3: f64,
     pub removed_volume_mm3: f64,
     pub volume_after_mm3: f64,
     pub air_cut_fraction: f64,
     pub gouges: usize,
     pub rapids_through_material: usize,
     pub collisions: usize,
-    /// Material left over the part.
+    /// The first collisions (move numbers within this tool's read-back moves).
+    pub first_collisions: Vec<CollisionReport>,
+    /// Material left over the part after this tool.
     pub rest: Rest,
+}
+
+/// One tool's share of the program: its layers, its moves as read back, their checks and
+/// what they did to the stock.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoughToolRun {
+    pub tool: RoughToolReport,
+    /// `blank` for the first tool, `rest` for the ones after it (only where material stands).
+    pub material: &'static str,
+    pub layers: Vec<LayerReport>,
+    pub not_reached: Option<NotReached>,
+    pub moves: usize,
+    pub cutting_length_mm: f64,
+    /// At the programmed feeds and the rapid rate, s.
+    pub estimated_time_s: f64,
+    /// This tool's moves as read back from the G-code, checked against S₀ and the part.
+    pub overcut_vs_shape: OvercutReport,
+    pub overcut_vs_part: OvercutReport,
+    pub stock: RoughStockReport,
 }
 
 /// `rough.json`.
@@ -104,17 +133,12 @@ pub struct RoughReport {
     pub blank: String,
     pub allowance_mm: f64,
     pub shape_triangles: usize,
-    pub tool: RoughToolReport,
-    pub layers: Vec<LayerReport>,
-    pub not_reached: Option<NotReached>,
-    pub moves: usize,
-    pub cutting_length_mm: f64,
-    /// At the programmed feeds and the rapid rate, s.
+    pub resolution_mm: f64,
+    pub blank_volume_mm3: f64,
+    /// One per tool, in machining order.
+    pub tools: Vec<RoughToolRun>,
     pub estimated_time_s: f64,
-    /// The program as read back from the G-code, checked against S₀ and against the part.
-    pub overcut_vs_shape: OvercutReport,
-    pub overcut_vs_part: OvercutReport,
-    pub stock: RoughStockReport,
+    pub volume_after_mm3: f64,
     pub timings_ms: Option<std::collections::BTreeMap<&'static str, f64>>,
 }
 
@@ -128,8 +152,9 @@ pub struct RoughOutput {
     pub failure: Option<String>,
 }
 
-/// Plans, posts, reads back and checks layer roughing of `raw` (in mm) from its blank with a
-/// tool of `library`.
+/// Plans, posts, reads back and checks layer roughing of `raw` (in mm) from its blank with
+/// tools of `library`: the first from the blank, each further (smaller) one only where the
+/// stock the ones before it leave still holds material.
 pub fn rough(
     raw: &RawMesh,
     part_name: &str,
@@ -176,13 +201,16 @@ pub fn rough(
             )));
         }
     };
-    let (assembly, chosen) = choose_tool(
+    let sequence = choose_tools(
         library,
         options.tool_id,
+        options.rest_tools,
         blank.top - floor,
         options.holder_margin,
     )?;
-    let tool = RoughingTool::of(&assembly, options.holder_margin);
+    let spacing = options
+        .resolution
+        .unwrap_or_else(|| default_resolution(&part));
     timings.insert("prepare", ms(t));
 
     let t = Instant::now();
@@ -194,29 +222,56 @@ pub fn rough(
         .mesh;
     timings.insert("offset_shape", ms(t));
 
+    // Plan tool by tool on a stock model: each later tool from what the earlier ones leave.
     let t = Instant::now();
-    let mut roughing_options = RoughingOptions::for_radius(tool.radius);
-    roughing_options.floor = Some(floor);
-    roughing_options.feeds = options.feeds.clone();
-    roughing_options.tolerance = options.tolerance;
-    let planned = crate::rough::rough_layers(shape, &blank, &tool, assembly.id, &roughing_options)
-        .map_err(|e| Error::Usage(format!("{part_name}: roughing: {e}")))?;
-    if !planned
-        .toolpath
-        .moves
-        .iter()
-        .any(|m| m.kind == MoveKind::Cut)
-    {
-        return Err(Error::NothingToCut(format!(
-            "{part_name}: the blank `{}` holds no material outside the part's offset shape that \
-             the tool can reach",
-            spec.describe()
-        )));
+    let mut planning_stock = blank_stock(&part, &spec, units, spacing, DEFAULT_MAX_DEXELS)?;
+    let mut planned = Vec::with_capacity(sequence.len());
+    for (k, (assembly, _)) in sequence.iter().enumerate() {
+        let tool = RoughingTool::of(assembly, options.holder_margin);
+        let mut roughing_options = RoughingOptions::for_radius(tool.radius);
+        roughing_options.floor = Some(floor);
+        roughing_options.feeds = options.feeds.clone();
+        roughing_options.tolerance = options.tolerance;
+        let body = CuttingBody::of(&assembly.cutter);
+        let material = if k == 0 {
+            Material::Blank
+        } else {
+            Material::Stock {
+                stock: &mut planning_stock,
+                body: &body,
+            }
+        };
+        let layers = rough_layers(
+            shape,
+            &blank,
+            &tool,
+            assembly.id,
+            material,
+            &roughing_options,
+        )
+        .map_err(|e| Error::Usage(format!("{part_name}: roughing with T{}: {e}", assembly.id)))?;
+        if k == 0 {
+            if !layers
+                .toolpath
+                .moves
+                .iter()
+                .any(|m| m.kind == MoveKind::Cut)
+            {
+                return Err(Error::NothingToCut(format!(
+                    "{part_name}: the blank `{}` holds no material outside the part's offset \
+                     shape that the tool can reach",
+                    spec.describe()
+                )));
+            }
+            planning_stock.remove_cutting(&layers.toolpath, &body, options.tolerance);
+        }
+        planned.push((tool, layers));
     }
     timings.insert("layers", ms(t));
 
+    // One program, a tool change before each tool after the first.
     let t = Instant::now();
-    let header = ProgramHeader {
+    let header = |assembly: &ToolAssembly| ProgramHeader {
         program_name: "wavemill layer roughing".into(),
         part_name: part_name.to_string(),
         tool_description: vec![assembly.describe()],
@@ -233,90 +288,136 @@ pub fn rough(
         tolerance_mm: options.tolerance,
         ..Default::default()
     };
-    let gcode = crate::post::post_gcode(
-        &ThreeAxis,
-        &planned.toolpath,
-        &header,
-        &linearise,
-        &GcodeOptions::default(),
-    )
-    .map_err(|e| Error::Internal(format!("posting the roughing program: {e}")))?;
-    let cl_csv = crate::post::write_cl_csv(&planned.toolpath);
-    let (posted, _) = program_toolpath(&gcode, &MachineModel::ThreeAxis, options.tolerance)
+    let mut writer = GcodeWriter::new(&ThreeAxis, GcodeOptions::default());
+    let mut all_moves = Vec::new();
+    for (k, ((assembly, _), (_, layers))) in sequence.iter().zip(&planned).enumerate() {
+        let blocks = crate::post::linearise_opt(&ThreeAxis, &layers.toolpath, &linearise)
+            .map_err(|e| Error::Internal(format!("posting the roughing program: {e}")))?;
+        if k == 0 {
+            writer.begin(&header(assembly));
+        } else {
+            writer.tool_change(&header(assembly));
+        }
+        for (m, j) in &blocks {
+            writer.motion(m, j);
+        }
+        all_moves.extend(layers.toolpath.moves.iter().map(|m| (assembly.id, *m)));
+    }
+    writer.end();
+    let gcode = writer.into_string();
+    let cl_csv = cl_csv_of(&all_moves);
+    let (posted, lines) = program_toolpath(&gcode, &MachineModel::ThreeAxis, options.tolerance)
         .map_err(|e| {
             Error::Internal(format!(
                 "the posted roughing program does not read back: {e}"
             ))
         })?;
-    // Rounding to the posted decimals may bring a move 5e-5 mm nearer; the check allows that.
-    let rounding = 1e-4;
-    let overcut_vs_shape = overcuts(shape, &posted, tool.radius, rounding);
-    let overcut_vs_part = overcuts(&part, &posted, tool.radius, rounding);
-    timings.insert("post_and_check", ms(t));
+    let sections = split_at_tool_changes(&gcode, &posted, &lines, sequence.len())?;
+    timings.insert("post", ms(t));
 
+    // Check each tool's moves as read back, and run them on a fresh blank in order.
     let t = Instant::now();
-    let spacing = options
-        .resolution
-        .unwrap_or_else(|| default_resolution(&part));
     let mut stock = blank_stock(&part, &spec, units, spacing, DEFAULT_MAX_DEXELS)?;
     let blank_volume = stock.volume();
-    let sim = simulate(
-        &mut stock,
-        &part,
-        &posted,
-        &CuttingBody::of(&assembly.cutter),
-        &SimulationOptions {
-            tolerance: options.tolerance,
-            max_dexels: DEFAULT_MAX_DEXELS,
-            non_cutting: assembly
-                .bodies()
-                .into_iter()
-                .filter(|b| b.role != BodyRole::Flutes)
-                .collect(),
-        },
-    )
-    .map_err(stock_error)?;
     let part_model = Stock::from_mesh(&part, spacing, DEFAULT_MAX_DEXELS).map_err(stock_error)?;
-    let rest = rest_over(&stock, &part, &part_model, stock.bounds().diagonal());
+    // Rounding to the posted decimals may bring a move 5e-5 mm nearer; the check allows that.
+    let rounding = 1e-4;
+    let mut runs = Vec::with_capacity(sequence.len());
+    let mut problems = Vec::new();
+    for (((assembly, chosen), (tool, layers)), section) in
+        sequence.iter().zip(planned).zip(sections)
+    {
+        let overcut_vs_shape = overcuts(shape, &section, tool.radius, rounding);
+        let overcut_vs_part = overcuts(&part, &section, tool.radius, rounding);
+        let sim = simulate(
+            &mut stock,
+            &part,
+            &section,
+            &CuttingBody::of(&assembly.cutter),
+            &SimulationOptions {
+                tolerance: options.tolerance,
+                max_dexels: DEFAULT_MAX_DEXELS,
+                non_cutting: assembly
+                    .bodies()
+                    .into_iter()
+                    .filter(|b| b.role != BodyRole::Flutes)
+                    .collect(),
+            },
+        )
+        .map_err(stock_error)?;
+        let rest = rest_over(&stock, &part, &part_model, stock.bounds().diagonal());
+        let label = format!("T{}", assembly.id);
+        if let Some(o) = overcut_vs_shape.overcuts.first() {
+            problems.push(format!(
+                "{label}: {} move(s) into the offset shape, the first by {:.4} mm",
+                overcut_vs_shape.overcuts.len(),
+                o.depth_mm
+            ));
+        }
+        if sim.gouge.count > 0 {
+            problems.push(format!("{label}: {} gouging move(s)", sim.gouge.count));
+        }
+        if !sim.rapids_through_material.is_empty() {
+            problems.push(format!(
+                "{label}: {} rapid(s) through material",
+                sim.rapids_through_material.len()
+            ));
+        }
+        if let Some(c) = sim.collisions.first() {
+            problems.push(format!(
+                "{label}: {} move(s) with the shank or holder in material (the first a {:?})",
+                sim.collisions.len(),
+                c.role
+            ));
+        }
+        let moves = &layers.toolpath.moves;
+        runs.push(RoughToolRun {
+            tool: RoughToolReport {
+                id: assembly.id,
+                name: assembly.name.clone(),
+                description: assembly.describe(),
+                chosen: chosen.clone(),
+                planning: tool,
+            },
+            material: if runs.is_empty() { "blank" } else { "rest" },
+            layers: layers.layers,
+            not_reached: layers.not_reached,
+            moves: moves.len(),
+            cutting_length_mm: moves
+                .windows(2)
+                .filter(|w| w[1].kind == MoveKind::Cut)
+                .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+                .sum(),
+            estimated_time_s: moves
+                .windows(2)
+                .map(|w| 60.0 * (w[1].pose.tip - w[0].pose.tip).norm() / w[1].feed)
+                .sum(),
+            overcut_vs_shape,
+            overcut_vs_part,
+            stock: RoughStockReport {
+                removed_volume_mm3: sim.removed_volume_mm3,
+                volume_after_mm3: stock.volume(),
+                air_cut_fraction: sim.air_cut_fraction,
+                gouges: sim.gouge.count,
+                rapids_through_material: sim.rapids_through_material.len(),
+                collisions: sim.collisions.len(),
+                first_collisions: sim
+                    .collisions
+                    .iter()
+                    .take(10)
+                    .map(|c| CollisionReport {
+                        move_index: c.move_index,
+                        body: c.role,
+                        depth_mm: c.depth_mm,
+                        at: [c.at.x, c.at.y, c.at.z],
+                    })
+                    .collect(),
+                rest,
+            },
+        });
+    }
     let stock_glb = stock_model_glb(&stock, &part, options.tolerance)?;
     timings.insert("stock", ms(t));
-
-    let moves = &planned.toolpath.moves;
-    let cutting_length_mm = moves
-        .windows(2)
-        .filter(|w| w[1].kind == MoveKind::Cut)
-        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
-        .sum();
-    let estimated_time_s = moves
-        .windows(2)
-        .map(|w| 60.0 * (w[1].pose.tip - w[0].pose.tip).norm() / w[1].feed)
-        .sum();
-    let mut problems = Vec::new();
-    if let Some(o) = overcut_vs_shape.overcuts.first() {
-        problems.push(format!(
-            "{} move(s) into the offset shape, the first move {} by {:.4} mm",
-            overcut_vs_shape.overcuts.len(),
-            o.move_index,
-            o.depth_mm
-        ));
-    }
-    if sim.gouge.count > 0 {
-        problems.push(format!("{} gouging move(s)", sim.gouge.count));
-    }
-    if let Some(first) = sim.rapids_through_material.first() {
-        problems.push(format!(
-            "{} rapid(s) through material, the first move {first}",
-            sim.rapids_through_material.len()
-        ));
-    }
-    if let Some(c) = sim.collisions.first() {
-        problems.push(format!(
-            "{} move(s) with the shank or holder in material, the first move {} ({:?})",
-            sim.collisions.len(),
-            c.move_index,
-            c.role
-        ));
-    }
     let failure = (!problems.is_empty()).then(|| format!("{part_name}: {}", problems.join("; ")));
     let report = RoughReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),
@@ -324,31 +425,11 @@ pub fn rough(
         blank: spec.describe(),
         allowance_mm: options.allowance,
         shape_triangles: shape.triangles.len(),
-        tool: RoughToolReport {
-            id: assembly.id,
-            name: assembly.name.clone(),
-            description: assembly.describe(),
-            chosen,
-            planning: tool,
-        },
-        layers: planned.layers,
-        not_reached: planned.not_reached,
-        moves: moves.len(),
-        cutting_length_mm,
-        estimated_time_s,
-        overcut_vs_shape,
-        overcut_vs_part,
-        stock: RoughStockReport {
-            resolution_mm: spacing,
-            blank_volume_mm3: blank_volume,
-            removed_volume_mm3: sim.removed_volume_mm3,
-            volume_after_mm3: stock.volume(),
-            air_cut_fraction: sim.air_cut_fraction,
-            gouges: sim.gouge.count,
-            rapids_through_material: sim.rapids_through_material.len(),
-            collisions: sim.collisions.len(),
-            rest,
-        },
+        resolution_mm: spacing,
+        blank_volume_mm3: blank_volume,
+        estimated_time_s: runs.iter().map(|r| r.estimated_time_s).sum(),
+        volume_after_mm3: stock.volume(),
+        tools: runs,
         timings_ms: Some(timings),
     };
     Ok(RoughOutput {
@@ -360,49 +441,136 @@ pub fn rough(
     })
 }
 
-/// The tool to rough with: `id` if given, else the largest flat or bull-nose end mill of the
-/// library, the first of them that reaches `depth` below the blank's top if any does. Also
-/// why it was chosen.
-fn choose_tool(
+/// CL data of several tools' moves, each row with its tool.
+fn cl_csv_of(moves: &[(u32, crate::geom::Move)]) -> String {
+    let mut out = String::new();
+    let mut start = 0;
+    while start < moves.len() {
+        let id = moves[start].0;
+        let end = moves[start..]
+            .iter()
+            .position(|(t, _)| *t != id)
+            .map_or(moves.len(), |n| start + n);
+        let text = crate::post::write_cl_csv(&crate::geom::Toolpath {
+            tool_id: id,
+            moves: moves[start..end].iter().map(|(_, m)| *m).collect(),
+        });
+        if start == 0 {
+            out.push_str(&text);
+        } else {
+            // The header line once.
+            out.extend(text.lines().skip(1).flat_map(|l| [l, "\n"]));
+        }
+        start = end;
+    }
+    out
+}
+
+/// The read-back program cut at its tool changes (`T… M6` lines) into one toolpath per tool,
+/// each starting from where the one before it ended.
+fn split_at_tool_changes(
+    gcode: &str,
+    posted: &crate::geom::Toolpath,
+    lines: &[usize],
+    tools: usize,
+) -> Result<Vec<crate::geom::Toolpath>> {
+    let changes: Vec<usize> = gcode
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with('T') && l.ends_with(" M6"))
+        .map(|(k, _)| k + 1)
+        .collect();
+    if changes.len() != tools {
+        return Err(Error::Internal(format!(
+            "the roughing program has {} tool changes for {tools} tools",
+            changes.len()
+        )));
+    }
+    let mut sections = Vec::with_capacity(tools);
+    for k in 0..tools {
+        let (from, to) = (
+            changes[k],
+            changes.get(k + 1).copied().unwrap_or(usize::MAX),
+        );
+        let first = lines.iter().position(|&l| l > from).unwrap_or(lines.len());
+        let last = lines.iter().position(|&l| l > to).unwrap_or(lines.len());
+        let begin = first.saturating_sub(1);
+        sections.push(crate::geom::Toolpath {
+            tool_id: posted.tool_id,
+            moves: posted.moves[begin..last.max(begin)].to_vec(),
+        });
+    }
+    Ok(sections)
+}
+
+/// The tools to rough with, in order, and why each: the first is `id` if given, else the
+/// largest flat or bull-nose end mill of the library, the first of them that reaches `depth`
+/// below the blank's top if any does; then up to `rest` smaller ones, each at most 3/4 of the
+/// one before it across, preferring those that reach.
+fn choose_tools(
     library: &ToolLibrary,
     id: Option<u32>,
+    rest: usize,
     depth: f64,
     holder_margin: f64,
-) -> Result<(ToolAssembly, String)> {
-    if let Some(id) = id {
-        let tool = library
-            .tools
-            .iter()
-            .find(|t| t.id == id)
-            .ok_or_else(|| Error::Usage(format!("the library has no tool with id {id}")))?;
-        return Ok((tool.clone(), format!("asked for (T{id})")));
-    }
+) -> Result<Vec<(ToolAssembly, String)>> {
     let roughers: Vec<&ToolAssembly> = library
         .largest_first()
         .into_iter()
         .map(|i| &library.tools[i])
         .filter(|t| matches!(t.cutter, Cutter::Flat { .. } | Cutter::BullNose { .. }))
         .collect();
-    let Some(largest) = roughers.first() else {
-        return Err(Error::Usage(
-            "the library has no flat or bull-nose end mill to rough with".into(),
-        ));
+    let reaches = |t: &ToolAssembly| t.stickout - holder_margin >= depth;
+    let first = match id {
+        Some(id) => {
+            let tool = library
+                .tools
+                .iter()
+                .find(|t| t.id == id)
+                .ok_or_else(|| Error::Usage(format!("the library has no tool with id {id}")))?;
+            (tool.clone(), format!("asked for (T{id})"))
+        }
+        None => {
+            let Some(largest) = roughers.first() else {
+                return Err(Error::Usage(
+                    "the library has no flat or bull-nose end mill to rough with".into(),
+                ));
+            };
+            match roughers.iter().find(|t| reaches(t)) {
+                Some(t) => (
+                    (*t).clone(),
+                    format!("the largest flat or bull-nose end mill reaching {depth:.1} mm deep"),
+                ),
+                None => (
+                    (*largest).clone(),
+                    format!(
+                        "the largest flat or bull-nose end mill; none reaches {depth:.1} mm deep"
+                    ),
+                ),
+            }
+        }
     };
-    Ok(
-        match roughers
+    let mut sequence = vec![first];
+    while sequence.len() <= rest {
+        let previous = sequence[sequence.len() - 1].0.cutter.diameter();
+        let smaller: Vec<&&ToolAssembly> = roughers
             .iter()
-            .find(|t| t.stickout - holder_margin >= depth)
-        {
-            Some(t) => (
-                (*t).clone(),
-                format!("the largest flat or bull-nose end mill reaching {depth:.1} mm deep"),
-            ),
-            None => (
-                (*largest).clone(),
-                format!("the largest flat or bull-nose end mill; none reaches {depth:.1} mm deep"),
-            ),
-        },
-    )
+            .filter(|t| t.cutter.diameter() <= 0.75 * previous)
+            .collect();
+        let Some(next) = smaller.iter().find(|t| reaches(t)).or(smaller.first()) else {
+            break;
+        };
+        let why = format!(
+            "rest roughing: the largest end mill at most 3/4 of the D{previous} before it{}",
+            if reaches(next) {
+                ""
+            } else {
+                " (it does not reach the floor)"
+            }
+        );
+        sequence.push(((**next).clone(), why));
+    }
+    Ok(sequence)
 }
 
 fn ms(since: Instant) -> f64 {

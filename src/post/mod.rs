@@ -86,6 +86,10 @@ pub trait ProgramSink {
     /// One circular block in the machine's XY plane, from the previous block's end to `end`
     /// (planar programs: [`planar`]).
     fn arc(&mut self, m: &Move, end: &Joints, arc: &ArcXY);
+    /// Changes to the tool of `header` (its number, description and spindle speed) between two
+    /// motions: the next motion starts as a program's first does, length compensation and Z
+    /// first. The tool is on its safe height when this is called.
+    fn tool_change(&mut self, header: &ProgramHeader);
     /// Ends the program.
     fn end(&mut self);
 }

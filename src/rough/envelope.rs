@@ -91,6 +91,16 @@ impl TopEnvelope {
         }
     }
 
+    /// Height of the cell holding `p` (`-∞` off the grid).
+    pub fn top_at(&self, p: Point2) -> f64 {
+        let i = ((p.x - self.origin.x) / self.cell).floor();
+        let j = ((p.y - self.origin.y) / self.cell).floor();
+        if i < 0.0 || j < 0.0 || i >= self.width as f64 || j >= self.height as f64 {
+            return f64::NEG_INFINITY;
+        }
+        self.at(i as usize, j as usize)
+    }
+
     /// Height of cell (i, j).
     pub fn at(&self, i: usize, j: usize) -> f64 {
         self.top[i + j * self.width]

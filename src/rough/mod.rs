@@ -25,6 +25,7 @@ pub mod envelope;
 pub mod layers;
 pub mod moves;
 pub mod region;
+pub mod rest;
 
 use serde::Serialize;
 
@@ -35,6 +36,8 @@ use crate::contour::toolpath::{CenterPath, Link, Pass};
 use crate::contour::{ContourError, ParallelOptions, contour_parallel};
 use crate::geom::{Direction, Move, MoveKind, Point3, ToolPose, Toolpath, Vector3};
 use crate::mesh::Mesh;
+use crate::stock::Stock;
+use crate::stock::cutter::CuttingBody;
 use crate::tool::ToolAssembly;
 use envelope::TopEnvelope;
 pub use layers::{Layer, LayerOptions};
@@ -308,8 +311,10 @@ pub fn rough_layers(
     blank: &Blank,
     tool: &RoughingTool,
     tool_id: u32,
+    material: Material,
     options: &RoughingOptions,
 ) -> Result<Roughing, RoughError> {
+    let mut material = material;
     options.validate(tool)?;
     if blank.bottom.partial_cmp(&blank.top) != Some(std::cmp::Ordering::Less)
         || blank.outline.contours.is_empty()
@@ -366,17 +371,30 @@ pub fn rough_layers(
         let z = layer.z;
         let err = |error| RoughError::Layer { z, error };
         let forbidden = region::cells_above(&envelope, z, 0.0);
+        let layer_start = writer.moves.len() - 1;
+        let section = match &mut material {
+            Material::Blank => blank.outline.clone(),
+            Material::Stock { stock, .. } => {
+                match rest::material_in_slab(stock, &envelope, z, z_above, REST_MIN_THICKNESS) {
+                    Some(region) => region,
+                    None => {
+                        // Nothing stands in this slab: the layers below start from here.
+                        above = forbidden.as_ref().map(RegionIndex::new);
+                        z_above = z;
+                        continue;
+                    }
+                }
+            }
+        };
         let path = match &forbidden {
-            Some(part) => contour_parallel(
-                part,
-                &blank.outline,
-                &ParallelOptions::new(r, options.stepover),
-            )
-            .map_err(err)?,
-            None => facing(&blank.outline, r, options.stepover).map_err(err)?,
+            Some(part) => {
+                contour_parallel(part, &section, &ParallelOptions::new(r, options.stepover))
+                    .map_err(err)?
+            }
+            None => facing(&section, r, options.stepover).map_err(err)?,
         };
         let mut map =
-            MaterialMap::of_stock(&blank.outline, forbidden.as_ref(), r, r / 8.0).map_err(err)?;
+            MaterialMap::of_stock(&section, forbidden.as_ref(), r, r / 8.0).map_err(err)?;
         let mut report = LayerReport {
             layer,
             passes: path.passes().len(),
@@ -490,10 +508,21 @@ pub fn rough_layers(
             report.cut_length_mm += moves::polyline_length(&points);
         }
         report.cleared_area_mm2 -= map.material_area();
-        if report.passes > 0 {
-            reports.push(report);
+        let rest = matches!(material, Material::Stock { .. });
+        if let Material::Stock { stock, body } = &mut material {
+            // The next layer is planned from what this one leaves.
+            let moves = Toolpath {
+                tool_id,
+                moves: writer.moves[layer_start..].to_vec(),
+            };
+            stock.remove_cutting(&moves, body, options.tolerance);
+        }
+        if report.passes > 0 || rest {
             above = forbidden.as_ref().map(RegionIndex::new);
             z_above = z;
+        }
+        if report.passes > 0 {
+            reports.push(report);
         }
     }
     let last = writer.last();
@@ -511,6 +540,22 @@ pub fn rough_layers(
         safe_z,
         not_reached,
     })
+}
+
+/// Layers thinner than this in a slab of the stock are not rest material, mm (the skin a
+/// layer's floor may keep in the model's round-off).
+const REST_MIN_THICKNESS: f64 = 0.05;
+
+/// What a layer clears.
+pub enum Material<'a> {
+    /// The blank's section, whole: the first roughing of a blank.
+    Blank,
+    /// What the stock still holds in the layer's slab (rest roughing). Each layer's moves are
+    /// removed from the stock with `body` before the next layer is planned.
+    Stock {
+        stock: &'a mut Stock,
+        body: &'a CuttingBody,
+    },
 }
 
 /// A point on the blank's outline, where the program starts above.
@@ -645,7 +690,8 @@ mod tests {
     #[test]
     fn a_block_is_roughed_in_layers_to_its_walls() {
         let (block, blank, tool, options) = block_job();
-        let rough = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        let rough =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
         let zs: Vec<f64> = rough.layers.iter().map(|l| l.layer.z).collect();
         assert_eq!(zs, vec![10.0, 7.5, 5.0, 2.5, 0.0]);
         assert!(rough.layers[0].layer.at_flat);
@@ -690,7 +736,8 @@ mod tests {
     #[test]
     fn entries_are_ramped_and_the_program_is_deterministic() {
         let (block, blank, tool, options) = block_job();
-        let rough = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        let rough =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
         let slope = options.ramp_angle_deg.to_radians().tan();
         for w in rough.toolpath.moves.windows(2) {
             let d = w[1].pose.tip - w[0].pose.tip;
@@ -707,7 +754,8 @@ mod tests {
         let moves = &rough.toolpath.moves;
         assert_eq!(moves[0].pose.tip.z, rough.safe_z);
         assert_eq!(moves[moves.len() - 1].pose.tip.z, rough.safe_z);
-        let again = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        let again =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
         assert_eq!(again.toolpath, rough.toolpath);
     }
 
@@ -716,15 +764,16 @@ mod tests {
         let (block, blank, tool, options) = block_job();
         let mut o = options.clone();
         o.stepover = 4.0;
-        let err = rough_layers(&block, &blank, &tool, 7, &o).expect_err("stepover");
+        let err =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &o).expect_err("stepover");
         assert!(err.to_string().contains("stepover"), "{err}");
         let mut o = options.clone();
         o.layers.max_depth = 25.0;
-        let err = rough_layers(&block, &blank, &tool, 7, &o).expect_err("depth");
+        let err = rough_layers(&block, &blank, &tool, 7, Material::Blank, &o).expect_err("depth");
         assert!(err.to_string().contains("deeper than the flutes"), "{err}");
         let flat = Blank { top: 0.0, ..blank };
         assert!(matches!(
-            rough_layers(&block, &flat, &tool, 7, &options),
+            rough_layers(&block, &flat, &tool, 7, Material::Blank, &options),
             Err(RoughError::Blank(_))
         ));
     }
@@ -734,7 +783,8 @@ mod tests {
     fn layers_beyond_the_reach_are_reported() {
         let (block, blank, mut tool, options) = block_job();
         tool.reach = 6.0;
-        let rough = rough_layers(&block, &blank, &tool, 7, &options).expect("roughing");
+        let rough =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
         let lowest = rough.layers.last().expect("layers").layer.z;
         assert!((lowest - 6.0).abs() < 1e-12, "{lowest}");
         let left = rough.not_reached.expect("reported");

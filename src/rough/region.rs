@@ -12,13 +12,31 @@ use crate::contour::geometry::{Contour, Point2, Shape, Vertex};
 /// meet only at a corner are joined by filling a neighbour (the region only grows, and the
 /// outline never touches itself). `None` when no cell stands that high.
 pub fn cells_above(envelope: &TopEnvelope, z: f64, slack: f64) -> Option<Shape> {
-    let (w, h) = (envelope.width, envelope.height);
-    let mut filled: Vec<bool> = envelope.top.iter().map(|&t| t > z + slack).collect();
+    let filled: Vec<bool> = envelope.top.iter().map(|&t| t > z + slack).collect();
+    trace_cells(
+        filled,
+        envelope.width,
+        envelope.height,
+        envelope.origin,
+        envelope.cell,
+    )
+}
+
+/// The union of the `filled` cells of a `w` × `h` grid (cell (0, 0)'s lower-left corner at
+/// `origin`, sides `cell`) as a shape, corner contacts joined as in [`cells_above`]; `None`
+/// when no cell is filled.
+pub fn trace_cells(
+    mut filled: Vec<bool>,
+    w: usize,
+    h: usize,
+    origin: Point2,
+    cell: f64,
+) -> Option<Shape> {
     if !filled.iter().any(|&f| f) {
         return None;
     }
     fill_saddles(&mut filled, w, h);
-    Some(trace(&filled, w, h, envelope.origin, envelope.cell))
+    Some(trace(&filled, w, h, origin, cell))
 }
 
 /// Fills one empty cell of every diagonal pair (two filled cells meeting only at a corner)

@@ -22,6 +22,10 @@ pub struct RoughArgs {
     /// first that reaches the part's floor if any does].
     #[arg(long)]
     pub tool_id: Option<u32>,
+    /// How many smaller end mills of the library rest-rough after the first, each at most 3/4
+    /// of the one before it across, only where the stock still holds material.
+    #[arg(long, default_value_t = 1)]
+    pub rest_tools: usize,
     /// Material left on the part: roughing stops at its verified offset shape by this much, mm.
     #[arg(long, default_value_t = 0.5, value_parser = positive)]
     pub allowance: f64,
@@ -66,6 +70,7 @@ pub fn run(args: &RoughArgs) -> Result<()> {
         allowance: args.allowance,
         blank: args.blank.clone(),
         tool_id: args.tool_id,
+        rest_tools: args.rest_tools,
         spindle_rpm: args.spindle_rpm,
         feeds: crate::rough::RoughingFeeds {
             cut: args.feed,
@@ -79,30 +84,40 @@ pub fn run(args: &RoughArgs) -> Result<()> {
     job::write_rough_outputs(&args.out, &output, !args.no_timings)?;
     let r = &output.report;
     say!(
-        "{name}: T{} {} from {}, {} layers, {} moves, {:.1} min",
-        r.tool.id,
-        r.tool.description,
+        "{name}: from {}, {} tool(s), {:.1} min; {:.0} of {:.0} mm³ left",
         r.blank,
-        r.layers.len(),
-        r.moves,
-        r.estimated_time_s / 60.0
+        r.tools.len(),
+        r.estimated_time_s / 60.0,
+        r.volume_after_mm3,
+        r.blank_volume_mm3
     );
-    say!(
-        "  removed {:.0} of {:.0} mm³; rest over the part mean {:.2} mm, max {:.2} mm",
-        r.stock.removed_volume_mm3,
-        r.stock.blank_volume_mm3,
-        r.stock.rest.mean_mm,
-        r.stock.rest.max_mm
-    );
-    say!(
-        "  checks: closest to the offset shape {:.4} mm, to the part {:.3} mm; 0 gouges, 0 rapids \
-         through material, 0 shank or holder touches",
-        r.overcut_vs_shape.min_clearance_mm,
-        r.overcut_vs_part.min_clearance_mm
-    );
-    if let Some(n) = &r.not_reached {
-        say!("  not reached: {}", n.reason);
+    for t in &r.tools {
+        say!(
+            "  T{} {} ({}): {} layers, {} moves, {:.1} min, removed {:.0} mm³; rest over the part \
+             mean {:.2} mm, max {:.2} mm",
+            t.tool.id,
+            t.tool.name,
+            t.material,
+            t.layers.len(),
+            t.moves,
+            t.estimated_time_s / 60.0,
+            t.stock.removed_volume_mm3,
+            t.stock.rest.mean_mm,
+            t.stock.rest.max_mm
+        );
+        if let Some(n) = &t.not_reached {
+            say!("    not reached: {}", n.reason);
+        }
     }
+    let clearance = |f: fn(&job::RoughToolRun) -> f64| {
+        r.tools.iter().map(f).fold(f64::INFINITY, f64::min).max(0.0)
+    };
+    say!(
+        "  checks: closest to the offset shape {:.4} mm (posted rounding aside), to the part {:.3} \
+         mm; no gouge, rapid through material, or shank or holder touch",
+        clearance(|t| t.overcut_vs_shape.min_clearance_mm),
+        clearance(|t| t.overcut_vs_part.min_clearance_mm)
+    );
     say!("  wrote {}", args.out.display());
     Ok(())
 }
