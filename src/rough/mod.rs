@@ -153,6 +153,10 @@ pub struct RoughingOptions {
     pub max_ramp_leg: f64,
     /// A descent meeting more uncut material than this share of the tool's disc is ramped.
     pub max_plunge_share: f64,
+    /// Where a layer lies deeper below the blank's top than the flutes are long, the shank
+    /// runs beside material: the path then keeps this much more off the shape, mm (flutes and
+    /// shank of one radius would otherwise ride the wall the flutes cut).
+    pub shank_clearance: f64,
     /// Height above the layer above, and above the blank for the safe moves, mm.
     pub clearance: f64,
     /// Arcs are replaced by straight moves at most this far outside them, mm.
@@ -179,6 +183,7 @@ impl RoughingOptions {
             ramp_angle_deg: 3.0,
             max_ramp_leg: 8.0 * r,
             max_plunge_share: 0.05,
+            shank_clearance: 0.5,
             clearance: 1.0,
             tolerance: 0.01,
             floor: None,
@@ -246,6 +251,13 @@ impl RoughingOptions {
                 "max_ramp_leg",
                 self.max_ramp_leg,
                 "needs a positive leg and a plunge share in [0, 1]",
+            );
+        }
+        if !(self.shank_clearance >= 0.0 && self.shank_clearance.is_finite()) {
+            return bad(
+                "shank_clearance",
+                self.shank_clearance,
+                "must be a finite number of mm ≥ 0",
             );
         }
         if !positive(self.clearance) || !positive(self.tolerance) {
@@ -324,7 +336,6 @@ pub fn rough_layers(
             blank.bottom, blank.top
         )));
     }
-    let r = tool.radius;
     let envelope = TopEnvelope::of_mesh(shape, options.cell);
     let shape_bottom = shape.aabb().min.z;
     let floor = options
@@ -369,6 +380,11 @@ pub fn rough_layers(
     let mut z_above = blank.top;
     for layer in planned {
         let z = layer.z;
+        let r = if blank.top - z > tool.flute_length {
+            tool.radius + options.shank_clearance
+        } else {
+            tool.radius
+        };
         let err = |error| RoughError::Layer { z, error };
         let forbidden = region::cells_above(&envelope, z, 0.0);
         let layer_start = writer.moves.len() - 1;
@@ -394,7 +410,8 @@ pub fn rough_layers(
             None => facing(&section, r, options.stepover).map_err(err)?,
         };
         let mut map =
-            MaterialMap::of_stock(&section, forbidden.as_ref(), r, r / 8.0).map_err(err)?;
+            MaterialMap::of_stock(&section, forbidden.as_ref(), tool.radius, tool.radius / 8.0)
+                .map_err(err)?;
         let mut report = LayerReport {
             layer,
             passes: path.passes().len(),
@@ -420,7 +437,8 @@ pub fn rough_layers(
                     r,
                     options.feeds.rapid,
                 );
-                let plunge_limit = options.max_plunge_share * std::f64::consts::PI * r * r;
+                let plunge_limit =
+                    options.max_plunge_share * std::f64::consts::PI * tool.radius * tool.radius;
                 let ramp = if map.material_within(to) > plunge_limit {
                     moves::ramp_along(
                         &points,
@@ -776,6 +794,40 @@ mod tests {
             rough_layers(&block, &flat, &tool, 7, Material::Blank, &options),
             Err(RoughError::Blank(_))
         ));
+    }
+
+    /// Layers deeper below the blank's top than the flutes are long keep the shank's
+    /// clearance more off the walls; those within the flutes ride them at the radius.
+    #[test]
+    fn the_shank_keeps_its_clearance_below_the_flutes() {
+        let (block, blank, mut tool, options) = block_job();
+        tool.flute_length = 3.0;
+        let rough =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
+        let nearest = |z: f64| {
+            rough
+                .toolpath
+                .moves
+                .iter()
+                .filter(|m| m.kind == MoveKind::Cut && (m.pose.tip.z - z).abs() < 1e-9)
+                .map(|m| {
+                    let dx = (m.pose.tip.x.abs() - 10.0).max(0.0);
+                    let dy = (m.pose.tip.y.abs() - 10.0).max(0.0);
+                    dx.hypot(dy)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let slack = options.cell * 2f64.sqrt() + 1e-9;
+        // z = 10 faces the block's top (no wall); 2 mm under the top is within the flutes.
+        for (z, keep) in [(7.5, 3.5), (5.0, 3.5), (2.5, 3.5), (0.0, 3.5)] {
+            let d = nearest(z);
+            assert!(d >= keep - 1e-9 && d <= keep + slack, "z {z}: {d}");
+        }
+        let mut within = options.clone();
+        within.shank_clearance = 0.0;
+        let plain =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &within).expect("roughing");
+        assert!(plain.toolpath != rough.toolpath);
     }
 
     /// A tool too short for the blank cuts the layers it reaches and says what is left.

@@ -61,92 +61,6 @@ pub struct Guard {
     /// Holds every frustum.
     pub cover: SphereSweptHull,
     pub frusta: Vec<Frustum>,
-    /// How to look closer at a shallow touch, if the frusta are the body's poses grown.
-    pub refine: Option<Refine>,
-}
-
-/// A guard's frusta are the body at evenly spaced poses of the move, each grown by how far the
-/// body moves between poses, so that they hold it at every pose in between. A touch shallower
-/// than that growth may be a near miss: such a touch is measured again on finer frusta over
-/// the stretch of the move its frustum stands for, and that measure replaces it.
-#[derive(Clone, Debug)]
-pub struct Refine {
-    pub body: crate::tool::Body,
-    pub from: crate::geom::ToolPose,
-    pub to: crate::geom::ToolPose,
-    /// The coarse poses: `samples + 1` of them, at t = s / samples.
-    pub samples: usize,
-    /// The pose each of the guard's frusta is (those kept: near material).
-    pub pose_of: Vec<usize>,
-    /// How much the coarse frusta are grown, mm: a deeper touch is reported this much less
-    /// deep (what it is at least).
-    pub growth: f64,
-    /// Touches at most this deep are measured again (the coarse growth plus the depth that
-    /// counts as a touch).
-    pub below: f64,
-    /// The finer poses are at most this far apart along the body's fastest point, mm.
-    pub step: f64,
-}
-
-/// Frusta holding `body` at every pose of the move from `from` to `to` (tip along the chord,
-/// axis along the great circle) for t in `[t0, t1]`: `samples + 1` poses evenly, each body
-/// grown by half the most any of its points moves between two poses. Also that growth.
-pub fn body_frusta(
-    body: &crate::tool::Body,
-    from: &crate::geom::ToolPose,
-    to: &crate::geom::ToolPose,
-    (t0, t1): (f64, f64),
-    samples: usize,
-) -> (Vec<Frustum>, f64) {
-    use crate::geom::{angle_between, slerp};
-    let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
-    let reach = body
-        .from
-        .abs()
-        .hypot(body.radius_from)
-        .max(body.to.abs().hypot(body.radius_to));
-    let travel = ((to.tip - from.tip).norm() + angle_between(&k0, &k1) * reach) * (t1 - t0);
-    let grow = 0.5 * travel / samples as f64;
-    let slope = (body.radius_to - body.radius_from) / (body.to - body.from);
-    let widen = grow * ((1.0 + slope * slope).sqrt() + slope.abs());
-    let frusta = (0..=samples)
-        .map(|k| {
-            let t = t0 + (t1 - t0) * k as f64 / samples as f64;
-            Frustum {
-                base: from.tip + t * (to.tip - from.tip),
-                axis: slerp(&k0, &k1, t),
-                from: body.from - grow,
-                to: body.to + grow,
-                radius_from: body.radius_from + widen,
-                radius_to: body.radius_to + widen,
-            }
-        })
-        .collect();
-    (frusta, grow)
-}
-
-impl Refine {
-    /// The deepest touch of the body over the stretch coarse frustum `k` stands for (from the
-    /// pose before it to the pose after it), on frusta grown by at most half `step`.
-    fn touch_near(&self, rows: &Rows<'_>, k: usize) -> Option<Touch> {
-        let n = self.samples as f64;
-        let (t0, t1) = ((k as f64 - 1.0).max(0.0) / n, (k as f64 + 1.0).min(n) / n);
-        let (coarse, _) = body_frusta(&self.body, &self.from, &self.to, (t0, t1), 1);
-        let span = (coarse[1].base - coarse[0].base).norm()
-            + crate::geom::angle_between(&coarse[0].axis, &coarse[1].axis)
-                * self
-                    .body
-                    .to
-                    .abs()
-                    .max(self.body.from.abs())
-                    .hypot(self.body.radius_from.max(self.body.radius_to));
-        let fine = ((span / self.step).ceil() as usize).clamp(1, 10_000);
-        let (frusta, _) = body_frusta(&self.body, &self.from, &self.to, (t0, t1), fine);
-        frusta
-            .iter()
-            .filter_map(|f| rows.touching(f))
-            .max_by(|a, b| a.depth_mm.total_cmp(&b.depth_mm))
-    }
 }
 
 /// Where depths of cut are measured from: a point and two unit directions.
@@ -561,18 +475,8 @@ pub fn replay<S: LineInterval>(
                     }
                     for guard in &w.guards {
                         for rows in stock_rows.iter().filter(|rows| rows.meets(&guard.cover)) {
-                            for (k, frustum) in guard.frusta.iter().enumerate() {
-                                let touch = match (rows.touching(frustum), &guard.refine) {
-                                    (Some(t), Some(refine)) if t.depth_mm <= refine.below => {
-                                        refine.touch_near(rows, refine.pose_of[k])
-                                    }
-                                    (Some(t), Some(refine)) => Some(Touch {
-                                        depth_mm: t.depth_mm - refine.growth,
-                                        ..t
-                                    }),
-                                    (touch, _) => touch,
-                                };
-                                if let Some(touch) = touch {
+                            for frustum in &guard.frusta {
+                                if let Some(touch) = rows.touching(frustum) {
                                     let slot = &mut share.touches[guard.index];
                                     if slot.is_none_or(|t| touch.depth_mm > t.depth_mm) {
                                         *slot = Some(touch);
@@ -671,7 +575,6 @@ mod tests {
                                     2.5,
                                 ),
                                 frusta: vec![frustum],
-                                refine: None,
                             }
                         })
                         .collect(),
