@@ -173,7 +173,7 @@ fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str, tool_table: &str)
 }
 
 #[test]
-fn a_library_without_end_mills_and_a_mesh_blank_are_refused() {
+fn a_library_without_end_mills_a_mesh_blank_and_a_zero_up_are_refused() {
     let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
     let balls = ToolLibrary {
         tools: library()
@@ -201,4 +201,15 @@ fn a_library_without_end_mills_and_a_mesh_blank_are_refused() {
         "{err}"
     );
     assert_eq!(err.exit_code(), 2);
+    let options = RoughOptions {
+        up: Some([0.0, 0.0, 0.0]),
+        ..Default::default()
+    };
+    let err = job::rough(&raw, "sample", "mm", &library(), &options)
+        .err()
+        .expect("no up");
+    assert!(
+        err.to_string().contains("--up must be a non-zero vector"),
+        "{err}"
+    );
 }

@@ -41,6 +41,10 @@ use crate::verify::{MachineModel, program_toolpath};
 pub struct RoughOptions {
     /// Material S₀ leaves on the part, mm.
     pub allowance: f64,
+    /// The direction in the part file that points up the spindle (the part's axis for an
+    /// impeller); the part is turned so that it becomes +Z, and the program is in that frame.
+    /// `None`: +Z.
+    pub up: Option<[f64; 3]>,
     /// The blank; `None`: a cylinder about the part's vertical axis, `margin` mm wider than the
     /// part and 1 mm above it, standing on the part's lowest point.
     pub blank: Option<BlankSpec>,
@@ -64,6 +68,7 @@ impl Default for RoughOptions {
     fn default() -> Self {
         RoughOptions {
             allowance: 0.5,
+            up: None,
             blank: None,
             margin: 2.0,
             tool_id: None,
@@ -164,8 +169,17 @@ pub fn rough(
 ) -> Result<RoughOutput> {
     let mut timings = std::collections::BTreeMap::new();
     let t = Instant::now();
+    let upright = match options.up {
+        Some(up) => {
+            let axis = super::config::unit_direction(up).ok_or_else(|| {
+                Error::Usage(format!("--up must be a non-zero vector, got {up:?}"))
+            })?;
+            super::setup::turned_upright(&raw.mesh, &axis)
+        }
+        None => raw.mesh.clone(),
+    };
     let (part, _) =
-        crate::mesh::prepare(&raw.mesh, &Default::default()).map_err(|e| Error::Mesh {
+        crate::mesh::prepare(&upright, &Default::default()).map_err(|e| Error::Mesh {
             file: part_name.to_string(),
             reason: e.to_string(),
         })?;

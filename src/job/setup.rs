@@ -274,7 +274,7 @@ fn check_drive_points(mesh: &MeshReport, job: &Job) -> Result<()> {
 
 /// `mesh` turned so that the unit vector `up` points along +Z (the shortest rotation; 180°
 /// about X when `up` points down).
-fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
+pub(crate) fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
     let rotation = nalgebra::Rotation3::rotation_between(up, &Vector3::z()).unwrap_or_else(|| {
         nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
     });

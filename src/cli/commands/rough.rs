@@ -15,6 +15,10 @@ pub struct RoughArgs {
     /// Part mesh (.stl, .obj, .gltf, .glb), closed, standing on its lowest point with its axis
     /// along +Z.
     pub part: PathBuf,
+    /// Direction in the part file that should point up the spindle, e.g. `0,1,0` for a part
+    /// modelled with its axis along Y; the program is in the part's frame turned so.
+    #[arg(long, value_parser = parse_vector)]
+    pub up: Option<[f64; 3]>,
     /// Tool library (TOML, one `[[tool]]` table per tool; see data/tools.toml).
     #[arg(long)]
     pub library: PathBuf,
@@ -68,6 +72,7 @@ pub fn run(args: &RoughArgs) -> Result<()> {
     let defaults = job::RoughOptions::default();
     let options = job::RoughOptions {
         allowance: args.allowance,
+        up: args.up,
         blank: args.blank.clone(),
         tool_id: args.tool_id,
         rest_tools: args.rest_tools,
