@@ -209,7 +209,7 @@ fn a_library_without_end_mills_a_mesh_blank_and_a_zero_up_are_refused() {
         .err()
         .expect("no up");
     assert!(
-        err.to_string().contains("--up must be a non-zero vector"),
+        err.to_string().contains("up must be a non-zero vector"),
         "{err}"
     );
 }

@@ -171,9 +171,8 @@ pub fn rough(
     let t = Instant::now();
     let upright = match options.up {
         Some(up) => {
-            let axis = super::config::unit_direction(up).ok_or_else(|| {
-                Error::Usage(format!("--up must be a non-zero vector, got {up:?}"))
-            })?;
+            let axis = super::config::unit_direction(up)
+                .ok_or_else(|| Error::Usage(format!("up must be a non-zero vector, got {up:?}")))?;
             super::setup::turned_upright(&raw.mesh, &axis)
         }
         None => raw.mesh.clone(),
