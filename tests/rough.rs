@@ -5,8 +5,6 @@
 
 mod common;
 
-use std::process::Command;
-
 use common::repo_file;
 use wavemill::job::{self, RoughOptions};
 use wavemill::tool::ToolLibrary;
@@ -90,47 +88,10 @@ fn the_sample_is_roughed_to_its_offset_shape_without_a_touch() {
 /// each tool change), ending where the plan does to the posted decimals. Skipped, saying so,
 /// where `rs274` is not installed.
 fn a_real_control_reads_the_program(gcode: &str, cl_csv: &str, tool_table: &str) {
-    let Ok(rs274) = common::plan_checks::which("rs274") else {
-        eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
+    let Some(motions) = common::plan_checks::rs274_motions(gcode, Some(tool_table)) else {
         return;
     };
-    let dir = std::env::temp_dir().join(format!("wavemill-rs274-rough-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let (program, canon) = (dir.join("rough.nc"), dir.join("rough.canon"));
-    let table = dir.join("tools.tbl");
-    std::fs::write(&program, gcode).unwrap();
-    std::fs::write(&table, tool_table).unwrap();
-    let run = Command::new(rs274)
-        .arg("-t")
-        .arg(&table)
-        .arg("-g")
-        .arg(&program)
-        .arg(&canon)
-        .stdin(std::process::Stdio::null())
-        .output()
-        .expect("run rs274");
-    assert!(
-        run.status.success(),
-        "rs274: {}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let text = std::fs::read_to_string(&canon).unwrap();
-    std::fs::remove_dir_all(&dir).unwrap();
-    let ends: Vec<[f64; 3]> = text
-        .lines()
-        .filter_map(|l| {
-            let rest = l
-                .split_once("STRAIGHT_FEED(")
-                .or_else(|| l.split_once("STRAIGHT_TRAVERSE("))?
-                .1;
-            let v: Vec<f64> = rest
-                .trim_end_matches(')')
-                .split(',')
-                .map(|x| x.trim().parse().unwrap())
-                .collect();
-            Some([v[0], v[1], v[2]])
-        })
-        .collect();
+    let ends: Vec<[f64; 3]> = motions.iter().map(|(_, v)| [v[0], v[1], v[2]]).collect();
     // The planned tips, every tool's, in order (cl.csv: x, y, z first on each row).
     let planned: Vec<[f64; 3]> = cl_csv
         .lines()

@@ -33,7 +33,7 @@ use crate::stock::cutter::CuttingBody;
 use crate::stock::rest::{Rest, rest_over};
 use crate::stock::simulate::{SimulationOptions, simulate};
 use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
-use crate::tool::{BodyRole, Cutter, ToolAssembly, ToolLibrary};
+use crate::tool::{Cutter, ToolAssembly, ToolLibrary};
 use crate::verify::{MachineModel, program_toolpath};
 
 /// What `rough` is asked to do.
@@ -347,15 +347,7 @@ pub fn rough(
             &part,
             &section,
             &CuttingBody::of(&assembly.cutter),
-            &SimulationOptions {
-                tolerance: options.tolerance,
-                max_dexels: DEFAULT_MAX_DEXELS,
-                non_cutting: assembly
-                    .bodies()
-                    .into_iter()
-                    .filter(|b| b.role != BodyRole::Flutes)
-                    .collect(),
-            },
+            &SimulationOptions::for_tool(assembly, options.tolerance),
         )
         .map_err(stock_error)?;
         let rest = rest_over(&stock, &part, &part_model, stock.bounds().diagonal());

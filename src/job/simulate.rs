@@ -280,12 +280,7 @@ pub fn simulate_program(
     let non_cutting: Vec<crate::tool::Body> = options
         .assembly
         .as_ref()
-        .map(|tool| {
-            tool.bodies()
-                .into_iter()
-                .filter(|b| b.role != crate::tool::BodyRole::Flutes)
-                .collect()
-        })
+        .map(|tool| SimulationOptions::for_tool(tool, options.tolerance).non_cutting)
         .unwrap_or_default();
     if !(d.is_finite() && d > 0.0 && flutes.is_finite() && flutes >= 0.5 * d) {
         return Err(Error::JobFile(JobError::Invalid {

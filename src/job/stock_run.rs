@@ -21,7 +21,6 @@ use crate::stock::cutter::CuttingBody;
 use crate::stock::rest::{Rest, rest_over};
 use crate::stock::simulate::{SimulationOptions, simulate_with_progress};
 use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
-use crate::tool::BodyRole;
 
 /// Collisions listed per operation in the report (all are counted).
 const LISTED_COLLISIONS: usize = 100;
@@ -126,15 +125,7 @@ pub fn run_operations(
             moves: toolpath.moves[first..span.end].to_vec(),
         };
         let assembly = operation.tool.assembly();
-        let options = SimulationOptions {
-            tolerance,
-            max_dexels: DEFAULT_MAX_DEXELS,
-            non_cutting: assembly
-                .bodies()
-                .into_iter()
-                .filter(|b| b.role != BodyRole::Flutes)
-                .collect(),
-        };
+        let options = SimulationOptions::for_tool(&assembly, tolerance);
         observer.stage(
             &format!("stock: {}", operation.name),
             moves.moves.len() as u64,

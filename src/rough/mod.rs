@@ -701,6 +701,21 @@ mod tests {
         (block, blank, tool, options)
     }
 
+    /// How near the block's sides the cutting moves at height `z` come, in the plane.
+    fn nearest_to_block(rough: &Roughing, z: f64) -> f64 {
+        rough
+            .toolpath
+            .moves
+            .iter()
+            .filter(|m| m.kind == MoveKind::Cut && (m.pose.tip.z - z).abs() < 1e-9)
+            .map(|m| {
+                let dx = (m.pose.tip.x.abs() - 10.0).max(0.0);
+                let dy = (m.pose.tip.y.abs() - 10.0).max(0.0);
+                dx.hypot(dy)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// The block's top is a flat: a layer at its height (a facing layer, the tool resting on
     /// it), then the 10 mm below split evenly within the 3 mm depth of cut; no move comes
     /// nearer the block than the radius, and the layers below its top run within a cell's
@@ -720,19 +735,7 @@ mod tests {
             "{}",
             check.min_clearance_mm
         );
-        let nearest = |z: f64| {
-            rough
-                .toolpath
-                .moves
-                .iter()
-                .filter(|m| m.kind == MoveKind::Cut && (m.pose.tip.z - z).abs() < 1e-9)
-                .map(|m| {
-                    let dx = (m.pose.tip.x.abs() - 10.0).max(0.0);
-                    let dy = (m.pose.tip.y.abs() - 10.0).max(0.0);
-                    dx.hypot(dy)
-                })
-                .fold(f64::INFINITY, f64::min)
-        };
+        let nearest = |z: f64| nearest_to_block(&rough, z);
         for z in [7.5, 5.0, 2.5, 0.0] {
             let d = nearest(z);
             assert!(
@@ -804,19 +807,7 @@ mod tests {
         tool.flute_length = 3.0;
         let rough =
             rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
-        let nearest = |z: f64| {
-            rough
-                .toolpath
-                .moves
-                .iter()
-                .filter(|m| m.kind == MoveKind::Cut && (m.pose.tip.z - z).abs() < 1e-9)
-                .map(|m| {
-                    let dx = (m.pose.tip.x.abs() - 10.0).max(0.0);
-                    let dy = (m.pose.tip.y.abs() - 10.0).max(0.0);
-                    dx.hypot(dy)
-                })
-                .fold(f64::INFINITY, f64::min)
-        };
+        let nearest = |z: f64| nearest_to_block(&rough, z);
         let slack = options.cell * 2f64.sqrt() + 1e-9;
         // z = 10 faces the block's top (no wall); 2 mm under the top is within the flutes.
         for (z, keep) in [(7.5, 3.5), (5.0, 3.5), (2.5, 3.5), (0.0, 3.5)] {

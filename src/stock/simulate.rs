@@ -50,6 +50,21 @@ impl Default for SimulationOptions {
     }
 }
 
+impl SimulationOptions {
+    /// Options for `tool`: its shank, neck and holder guarded, at `tolerance`.
+    pub fn for_tool(tool: &crate::tool::ToolAssembly, tolerance: f64) -> Self {
+        SimulationOptions {
+            tolerance,
+            max_dexels: super::DEFAULT_MAX_DEXELS,
+            non_cutting: tool
+                .bodies()
+                .into_iter()
+                .filter(|b| b.role != BodyRole::Flutes)
+                .collect(),
+        }
+    }
+}
+
 /// What one move did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MoveRecord {

@@ -113,46 +113,12 @@ pub fn posted_program_keeps_the_ball_within_the_tolerance(
 /// so the back-simulation above) saw: the same kind of move to the same position in every
 /// axis. Skipped, saying so, where `rs274` is not installed.
 pub fn a_real_control_reads_the_program_as_the_tests_do(gcode: &str) {
-    let Ok(rs274) = which("rs274") else {
-        eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
+    let Some(motions) = rs274_motions(gcode, None) else {
         return;
     };
-    let dir = std::env::temp_dir().join(format!("wavemill-rs274-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let (program, canon) = (dir.join("job.nc"), dir.join("job.canon"));
-    std::fs::write(&program, gcode).unwrap();
-    let run = std::process::Command::new(rs274)
-        .arg("-g")
-        .arg(&program)
-        .arg(&canon)
-        .stdin(std::process::Stdio::null())
-        .output()
-        .expect("run rs274");
-    assert!(
-        run.status.success(),
-        "rs274: {}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let text = std::fs::read_to_string(&canon).unwrap();
-    std::fs::remove_dir_all(&dir).unwrap();
-    // STRAIGHT_TRAVERSE(x, y, z, a, b, c) / STRAIGHT_FEED(...), in program coordinates.
-    let motions: Vec<(bool, [f64; 5])> = text
-        .lines()
-        .filter_map(|l| {
-            let (rapid, rest) = if let Some(i) = l.find("STRAIGHT_TRAVERSE(") {
-                (true, &l[i + 18..])
-            } else if let Some(i) = l.find("STRAIGHT_FEED(") {
-                (false, &l[i + 14..])
-            } else {
-                return None;
-            };
-            let v: Vec<f64> = rest
-                .trim_end_matches(')')
-                .split(',')
-                .map(|x| x.trim().parse().unwrap())
-                .collect();
-            Some((rapid, [v[0], v[1], v[2], v[3], v[5]]))
-        })
+    let motions: Vec<(bool, [f64; 5])> = motions
+        .into_iter()
+        .map(|(rapid, v)| (rapid, [v[0], v[1], v[2], v[3], v[5]]))
         .collect();
     let blocks = read_ac_program(gcode);
     assert!(
@@ -172,6 +138,68 @@ pub fn a_real_control_reads_the_program_as_the_tests_do(gcode: &str) {
             );
         }
     }
+}
+
+/// The straight motions LinuxCNC's interpreter (`rs274 -g`, with `tool_table` as its tool
+/// table when given) reads from `gcode`: rapid or not, and X, Y, Z, A, B, C in program
+/// coordinates. `None`, saying so, where `rs274` is not installed.
+#[allow(dead_code)] // each test crate uses its own part of this module
+pub fn rs274_motions(gcode: &str, tool_table: Option<&str>) -> Option<Vec<(bool, [f64; 6])>> {
+    let Ok(rs274) = which("rs274") else {
+        eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
+        return None;
+    };
+    let dir = std::env::temp_dir().join(format!(
+        "wavemill-rs274-{}-{:x}",
+        std::process::id(),
+        gcode.len()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (program, canon, table) = (
+        dir.join("job.nc"),
+        dir.join("job.canon"),
+        dir.join("tools.tbl"),
+    );
+    std::fs::write(&program, gcode).unwrap();
+    let mut command = std::process::Command::new(rs274);
+    if let Some(text) = tool_table {
+        std::fs::write(&table, text).unwrap();
+        command.arg("-t").arg(&table);
+    }
+    let run = command
+        .arg("-g")
+        .arg(&program)
+        .arg(&canon)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run rs274");
+    assert!(
+        run.status.success(),
+        "rs274: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(&canon).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    // STRAIGHT_TRAVERSE(x, y, z, a, b, c) / STRAIGHT_FEED(...), in program coordinates.
+    Some(
+        text.lines()
+            .filter_map(|l| {
+                let (rapid, rest) = if let Some(i) = l.find("STRAIGHT_TRAVERSE(") {
+                    (true, &l[i + 18..])
+                } else if let Some(i) = l.find("STRAIGHT_FEED(") {
+                    (false, &l[i + 14..])
+                } else {
+                    return None;
+                };
+                let v: Vec<f64> = rest
+                    .trim_end_matches(')')
+                    .split(',')
+                    .map(|x| x.trim().parse().unwrap())
+                    .collect();
+                Some((rapid, [v[0], v[1], v[2], v[3], v[4], v[5]]))
+            })
+            .collect(),
+    )
 }
 
 /// `name` on the PATH.
