@@ -61,6 +61,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             }
             OperationKind::Finish => OperationTarget::DriveSurface(&drive),
+            // Roughing has its own stage (`job::plan_roughing`, from a `[stock]` blank) and a
+            // program with tool changes (`job::post_program_with_tool_changes`): `job::plan`
+            // wires it in.
+            OperationKind::Rough | OperationKind::RestRough => {
+                return Err(format!(
+                    "{}: this example runs the ball operations only; job::plan runs roughing",
+                    operation.name
+                )
+                .into());
+            }
         };
         let p = job::plan_operation(&setup, operation, target, &stock, &|| ())?;
         let cuts = p
@@ -102,6 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .verification_mm
                 .max(0.1 * job.safety.shank_margin),
             search_mm: setup.search,
+            tool: None,
         },
     )?;
     println!(

@@ -3,6 +3,9 @@
 
 use std::path::PathBuf;
 
+/// Radial margin of the enclosing cylinder blank, mm.
+pub const ENCLOSING_MARGIN: f64 = 2.0;
+
 /// The blank a simulation or a plan starts from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum BlankSpec {
@@ -10,6 +13,10 @@ pub enum BlankSpec {
     Box([f64; 6]),
     /// A cylinder about the vertical line through the part's box centre: radius, `z0`, `z1`.
     Cylinder { radius: f64, z0: f64, z1: f64 },
+    /// The cylinder about that line that holds the part with `margin` mm to spare around it
+    /// and 1 mm above, standing on the part's lowest point (`cylinder` with no numbers):
+    /// an impeller's bar stock.
+    EnclosingCylinder { margin: f64 },
     /// The part grown by this many mm (its verified enclosing offset shape).
     Offset(f64),
     /// A closed mesh file (in the part's units).
@@ -23,9 +30,14 @@ impl BlankSpec {
         let bad = || {
             format!(
                 "`{text}`: expected box:X0,Y0,Z0,X1,Y1,Z1 (X0 < X1, …), cylinder:R,Z0,Z1 (R > 0, \
-                 Z0 < Z1), offset:M (M > 0) or mesh:FILE"
+                 Z0 < Z1), cylinder (enclosing the part), offset:M (M > 0) or mesh:FILE"
             )
         };
+        if text.trim() == "cylinder" {
+            return Ok(BlankSpec::EnclosingCylinder {
+                margin: ENCLOSING_MARGIN,
+            });
+        }
         let (kind, value) = text.split_once(':').ok_or_else(bad)?;
         let numbers = || -> std::result::Result<Vec<f64>, String> {
             value
@@ -56,9 +68,29 @@ impl BlankSpec {
         }
     }
 
+    /// The spec with the enclosing cylinder sized for `part` (as planned); others as they are.
+    pub fn resolved(&self, part: &crate::mesh::Mesh) -> BlankSpec {
+        let BlankSpec::EnclosingCylinder { margin } = *self else {
+            return self.clone();
+        };
+        let bounds = part.aabb();
+        let centre = bounds.center();
+        let radius = part
+            .positions
+            .iter()
+            .map(|p| (p.x - centre.x).hypot(p.y - centre.y))
+            .fold(0.0, f64::max);
+        BlankSpec::Cylinder {
+            radius: radius + margin,
+            z0: bounds.min.z,
+            z1: bounds.max.z + 1.0,
+        }
+    }
+
     /// The spec as a user writes it (a mesh by its file name).
     pub fn describe(&self) -> String {
         match self {
+            BlankSpec::EnclosingCylinder { .. } => "cylinder".to_string(),
             BlankSpec::Box(b) => {
                 format!("box:{},{},{},{},{},{}", b[0], b[1], b[2], b[3], b[4], b[5])
             }

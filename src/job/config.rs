@@ -32,6 +32,7 @@ pub struct Job {
     pub safety: SafetySection,
     pub limits: LimitsSection,
     pub stock: StockSection,
+    pub roughing: RoughingSection,
     /// The operations, in order (`[[operation]]` tables); empty: the ones today's
     /// `[strategy]` keys describe (see [`Job::operations`]).
     #[serde(rename = "operation", skip_serializing_if = "Vec::is_empty")]
@@ -84,6 +85,55 @@ impl StockSection {
             .transpose()
     }
 }
+
+/// `[roughing]`: where the roughing tools come from and how they cut. Roughing operations
+/// (`kind = "rough"`, `"rest-rough"`) clear the `[stock]` blank in layers down to the part's
+/// offset shape at their `stock_to_leave` with the library's flat and bull-nose end mills,
+/// 3-axis ([`crate::rough`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RoughingSection {
+    /// Tool library file (relative to the job file); leave out for the bundled one
+    /// (`data/tools.toml`).
+    pub library: Option<PathBuf>,
+    /// Material the roughing leaves on the part when the operations are not listed, mm.
+    pub allowance: f64,
+    /// Smaller end mills that rest-rough after the first when the operations are not listed,
+    /// each only where material stands.
+    pub rest_tools: usize,
+    pub spindle_rpm: u32,
+    /// Feed along the layers, mm/min.
+    pub cut_feed: f64,
+    /// Feed down the ramps into material, mm/min.
+    pub entry_feed: f64,
+}
+
+impl Default for RoughingSection {
+    fn default() -> Self {
+        Self {
+            library: None,
+            allowance: 0.5,
+            rest_tools: 1,
+            spindle_rpm: 8000,
+            cut_feed: 2000.0,
+            entry_feed: 800.0,
+        }
+    }
+}
+
+impl RoughingSection {
+    /// The library the roughing tools come from.
+    pub fn tool_library(&self) -> Result<crate::tool::ToolLibrary, JobError> {
+        let read = match &self.library {
+            Some(path) => crate::tool::ToolLibrary::read(path),
+            None => crate::tool::ToolLibrary::parse(BUNDLED_LIBRARY, "the bundled data/tools.toml"),
+        };
+        read.map_err(|e| invalid("roughing.library", e.to_string()))
+    }
+}
+
+/// The tool library shipped with wavemill, for jobs that name none.
+pub const BUNDLED_LIBRARY: &str = include_str!("../../data/tools.toml");
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -374,6 +424,11 @@ impl Job {
             let resolved = path.parent().unwrap_or(Path::new(".")).join(p);
             job.stock.blank = Some(format!("mesh:{}", resolved.display()));
         }
+        if let Some(p) = &job.roughing.library
+            && p.is_relative()
+        {
+            job.roughing.library = Some(path.parent().unwrap_or(Path::new(".")).join(p));
+        }
         Ok(job)
     }
 
@@ -402,6 +457,9 @@ impl Job {
         if let Some(r) = self.stock.resolution {
             positive("stock.resolution", r)?;
         }
+        positive("roughing.allowance", self.roughing.allowance)?;
+        positive("roughing.cut_feed", self.roughing.cut_feed)?;
+        positive("roughing.entry_feed", self.roughing.entry_feed)?;
         if let Some(e) = self.surface.base_max_error {
             non_negative("surface.base_max_error", e)?;
         }
@@ -587,6 +645,12 @@ impl Job {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OperationKind {
+    /// Layers from the blank down to the offset shape that holds the part at
+    /// `stock_to_leave` mm, with a library end mill (seed 002 §4), 3-axis.
+    Rough,
+    /// Layers again with a smaller end mill, only where the stock the operations before it
+    /// leave still holds material outside its offset shape.
+    RestRough,
     /// Ball-end passes over the stock-to-leave shape that holds the part at
     /// `stock_to_leave` mm (seed 004 ch. 5 step 3).
     SemiFinish,
@@ -598,9 +662,17 @@ impl OperationKind {
     /// The name used in the job file and in messages.
     pub fn name(self) -> &'static str {
         match self {
+            OperationKind::Rough => "rough",
+            OperationKind::RestRough => "rest-rough",
             OperationKind::SemiFinish => "semi-finish",
             OperationKind::Finish => "finish",
         }
+    }
+
+    /// Roughing kinds cut with a library end mill along a fixed vertical axis; the others
+    /// with the job's ball along the 5-axis passes.
+    pub fn is_roughing(self) -> bool {
+        matches!(self, OperationKind::Rough | OperationKind::RestRough)
     }
 }
 
@@ -617,8 +689,11 @@ pub struct OperationSection {
     /// Scallop height target, mm; default `strategy.semi_finish_scallop_height` when
     /// semi-finishing, `strategy.scallop_height` when finishing.
     pub scallop_height: Option<f64>,
-    /// The operation's own tool; default the job's `[tool]`.
+    /// The operation's own tool; default the job's `[tool]`. Not for roughing.
     pub tool: Option<ToolSection>,
+    /// Roughing: the library tool (its id); default the largest flat or bull-nose end mill
+    /// that reaches the floor (`rough`), the next at most 3/4 of the one before (`rest-rough`).
+    pub tool_id: Option<u32>,
 }
 
 /// One operation, every option resolved.
@@ -626,7 +701,11 @@ pub struct OperationSection {
 pub struct Operation {
     pub name: String,
     pub kind: OperationKind,
+    /// The ball of the semi-finishing and finishing passes (the job's `[tool]` for roughing,
+    /// which cuts with a library tool instead).
     pub tool: ToolSection,
+    /// Roughing: the library tool asked for, if one is.
+    pub library_tool: Option<u32>,
     /// Material left on the part, mm (0 when finishing).
     pub stock_to_leave: f64,
     /// Scallop height target, mm.
@@ -635,35 +714,63 @@ pub struct Operation {
 
 impl Job {
     /// The job's operations in machining order: its `[[operation]]` tables, or, without them,
-    /// one semi-finishing operation per `strategy.semi_finish_allowances` entry and then
-    /// finishing. Checks what a list must satisfy: semi-finishing stocks to leave positive and
-    /// strictly decreasing, exactly one finishing operation and it comes last, one tool for
-    /// the whole program (the post writes no tool changes yet).
+    /// roughing when the job's `[stock]` blank is a box or a cylinder (one `rough` to
+    /// `roughing.allowance` and `roughing.rest_tools` `rest-rough`s), one semi-finishing operation per
+    /// `strategy.semi_finish_allowances` entry, then finishing. Checks what a list must
+    /// satisfy: roughing first, stocks to leave positive and decreasing (strictly from one
+    /// ball operation to the next), exactly one finishing operation and it comes last, the
+    /// job's `[tool]` for every ball operation.
     pub fn operations(&self) -> Result<Vec<Operation>, JobError> {
         let default_name = |kind: OperationKind, stock: f64| match kind {
-            OperationKind::SemiFinish => format!("semi-finish to {stock} mm"),
             OperationKind::Finish => "finish".to_string(),
+            kind => format!("{} to {stock} mm", kind.name()),
+        };
+        let operation = |kind: OperationKind, stock: f64, scallop: f64| Operation {
+            name: default_name(kind, stock),
+            kind,
+            tool: self.tool.clone(),
+            library_tool: None,
+            stock_to_leave: stock,
+            scallop_height: scallop,
         };
         let operations: Vec<Operation> = if self.operations.is_empty() {
-            let semi = self
-                .strategy
-                .semi_finish_allowances
-                .iter()
-                .map(|&a| Operation {
-                    name: default_name(OperationKind::SemiFinish, a),
-                    kind: OperationKind::SemiFinish,
-                    tool: self.tool.clone(),
-                    stock_to_leave: a,
-                    scallop_height: self.strategy.semi_finish_scallop_height,
-                });
-            semi.chain(std::iter::once(Operation {
-                name: default_name(OperationKind::Finish, 0.0),
-                kind: OperationKind::Finish,
-                tool: self.tool.clone(),
-                stock_to_leave: 0.0,
-                scallop_height: self.strategy.scallop_height,
-            }))
-            .collect()
+            // A near-net blank (the part grown, a casting's mesh) is taken as roughed.
+            let layered = matches!(
+                self.stock.blank_spec()?,
+                Some(
+                    super::blank::BlankSpec::Box(_)
+                        | super::blank::BlankSpec::Cylinder { .. }
+                        | super::blank::BlankSpec::EnclosingCylinder { .. }
+                )
+            );
+            let roughing = if layered {
+                1 + self.roughing.rest_tools
+            } else {
+                0
+            };
+            let rough = (0..roughing).map(|k| {
+                let kind = if k == 0 {
+                    OperationKind::Rough
+                } else {
+                    OperationKind::RestRough
+                };
+                operation(kind, self.roughing.allowance, self.strategy.scallop_height)
+            });
+            let semi = self.strategy.semi_finish_allowances.iter().map(|&a| {
+                operation(
+                    OperationKind::SemiFinish,
+                    a,
+                    self.strategy.semi_finish_scallop_height,
+                )
+            });
+            rough
+                .chain(semi)
+                .chain(std::iter::once(operation(
+                    OperationKind::Finish,
+                    0.0,
+                    self.strategy.scallop_height,
+                )))
+                .collect()
         } else {
             if !self.strategy.semi_finish_allowances.is_empty() {
                 return Err(JobError::Operations(
@@ -672,25 +779,46 @@ impl Job {
                         .into(),
                 ));
             }
-            self.operations
-                .iter()
-                .map(|s| {
-                    let stock = s.stock_to_leave.unwrap_or(0.0);
-                    Operation {
-                        name: s
-                            .name
-                            .clone()
-                            .unwrap_or_else(|| default_name(s.kind, stock)),
-                        kind: s.kind,
-                        tool: s.tool.clone().unwrap_or_else(|| self.tool.clone()),
-                        stock_to_leave: stock,
-                        scallop_height: s.scallop_height.unwrap_or(match s.kind {
-                            OperationKind::SemiFinish => self.strategy.semi_finish_scallop_height,
-                            OperationKind::Finish => self.strategy.scallop_height,
-                        }),
-                    }
-                })
-                .collect()
+            let mut listed = Vec::with_capacity(self.operations.len());
+            for (i, s) in self.operations.iter().enumerate() {
+                let stock = s.stock_to_leave.unwrap_or(match s.kind {
+                    OperationKind::Rough | OperationKind::RestRough => self.roughing.allowance,
+                    _ => 0.0,
+                });
+                let name = s
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| default_name(s.kind, stock));
+                let fail = |reason: &str| JobError::Operation {
+                    index: i + 1,
+                    name: name.clone(),
+                    reason: reason.to_string(),
+                };
+                if s.kind.is_roughing() && s.tool.is_some() {
+                    return Err(fail(
+                        "roughing takes its end mill from the tool library: name it by \
+                         tool_id, not by an [operation.tool] table",
+                    ));
+                }
+                if !s.kind.is_roughing() && s.tool_id.is_some() {
+                    return Err(fail(
+                        "tool_id names a library end mill for roughing; a ball operation \
+                         takes its tool from [tool]",
+                    ));
+                }
+                listed.push(Operation {
+                    name,
+                    kind: s.kind,
+                    tool: s.tool.clone().unwrap_or_else(|| self.tool.clone()),
+                    library_tool: s.tool_id,
+                    stock_to_leave: stock,
+                    scallop_height: s.scallop_height.unwrap_or(match s.kind {
+                        OperationKind::SemiFinish => self.strategy.semi_finish_scallop_height,
+                        _ => self.strategy.scallop_height,
+                    }),
+                });
+            }
+            listed
         };
         check_operations(&operations, &self.tool)?;
         Ok(operations)
@@ -712,15 +840,22 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
                 op.scallop_height
             )));
         }
+        let previous_kind = i.checked_sub(1).map(|j| operations[j].kind);
         match op.kind {
-            OperationKind::SemiFinish => {
+            OperationKind::Rough | OperationKind::RestRough | OperationKind::SemiFinish => {
                 if !(op.stock_to_leave.is_finite() && op.stock_to_leave > 0.0) {
                     return Err(fail(format!(
-                        "semi-finishing needs stock_to_leave > 0 mm, got {}",
+                        "{} needs stock_to_leave > 0 mm, got {}",
+                        op.kind.name(),
                         op.stock_to_leave
                     )));
                 }
-                if op.stock_to_leave >= previous_stock {
+                // A rest-roughing tool may rough to the same shape as the one before it; every
+                // other operation must leave less than what is already there.
+                let same_allowed = op.kind == OperationKind::RestRough;
+                if op.stock_to_leave > previous_stock
+                    || (op.stock_to_leave == previous_stock && !same_allowed)
+                {
                     return Err(fail(format!(
                         "stock_to_leave {} mm is not below the {previous_stock} mm the \
                          operation before leaves",
@@ -744,10 +879,25 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
                 }
             }
         }
-        if op.tool != *job_tool {
+        match op.kind {
+            OperationKind::Rough if i != 0 => {
+                return Err(fail(
+                    "roughing from the blank must be the first operation (rest-rough clears \
+                     what the ones before leave)"
+                        .into(),
+                ));
+            }
+            OperationKind::RestRough if !previous_kind.is_some_and(OperationKind::is_roughing) => {
+                return Err(fail(
+                    "rest-roughing follows a roughing or rest-roughing operation".into(),
+                ));
+            }
+            _ => {}
+        }
+        if !op.kind.is_roughing() && op.tool != *job_tool {
             return Err(fail(
-                "uses another tool than [tool]; a program with tool changes is not posted \
-                 yet, so every operation runs the job's tool"
+                "uses another ball than [tool]; the semi-finishing and finishing passes run \
+                 the job's tool (roughing operations take theirs from the library)"
                     .into(),
             ));
         }

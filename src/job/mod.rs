@@ -20,6 +20,7 @@ mod offsets;
 mod operation;
 mod output;
 mod pipeline;
+mod plan_roughing;
 mod preview;
 mod render;
 mod report;
@@ -39,8 +40,8 @@ pub use blank::BlankSpec;
 pub use budget::ToleranceBudget;
 pub use config::{
     FeedSection, Job, JobError, LimitsSection, MachineSection, Operation, OperationKind,
-    OperationSection, PartSection, SafetySection, StockSection, StrategySection, ToolSection,
-    unit_direction,
+    OperationSection, PartSection, RoughingSection, SafetySection, StockSection, StrategySection,
+    ToolSection, unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,
@@ -56,8 +57,11 @@ pub use operation::InProcessStock;
 pub use output::{OutputKind, check_output_dir, write_atomically, write_output_set, write_outputs};
 pub use pipeline::{
     Observer, OperationDetails, OperationSpan, OperationTarget, PlanOutput, PlannedOperation,
-    Quiet, drive_surface, join_operations, load_part, plan, plan_operation, post_program,
-    program_header, stock_to_leave_shapes,
+    Quiet, ToolChange, drive_surface, join_operations, load_part, plan, plan_operation,
+    post_program, post_program_with_tool_changes, program_header, stock_to_leave_shapes,
+};
+pub use plan_roughing::{
+    PlannedRoughing, RoughingContext, RoughingSummary, check_posted_roughing, plan_roughing,
 };
 pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use rough::{RoughOptions, RoughOutput, RoughReport, RoughToolRun, rough, write_rough_outputs};
@@ -72,5 +76,7 @@ pub use stock_model::{
     CollisionReport, DepthOfCutReport, EngagementReport, GougeReport, Spread, blank_stock,
     cutting_spreads, default_resolution, enclosure_warning, stock_model_glb,
 };
-pub use stock_run::{OperationStockReport, PlanStockReport, StockRun, run_operations};
+pub use stock_run::{
+    OperationMoves, OperationStockReport, PlanStockReport, StockRun, run_operations,
+};
 pub use tools::{ToolsOutput, ToolsReport, tools, write_tools_outputs};

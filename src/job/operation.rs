@@ -79,7 +79,7 @@ mod tests {
         for (text, says) in [
             (
                 "[[operation]]\nkind = \"semi-finish\"\n",
-                "operation 1 (semi-finish to 0 mm): semi-finishing needs stock_to_leave > 0",
+                "operation 1 (semi-finish to 0 mm): semi-finish needs stock_to_leave > 0",
             ),
             (
                 "[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.5\n[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.5\n[[operation]]\nkind = \"finish\"\n",
@@ -103,20 +103,77 @@ mod tests {
             ),
             (
                 "[[operation]]\nkind = \"finish\"\n[operation.tool]\ndiameter = 3.0\n",
-                "uses another tool than [tool]",
+                "uses another ball than [tool]",
             ),
             (
                 "[strategy]\nsemi_finish_allowances = [1.0]\n[[operation]]\nkind = \"finish\"\n",
                 "both list operations",
             ),
             (
-                "[[operation]]\nkind = \"rough\"\n",
-                "unknown variant `rough`",
+                "[[operation]]\nkind = \"finish\"\n[[operation]]\nkind = \"rough\"\n",
+                "operation 1 (finish): finishing must be the last",
             ),
+            (
+                "[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 1.0\n\
+                 [[operation]]\nkind = \"rough\"\nstock_to_leave = 0.5\n[[operation]]\nkind = \"finish\"\n",
+                "operation 2 (rough to 0.5 mm): roughing from the blank must be the first",
+            ),
+            (
+                "[[operation]]\nkind = \"rest-rough\"\n[[operation]]\nkind = \"finish\"\n",
+                "rest-roughing follows a roughing",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\nstock_to_leave = 0.5\n\
+                 [[operation]]\nkind = \"rest-rough\"\nstock_to_leave = 0.8\n[[operation]]\nkind = \"finish\"\n",
+                "stock_to_leave 0.8 mm is not below the 0.5 mm",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\n[operation.tool]\ndiameter = 10.0\n[[operation]]\nkind = \"finish\"\n",
+                "name it by tool_id",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\ntool_id = 3\n",
+                "tool_id names a library end mill",
+            ),
+            ("[[operation]]\nkind = \"face\"\n", "unknown variant `face`"),
         ] {
             let err = job(text).expect_err(text);
             assert!(err.contains(says), "{text}: {err}");
         }
+    }
+
+    /// With a blank and no listed operations, the job roughs to `roughing.allowance` with one
+    /// tool, rest-roughs with `roughing.rest_tools` more, then semi-finishes and finishes; a
+    /// rest-roughing tool may rough to the shape the one before it roughed to.
+    #[test]
+    fn a_job_with_a_blank_roughs_first() {
+        let ops = job(
+            "[stock]\nblank = \"cylinder\"\n[roughing]\nallowance = 0.8\nrest_tools = 2\n\
+             [strategy]\nsemi_finish_allowances = [0.3]\n",
+        )
+        .expect("job");
+        let kinds: Vec<(OperationKind, f64)> =
+            ops.iter().map(|o| (o.kind, o.stock_to_leave)).collect();
+        assert_eq!(
+            kinds,
+            vec![
+                (OperationKind::Rough, 0.8),
+                (OperationKind::RestRough, 0.8),
+                (OperationKind::RestRough, 0.8),
+                (OperationKind::SemiFinish, 0.3),
+                (OperationKind::Finish, 0.0),
+            ]
+        );
+        assert_eq!(ops[0].name, "rough to 0.8 mm");
+        // A near-net blank is taken as roughed.
+        let near_net = job("[stock]\nblank = \"offset:3\"\n").expect("job");
+        assert_eq!(near_net.len(), 1);
+        let listed = job("[[operation]]\nkind = \"rough\"\ntool_id = 3\n\
+             [[operation]]\nkind = \"rest-rough\"\nstock_to_leave = 0.2\n[[operation]]\nkind = \"finish\"\n")
+        .expect("job");
+        assert_eq!(listed[0].library_tool, Some(3));
+        assert_eq!(listed[0].stock_to_leave, 0.5);
+        assert_eq!(listed[1].library_tool, None);
     }
 
     #[test]

@@ -22,6 +22,7 @@ use super::budget::ToleranceBudget;
 use super::config::{Job, Operation, OperationKind, SurfaceSection};
 use super::offsets::stock_shapes;
 use super::operation::InProcessStock;
+use super::plan_roughing::{RoughingContext, check_posted_roughing, plan_roughing};
 use super::preview::preview;
 use super::report::*;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
@@ -33,7 +34,7 @@ use crate::mesh::{Mesh, set_aside_warning};
 use crate::multires::Hierarchy;
 use crate::offset::OffsetShape;
 use crate::path::{self, Finishing, FinishingOptions, LinkReport};
-use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
+use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader, ProgramSink};
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
@@ -187,6 +188,9 @@ pub struct PlannedOperation {
 
 /// What planning an operation measured, by kind.
 pub enum OperationDetails {
+    /// Layers with a library end mill ([`super::plan_roughing`]); the summary as planned,
+    /// before the posted program is checked.
+    Rough(Box<super::plan_roughing::RoughingSummary>),
     SemiFinish(SemiFinishSummary),
     Finish {
         passes: Finishing,
@@ -363,8 +367,37 @@ pub fn plan(
     let mut shapes_left = shapes.iter();
     let mut stock = InProcessStock::Blank;
     let mut planned = Vec::with_capacity(operations.len());
+    let mut roughing = Vec::new();
+    let mut roughing_context = None;
+    // The tool each operation cuts with, in order: a library end mill or the job's ball.
+    let mut tools = Vec::with_capacity(operations.len());
     let advance = || observer.advance();
     for operation in &operations {
+        if operation.kind.is_roughing() {
+            let t = Instant::now();
+            observer.stage(&format!("roughing: {}", operation.name), 0);
+            let context = match &mut roughing_context {
+                Some(context) => context,
+                None => roughing_context.insert(RoughingContext::new(
+                    part,
+                    units,
+                    job,
+                    prepared.table_z,
+                )?),
+            };
+            let rough = plan_roughing(context, part, job, &setup, operation)?;
+            planned.push(PlannedOperation {
+                operation: operation.clone(),
+                toolpath: rough.toolpath.clone(),
+                details: OperationDetails::Rough(Box::new(rough.summary.clone())),
+                failure: None,
+            });
+            tools.push(rough.tool.clone());
+            roughing.push(rough);
+            stock = stock.after(operation);
+            timings.roughing += ms(t);
+            continue;
+        }
         let target = match operation.kind {
             OperationKind::SemiFinish => {
                 let (level, shape) = shapes_left.next().ok_or_else(|| {
@@ -376,7 +409,7 @@ pub fn plan(
                 }
             }
             OperationKind::Finish => {
-                timings.semi_finishing = ms(t);
+                timings.semi_finishing = ms(t) - timings.roughing;
                 let stepover = path::stepover_for_scallop(
                     operation.tool.diameter / 2.0,
                     operation.scallop_height,
@@ -392,26 +425,51 @@ pub fn plan(
                 );
                 OperationTarget::DriveSurface(&drive)
             }
+            OperationKind::Rough | OperationKind::RestRough => {
+                return Err(Error::Internal("roughing is planned above".into()));
+            }
         };
         let t = Instant::now();
         planned.push(plan_operation(&setup, operation, target, &stock, &advance)?);
-        match operation.kind {
-            OperationKind::SemiFinish => {}
-            OperationKind::Finish => timings.finishing_passes += ms(t),
+        tools.push(setup.tool.clone());
+        if operation.kind == OperationKind::Finish {
+            timings.finishing_passes += ms(t);
         }
         stock = stock.after(operation);
     }
 
     let t = Instant::now();
     observer.stage("linking", 0);
+    let rapids_fed = roughing_context.as_ref().map(|context| {
+        context.feed_rapids_through_rest(
+            planned
+                .iter_mut()
+                .filter(|p| !p.operation.kind.is_roughing())
+                .map(|p| &mut p.toolpath),
+            &setup.tool,
+            job.feeds.approach,
+            job.strategy.tolerance,
+        )
+    });
     let (toolpath, spans) = join_operations(&planned);
     timings.linking = ms(t);
 
     let t = Instant::now();
     observer.stage("verification", 0);
     let budget = &setup.budget;
+    // Every pose of the ball operations against the part and the machine; the roughing
+    // tools' moves are checked exactly as posted below.
+    let ball_start = spans
+        .iter()
+        .zip(&operations)
+        .find(|(_, op)| !op.kind.is_roughing())
+        .map_or(toolpath.moves.len(), |(span, _)| span.moves.start);
+    let ball_moves = Toolpath {
+        tool_id: setup.tool.id,
+        moves: toolpath.moves[ball_start..].to_vec(),
+    };
     let verification = verify(
-        &toolpath,
+        &ball_moves,
         &setup.collider,
         &setup.prepared_tool,
         setup.search,
@@ -429,43 +487,90 @@ pub fn plan(
 
     let t = Instant::now();
     observer.stage("post-processing", 0);
-    let header = program_header(&prepared, job, &setup, &operations);
-    let (program, gcode) = post_program(&setup, &toolpath, &header)?;
-    let cl_csv = post::write_cl_csv(&toolpath);
+    let mut header = program_header(&prepared, job, &setup, &operations);
+    if let Some(first) = roughing.first() {
+        header.program_name = format!("wavemill roughing and finishing of {}", prepared.name);
+        header.tool_description = vec![first.tool.describe()];
+        header.tool_number = first.tool.id;
+        header.spindle_rpm = job.roughing.spindle_rpm;
+        header.comments.insert(
+            0,
+            format!(
+                "layer roughing from {} with {}, 3-axis (A0), to the part + {} mm",
+                job.stock.blank.as_deref().unwrap_or("the blank"),
+                roughing
+                    .iter()
+                    .map(|r| format!("T{}", r.tool.id))
+                    .collect::<Vec<_>>()
+                    .join(", then "),
+                first.summary.stock_to_leave_mm
+            ),
+        );
+    }
+    let changes = tool_changes(job, &spans, &operations, &tools);
+    let (program, gcode) = post_program_with_tool_changes(&setup, &toolpath, &changes, &header)?;
+    let cl_csv = if roughing.is_empty() {
+        post::write_cl_csv(&toolpath)
+    } else {
+        let rows: Vec<(u32, Move)> = spans
+            .iter()
+            .zip(&tools)
+            .flat_map(|(span, tool)| {
+                toolpath.moves[span.moves.clone()]
+                    .iter()
+                    .map(|m| (tool.id, *m))
+            })
+            .collect();
+        super::rough::cl_csv_of(&rows)
+    };
     let time = post::estimate_time(&program, job.machine.max_rotary_speed);
     timings.post = ms(t);
 
     let t = Instant::now();
     observer.stage("back-simulation of the program", 0);
     let rapid_margin = job.safety.shank_margin;
+    let model = MachineModel::TableTableAc {
+        part_origin_in_table: setup.part_origin_in_table,
+    };
     let posted = check_posted(
         &gcode,
-        &MachineModel::TableTableAc {
-            part_origin_in_table: setup.part_origin_in_table,
-        },
+        &model,
         part,
         &PostedOptions {
             ball_radius: setup.prepared_tool.ball_radius,
             feed_error_mm: budget.verification_mm,
             rapid_error_mm: (0.1 * rapid_margin).max(budget.verification_mm),
             search_mm: setup.search,
+            tool: Some(setup.tool.id),
         },
     );
+    let roughing_failure = check_posted_roughing(
+        &gcode,
+        &model,
+        part,
+        &mut roughing,
+        1 + changes.len(),
+        budget.verification_mm,
+    )?;
     timings.back_simulation = ms(t);
     let t = Instant::now();
-    let ranges: Vec<std::ops::Range<usize>> = spans.iter().map(|s| s.moves.clone()).collect();
-    let stock_run = super::stock_run::run_operations(
-        part,
-        units,
-        job,
-        &toolpath,
-        &ranges,
-        &operations,
-        observer,
-    )?;
+    let runs: Vec<super::stock_run::OperationMoves> = operations
+        .iter()
+        .zip(&spans)
+        .zip(&tools)
+        .map(
+            |((operation, span), tool)| super::stock_run::OperationMoves {
+                operation,
+                moves: &span.moves,
+                tool,
+            },
+        )
+        .collect();
+    let stock_run = super::stock_run::run_operations(part, units, job, &toolpath, &runs, observer)?;
     timings.stock = ms(t);
     let verification_failure = pose_failure
         .or_else(|| posted_failure(&posted, budget, rapid_margin))
+        .or(roughing_failure)
         .or_else(|| planned.iter().find_map(|p| p.failure.clone()))
         .or_else(|| stock_run.as_ref().and_then(|run| run.failure.clone()));
     let posted = posted.ok();
@@ -481,6 +586,7 @@ pub fn plan(
     let mut finishing = None;
     for p in planned {
         match p.details {
+            OperationDetails::Rough(_) => {}
             OperationDetails::SemiFinish(summary) => semi_summaries.push(summary),
             OperationDetails::Finish { passes, linking } => finishing = Some((passes, linking)),
         }
@@ -571,6 +677,8 @@ pub fn plan(
             },
         },
         stock_to_leave: semi_summaries,
+        roughing: roughing.into_iter().map(|r| r.summary).collect(),
+        rapids_fed_through_rest: rapids_fed,
         poses: pose_counts(&toolpath),
         cutting_length_mm: length(MoveKind::Cut),
         approach_length_mm: length(MoveKind::Approach),
@@ -624,6 +732,85 @@ pub fn post_program(
     let program = post::linearise_opt(&setup.kinematics, toolpath, &linearise)?;
     let mut writer = post::GcodeWriter::new(&setup.kinematics, setup.gcode_options.clone());
     post::emit(&program, header, &mut writer);
+    Ok((program, writer.into_string()))
+}
+
+/// A tool change within a program: at move `at` of the toolpath, to the tool of `header`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ToolChange {
+    pub at: usize,
+    pub header: ProgramHeader,
+}
+
+/// Where the plan's program changes tools: at the start of every roughing operation after
+/// the first (each roughing tool's moves stand apart in the program, for its check), and at
+/// the first ball operation after roughing.
+fn tool_changes(
+    job: &Job,
+    spans: &[OperationSpan],
+    operations: &[Operation],
+    tools: &[crate::tool::ToolAssembly],
+) -> Vec<ToolChange> {
+    let mut changes = Vec::new();
+    for k in 1..operations.len() {
+        let (before, now) = (&operations[k - 1], &operations[k]);
+        if now.kind.is_roughing() || before.kind.is_roughing() {
+            let tool = &tools[k];
+            changes.push(ToolChange {
+                at: spans[k].moves.start,
+                header: ProgramHeader {
+                    tool_description: vec![tool.describe()],
+                    tool_number: tool.id,
+                    spindle_rpm: if now.kind.is_roughing() {
+                        job.roughing.spindle_rpm
+                    } else {
+                        job.tool.spindle_rpm
+                    },
+                    ..Default::default()
+                },
+            });
+        }
+    }
+    changes
+}
+
+/// [`post_program`] for a program with tool changes: each tool's moves linearised on their
+/// own and written after a tool change ([`post::ProgramSink::tool_change`]) at the safe plane,
+/// where every operation starts and ends.
+pub fn post_program_with_tool_changes(
+    setup: &PlanSetup,
+    toolpath: &Toolpath,
+    changes: &[ToolChange],
+    header: &ProgramHeader,
+) -> Result<(Vec<(Move, Joints)>, String)> {
+    if changes.is_empty() {
+        return post_program(setup, toolpath, header);
+    }
+    let linearise = LineariseOptions::default()
+        .with_tolerance_mm(setup.budget.linearisation_mm)
+        .with_control_point_mm(setup.prepared_tool.ball_radius);
+    let mut writer = post::GcodeWriter::new(&setup.kinematics, setup.gcode_options.clone());
+    let mut program = Vec::new();
+    let mut starts: Vec<usize> = std::iter::once(0)
+        .chain(changes.iter().map(|c| c.at))
+        .collect();
+    starts.push(toolpath.moves.len());
+    for (k, window) in starts.windows(2).enumerate() {
+        let section = Toolpath {
+            tool_id: toolpath.tool_id,
+            moves: toolpath.moves[window[0]..window[1]].to_vec(),
+        };
+        let blocks = post::linearise_opt(&setup.kinematics, &section, &linearise)?;
+        match k {
+            0 => writer.begin(header),
+            k => writer.tool_change(&changes[k - 1].header),
+        }
+        for (m, j) in &blocks {
+            writer.motion(m, j);
+        }
+        program.extend(blocks);
+    }
+    writer.end();
     Ok((program, writer.into_string()))
 }
 

@@ -21,6 +21,14 @@ pub struct PlanReport {
     /// The semi-finishing operations before finishing, in machining order: which shapes were
     /// used as stock to leave, and what the checks measured (issue 4 point 5). Empty: none.
     pub stock_to_leave: Vec<super::semi_finish::SemiFinishSummary>,
+    /// The roughing operations before them, in machining order: tool, layers, and the exact
+    /// check of each tool's posted moves against its offset shape and the part. Empty: none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub roughing: Vec<super::plan_roughing::RoughingSummary>,
+    /// After roughing: the ball operations' rapids that would have passed through the
+    /// material roughing leaves, made feed moves at the approach feed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rapids_fed_through_rest: Option<usize>,
     /// Poses, lengths, time, clearances and blocks are of the whole program (semi-finishing
     /// and finishing); the strategy and unreachable figures are of the finishing passes.
     pub poses: PoseCounts,
@@ -165,6 +173,8 @@ pub struct StageTimings {
     pub prepare: f64,
     pub drive_surface: f64,
     pub collision_structures: f64,
+    /// Roughing and rest-roughing operations planned (offset shapes, layers, planning stock).
+    pub roughing: f64,
     pub semi_finishing: f64,
     pub finishing_passes: f64,
     pub linking: f64,

@@ -182,38 +182,15 @@ pub fn rough(
             file: part_name.to_string(),
             reason: e.to_string(),
         })?;
-    let bounds = part.aabb();
-    let floor = bounds.min.z;
-    let centre = bounds.center();
+    let floor = part.aabb().min.z;
     let spec = match &options.blank {
         Some(spec) => spec.clone(),
-        None => {
-            let radius = part
-                .positions
-                .iter()
-                .map(|p| (p.x - centre.x).hypot(p.y - centre.y))
-                .fold(0.0, f64::max);
-            BlankSpec::Cylinder {
-                radius: radius + options.margin,
-                z0: floor,
-                z1: bounds.max.z + 1.0,
-            }
-        }
-    };
-    let blank = match &spec {
-        BlankSpec::Cylinder { radius, z0, z1 } => {
-            Blank::cylinder(Point2::new(centre.x, centre.y), *radius, *z0, *z1)
-        }
-        BlankSpec::Box(b) => {
-            Blank::cuboid(Point3::new(b[0], b[1], b[2]), Point3::new(b[3], b[4], b[5]))
-        }
-        other => {
-            return Err(Error::Usage(format!(
-                "blank `{}`: layer roughing clears a box or a cylinder blank",
-                other.describe()
-            )));
-        }
-    };
+        None => BlankSpec::EnclosingCylinder {
+            margin: options.margin,
+        },
+    }
+    .resolved(&part);
+    let blank = layer_blank(&spec, &part)?;
     let sequence = choose_tools(
         library,
         options.tool_id,
@@ -240,43 +217,33 @@ pub fn rough(
     let mut planning_stock = blank_stock(&part, &spec, units, spacing, DEFAULT_MAX_DEXELS)?;
     let mut planned = Vec::with_capacity(sequence.len());
     for (k, (assembly, _)) in sequence.iter().enumerate() {
-        let tool = RoughingTool::of(assembly, options.holder_margin);
-        let mut roughing_options = RoughingOptions::for_radius(tool.radius);
-        roughing_options.floor = Some(floor);
-        roughing_options.feeds = options.feeds.clone();
-        roughing_options.tolerance = options.tolerance;
-        let body = CuttingBody::of(&assembly.cutter);
-        let material = if k == 0 {
-            Material::Blank
-        } else {
-            Material::Stock {
-                stock: &mut planning_stock,
-                body: &body,
-            }
-        };
-        let layers = rough_layers(
+        let from_blank = k == 0;
+        let (tool, layers) = rough_with_tool(
             shape,
             &blank,
-            &tool,
-            assembly.id,
-            material,
-            &roughing_options,
+            assembly,
+            &ToolRoughing {
+                holder_margin: options.holder_margin,
+                floor,
+                feeds: &options.feeds,
+                tolerance: options.tolerance,
+            },
+            &mut planning_stock,
+            from_blank,
         )
         .map_err(|e| Error::Usage(format!("{part_name}: roughing with T{}: {e}", assembly.id)))?;
-        if k == 0 {
-            if !layers
+        if from_blank
+            && !layers
                 .toolpath
                 .moves
                 .iter()
                 .any(|m| m.kind == MoveKind::Cut)
-            {
-                return Err(Error::NothingToCut(format!(
-                    "{part_name}: the blank `{}` holds no material outside the part's offset \
-                     shape that the tool can reach",
-                    spec.describe()
-                )));
-            }
-            planning_stock.remove_cutting(&layers.toolpath, &body, options.tolerance);
+        {
+            return Err(Error::NothingToCut(format!(
+                "{part_name}: the blank `{}` holds no material outside the part's offset \
+                 shape that the tool can reach",
+                spec.describe()
+            )));
         }
         planned.push((tool, layers));
     }
@@ -446,8 +413,74 @@ pub fn rough(
     })
 }
 
+/// The layer-roughing blank of a box or cylinder spec (others are refused: layers clear a
+/// prism).
+pub(super) fn layer_blank(spec: &BlankSpec, part: &crate::mesh::Mesh) -> Result<Blank> {
+    match spec.resolved(part) {
+        BlankSpec::Cylinder { radius, z0, z1 } => {
+            let centre = part.aabb().center();
+            Ok(Blank::cylinder(
+                Point2::new(centre.x, centre.y),
+                radius,
+                z0,
+                z1,
+            ))
+        }
+        BlankSpec::Box(b) => Ok(Blank::cuboid(
+            Point3::new(b[0], b[1], b[2]),
+            Point3::new(b[3], b[4], b[5]),
+        )),
+        other => Err(Error::Usage(format!(
+            "blank `{}`: layer roughing clears a box or a cylinder blank",
+            other.describe()
+        ))),
+    }
+}
+
+/// How one tool roughs, beyond its shape and blank.
+pub(super) struct ToolRoughing<'a> {
+    /// The holder stays this far above the blank, mm.
+    pub holder_margin: f64,
+    /// The lowest the tool tip goes, mm.
+    pub floor: f64,
+    pub feeds: &'a RoughingFeeds,
+    pub tolerance: f64,
+}
+
+/// Layers of one tool down to `shape`: from the whole blank (`from_blank`; its moves are then
+/// taken off `stock`), else only where `stock` still holds material (each layer taken off as
+/// it is planned). `stock` is the planning model the next tool starts from.
+pub(super) fn rough_with_tool(
+    shape: &crate::mesh::Mesh,
+    blank: &Blank,
+    assembly: &ToolAssembly,
+    how: &ToolRoughing,
+    stock: &mut Stock,
+    from_blank: bool,
+) -> std::result::Result<(RoughingTool, crate::rough::Roughing), crate::rough::RoughError> {
+    let tool = RoughingTool::of(assembly, how.holder_margin);
+    let mut options = RoughingOptions::for_radius(tool.radius);
+    options.floor = Some(how.floor);
+    options.feeds = how.feeds.clone();
+    options.tolerance = how.tolerance;
+    let body = CuttingBody::of(&assembly.cutter);
+    let material = if from_blank {
+        Material::Blank
+    } else {
+        Material::Stock {
+            stock: &mut *stock,
+            body: &body,
+        }
+    };
+    let layers = rough_layers(shape, blank, &tool, assembly.id, material, &options)?;
+    if from_blank {
+        stock.remove_cutting(&layers.toolpath, &body, how.tolerance);
+    }
+    Ok((tool, layers))
+}
+
 /// CL data of several tools' moves, each row with its tool.
-fn cl_csv_of(moves: &[(u32, crate::geom::Move)]) -> String {
+pub(super) fn cl_csv_of(moves: &[(u32, crate::geom::Move)]) -> String {
     let mut out = String::new();
     let mut start = 0;
     while start < moves.len() {
@@ -473,7 +506,7 @@ fn cl_csv_of(moves: &[(u32, crate::geom::Move)]) -> String {
 
 /// The read-back program cut at its tool changes (`T… M6` lines) into one toolpath per tool,
 /// each starting from where the one before it ended.
-fn split_at_tool_changes(
+pub(super) fn split_at_tool_changes(
     gcode: &str,
     posted: &crate::geom::Toolpath,
     lines: &[usize],
@@ -519,63 +552,104 @@ fn choose_tools(
     depth: f64,
     holder_margin: f64,
 ) -> Result<Vec<(ToolAssembly, String)>> {
-    let roughers: Vec<&ToolAssembly> = library
+    let mut sequence = vec![first_rougher(library, id, depth, holder_margin)?];
+    while sequence.len() <= rest {
+        let previous = sequence[sequence.len() - 1].0.cutter.diameter();
+        match next_rougher(library, None, previous, depth, holder_margin)? {
+            Some(next) => sequence.push(next),
+            None => break,
+        }
+    }
+    Ok(sequence)
+}
+
+/// The library's flat and bull-nose end mills, largest first.
+fn roughers(library: &ToolLibrary) -> Vec<&ToolAssembly> {
+    library
         .largest_first()
         .into_iter()
         .map(|i| &library.tools[i])
         .filter(|t| matches!(t.cutter, Cutter::Flat { .. } | Cutter::BullNose { .. }))
-        .collect();
-    let reaches = |t: &ToolAssembly| t.stickout - holder_margin >= depth;
-    let first = match id {
-        Some(id) => {
-            let tool = library
-                .tools
-                .iter()
-                .find(|t| t.id == id)
-                .ok_or_else(|| Error::Usage(format!("the library has no tool with id {id}")))?;
-            (tool.clone(), format!("asked for (T{id})"))
-        }
-        None => {
-            let Some(largest) = roughers.first() else {
-                return Err(Error::Usage(
-                    "the library has no flat or bull-nose end mill to rough with".into(),
-                ));
-            };
-            match roughers.iter().find(|t| reaches(t)) {
-                Some(t) => (
-                    (*t).clone(),
-                    format!("the largest flat or bull-nose end mill reaching {depth:.1} mm deep"),
-                ),
-                None => (
-                    (*largest).clone(),
-                    format!(
-                        "the largest flat or bull-nose end mill; none reaches {depth:.1} mm deep"
-                    ),
-                ),
-            }
-        }
-    };
-    let mut sequence = vec![first];
-    while sequence.len() <= rest {
-        let previous = sequence[sequence.len() - 1].0.cutter.diameter();
-        let smaller: Vec<&&ToolAssembly> = roughers
-            .iter()
-            .filter(|t| t.cutter.diameter() <= 0.75 * previous)
-            .collect();
-        let Some(next) = smaller.iter().find(|t| reaches(t)).or(smaller.first()) else {
-            break;
-        };
-        let why = format!(
-            "rest roughing: the largest end mill at most 3/4 of the D{previous} before it{}",
-            if reaches(next) {
-                ""
-            } else {
-                " (it does not reach the floor)"
-            }
-        );
-        sequence.push(((**next).clone(), why));
+        .collect()
+}
+
+/// The library tool `id`, or an error naming it.
+fn library_tool(library: &ToolLibrary, id: u32) -> Result<(ToolAssembly, String)> {
+    let tool = library
+        .tools
+        .iter()
+        .find(|t| t.id == id)
+        .ok_or_else(|| Error::Usage(format!("the library has no tool with id {id}")))?;
+    if !matches!(tool.cutter, Cutter::Flat { .. } | Cutter::BullNose { .. }) {
+        return Err(Error::Usage(format!(
+            "T{id} ({}) is not a flat or bull-nose end mill: layers are roughed with one",
+            tool.describe()
+        )));
     }
-    Ok(sequence)
+    Ok((tool.clone(), format!("asked for (T{id})")))
+}
+
+/// The tool that roughs the blank, and why: `id` if given, else the largest flat or
+/// bull-nose end mill of the library, the first of them that reaches `depth` below the
+/// blank's top (its stickout less `holder_margin`) if any does.
+pub(super) fn first_rougher(
+    library: &ToolLibrary,
+    id: Option<u32>,
+    depth: f64,
+    holder_margin: f64,
+) -> Result<(ToolAssembly, String)> {
+    if let Some(id) = id {
+        return library_tool(library, id);
+    }
+    let roughers = roughers(library);
+    let reaches = |t: &ToolAssembly| t.stickout - holder_margin >= depth;
+    let Some(largest) = roughers.first() else {
+        return Err(Error::Usage(
+            "the library has no flat or bull-nose end mill to rough with".into(),
+        ));
+    };
+    Ok(match roughers.iter().find(|t| reaches(t)) {
+        Some(t) => (
+            (*t).clone(),
+            format!("the largest flat or bull-nose end mill reaching {depth:.1} mm deep"),
+        ),
+        None => (
+            (*largest).clone(),
+            format!("the largest flat or bull-nose end mill; none reaches {depth:.1} mm deep"),
+        ),
+    })
+}
+
+/// The tool that rest-roughs after one of `previous` mm, and why: `id` if given, else the
+/// largest end mill at most 3/4 of it across, preferring one that reaches `depth`; `None`
+/// when the library has no smaller one.
+pub(super) fn next_rougher(
+    library: &ToolLibrary,
+    id: Option<u32>,
+    previous: f64,
+    depth: f64,
+    holder_margin: f64,
+) -> Result<Option<(ToolAssembly, String)>> {
+    if let Some(id) = id {
+        return library_tool(library, id).map(Some);
+    }
+    let reaches = |t: &ToolAssembly| t.stickout - holder_margin >= depth;
+    let smaller: Vec<&ToolAssembly> = roughers(library)
+        .into_iter()
+        .filter(|t| t.cutter.diameter() <= 0.75 * previous)
+        .collect();
+    let Some(next) = smaller.iter().find(|t| reaches(t)).or(smaller.first()) else {
+        return Ok(None);
+    };
+    let why = format!(
+        "rest roughing: the largest end mill at most 3/4 of the D{previous} before it{}",
+        if reaches(next) {
+            ""
+        } else {
+            " (it does not reach the floor)"
+        }
+    );
+    Ok(Some(((*next).clone(), why)))
 }
 
 fn ms(since: Instant) -> f64 {

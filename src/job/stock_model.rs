@@ -228,7 +228,10 @@ pub fn blank_stock(
     max: usize,
 ) -> Result<Stock> {
     let b = part.aabb();
-    match spec {
+    match &spec.resolved(part) {
+        BlankSpec::EnclosingCylinder { .. } => Err(Error::Internal(
+            "the enclosing cylinder was not sized for the part".into(),
+        )),
         BlankSpec::Box(c) => {
             let bounds =
                 Aabb::from_points(&[Point3::new(c[0], c[1], c[2]), Point3::new(c[3], c[4], c[5])]);

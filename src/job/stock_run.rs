@@ -77,28 +77,29 @@ pub struct StockRun {
     pub stock: Stock,
 }
 
-/// Runs each of `operations` (its moves `spans[k]`, indices into `toolpath`) on the job's `[stock]` blank
-/// of `part` (as planned; a mesh blank is read in `units`), in order; `None` when the job names
-/// no blank.
+/// One operation of a plan as the stock run takes it: its moves (indices into the plan's
+/// toolpath) and the tool that cuts them.
+#[derive(Clone, Copy, Debug)]
+pub struct OperationMoves<'a> {
+    pub operation: &'a Operation,
+    pub moves: &'a std::ops::Range<usize>,
+    pub tool: &'a crate::tool::ToolAssembly,
+}
+
+/// Runs each of `operations` (its moves in `toolpath`, with its tool) on the job's `[stock]`
+/// blank of `part` (as planned; a mesh blank is read in `units`), in order; `None` when the
+/// job names no blank.
 pub fn run_operations(
     part: &Mesh,
     units: &str,
     job: &Job,
     toolpath: &Toolpath,
-    spans: &[std::ops::Range<usize>],
-    operations: &[Operation],
+    operations: &[OperationMoves],
     observer: &dyn Observer,
 ) -> Result<Option<StockRun>> {
     let Some(spec) = job.stock.blank_spec()? else {
         return Ok(None);
     };
-    if spans.len() != operations.len() {
-        return Err(Error::Internal(format!(
-            "{} operations but {} spans of moves",
-            operations.len(),
-            spans.len()
-        )));
-    }
     let spacing = job
         .stock
         .resolution
@@ -117,15 +118,15 @@ pub fn run_operations(
     };
     let mut models = Vec::with_capacity(operations.len());
     let mut failure = None;
-    for (k, (operation, span)) in operations.iter().zip(spans).enumerate() {
+    for (k, run) in operations.iter().enumerate() {
+        let (operation, span, assembly) = (run.operation, run.moves, run.tool);
         // From the pose the operation starts at (the last of the one before).
         let first = span.start.saturating_sub(1);
         let moves = Toolpath {
-            tool_id: operation.tool.id,
+            tool_id: assembly.id,
             moves: toolpath.moves[first..span.end].to_vec(),
         };
-        let assembly = operation.tool.assembly();
-        let options = SimulationOptions::for_tool(&assembly, tolerance);
+        let options = SimulationOptions::for_tool(assembly, tolerance);
         observer.stage(
             &format!("stock: {}", operation.name),
             moves.moves.len() as u64,

@@ -188,6 +188,9 @@ pub struct PostedOptions {
     pub rapid_error_mm: f64,
     /// Clearances are searched up to this distance beyond the ball; farther reads as this.
     pub search_mm: f64,
+    /// Measure only the blocks this tool runs (the ball's, in a program whose roughing tools
+    /// are checked by [`crate::rough::check`]); `None`: every block.
+    pub tool: Option<u32>,
 }
 
 /// What the back-simulation found.
@@ -259,6 +262,7 @@ pub fn check_posted(
     let pairs: Vec<(usize, [f64; 5], [f64; 5])> = match first {
         None => Vec::new(),
         Some(f) => (f + 1..blocks.len())
+            .filter(|&i| options.tool.is_none_or(|t| blocks[i].tool == Some(t)))
             .filter_map(|i| Some((i, joints(&blocks[i - 1])?, joints(&blocks[i])?)))
             .collect(),
     };
@@ -384,6 +388,7 @@ mod tests {
             feed_error_mm: 1e-4,
             rapid_error_mm: 1e-2,
             search_mm: 5.0,
+            tool: None,
         }
     }
 
@@ -426,6 +431,32 @@ mod tests {
             assert!((c.min_feed_clearance_mm - expected).abs() < 1e-9, "{c:?}");
             assert!(c.min_rapid_clearance_mm >= 5.0 - 1e-9);
         }
+    }
+
+    /// In a program with tool changes, `tool` measures only that tool's blocks: a roughing
+    /// tool's plunge through the top face is not the ball's (the roughing check has it), and
+    /// the ball's own 0.01 mm gouge after the change still is.
+    #[test]
+    fn only_the_named_tools_blocks_are_measured() {
+        let part = cuboid(30.0, 30.0, 10.0);
+        let program = format!(
+            "T3 M6\n{START}G0 X-5 Y0 Z20\nG1 Z7 F100\nG1 X5\nG0 Z100\n\
+             T1 M6\nG0 G43 H1 Z100\nG0 X-5 Y0 Z20\nG1 Z9.99 F100\nG1 X5\nG0 Z100\n"
+        );
+        // The roughing plunge crosses the top face: the ball centre's path meets the surface.
+        let all = check_posted(&program, &machine(), &part, &options()).unwrap();
+        assert_eq!(
+            (all.min_feed_clearance_mm, all.min_feed_line),
+            (-2.0, 5),
+            "{all:?}"
+        );
+        let ball = PostedOptions {
+            tool: Some(1),
+            ..options()
+        };
+        let c = check_posted(&program, &machine(), &part, &ball).unwrap();
+        assert!((c.min_feed_clearance_mm + 0.01).abs() < 1e-9, "{c:?}");
+        assert!(c.min_feed_line > 8, "{c:?}");
     }
 
     /// Turning the table by C sweeps the ball on a circle about the C axis, and the check

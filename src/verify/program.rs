@@ -18,6 +18,9 @@ pub struct MotionBlock {
     pub axes: [Option<f64>; 5],
     /// Whether tool length compensation (G43) was on for this block.
     pub length_compensation: bool,
+    /// The tool in the spindle: the `T` word of the last tool change (`M6`) before the block,
+    /// `None` before the first.
+    pub tool: Option<u32>,
 }
 
 /// A line the reader cannot take.
@@ -35,6 +38,8 @@ pub fn read_program(text: &str, axes: [char; 5]) -> Result<Vec<MotionBlock>, Pro
     let mut position: [Option<f64>; 5] = [None; 5];
     let mut motion: Option<bool> = None;
     let mut compensation = false;
+    let mut selected: Option<u32> = None;
+    let mut spindle: Option<u32> = None;
     for (index, raw) in text.lines().enumerate() {
         let line = index + 1;
         let fail = |reason: String| ProgramError { line, reason };
@@ -45,7 +50,20 @@ pub fn read_program(text: &str, axes: [char; 5]) -> Result<Vec<MotionBlock>, Pro
         }
         let mut moved = false;
         let mut target = position;
-        for (letter, value) in words(code).map_err(fail)? {
+        let words = words(code).map_err(fail)?;
+        // T selects a tool, M6 puts the selected one in the spindle (both may share a line).
+        for &(letter, value) in &words {
+            if letter == 'T' {
+                if !(value >= 0.0 && value.fract() == 0.0 && value <= u32::MAX as f64) {
+                    return Err(fail(format!("T{value} is not a tool number")));
+                }
+                selected = Some(value as u32);
+            }
+        }
+        if words.iter().any(|&(l, v)| l == 'M' && v == 6.0) {
+            spindle = Some(selected.ok_or_else(|| fail("M6 without a tool selected (T)".into()))?);
+        }
+        for (letter, value) in words {
             match letter {
                 'G' if value.fract() != 0.0 => {
                     return Err(fail(format!("G{value} is not read by the verifier")));
@@ -86,6 +104,7 @@ pub fn read_program(text: &str, axes: [char; 5]) -> Result<Vec<MotionBlock>, Pro
                 rapid,
                 axes: target,
                 length_compensation: compensation,
+                tool: spindle,
             });
             position = target;
         }
@@ -176,9 +195,24 @@ mod tests {
             ("X1\n", 1),
             ("G0 X1 (open\n", 1),
             ("G0 Xabc\n", 1),
+            ("G0 X1\nM6\n", 2),
+            ("T1.5 M6\n", 1),
         ] {
             let e = read_program(text, AC).unwrap_err();
             assert_eq!(e.line, line, "{text}: {e}");
         }
+    }
+
+    /// A motion belongs to the tool of the last `M6`, whatever `T` was selected since (a
+    /// control may preselect the next tool).
+    #[test]
+    fn each_block_knows_the_tool_in_the_spindle() {
+        let text = "G0 X0 Y0 Z9\nT3 M6\nG0 X1\nT7\nG1 X2 F100\nM6\nG0 X3\n";
+        let tools: Vec<Option<u32>> = read_program(text, AC)
+            .unwrap()
+            .iter()
+            .map(|b| b.tool)
+            .collect();
+        assert_eq!(tools, [None, Some(3), Some(3), Some(7)]);
     }
 }

@@ -1,0 +1,346 @@
+//! Roughing inside a plan: the job's `rough` and `rest-rough` operations, planned from its
+//! `[stock]` blank before the ball operations, each with a library end mill along the
+//! machine's vertical axis (A = 0), layer by layer down to the part's offset shape at the
+//! operation's stock to leave ([`crate::rough`]).
+//!
+//! What is written is what is checked: after posting, each roughing tool's moves are read back
+//! from the program (as the control interpolates them) and checked exactly against their
+//! offset shape and the part ([`crate::rough::check`], sharing no code with the planning); the
+//! stock run then runs them on the tri-dexel blank with each tool's whole assembly.
+
+use serde::Serialize;
+
+use super::config::{Job, Operation, OperationKind};
+use super::offsets::stock_shapes;
+use super::rough::{ToolRoughing, first_rougher, layer_blank, next_rougher, rough_with_tool};
+use super::setup::PlanSetup;
+use super::stock_model::{blank_stock, default_resolution};
+use crate::error::{Error, JobError, Result};
+use crate::geom::{Move, MoveKind, Point3, Toolpath};
+use crate::mesh::Mesh;
+use crate::rough::check::{OvercutReport, overcuts};
+use crate::rough::{LayerReport, NotReached, RoughingFeeds, RoughingTool};
+use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
+use crate::tool::{ToolAssembly, ToolLibrary};
+
+/// One roughing operation of a plan, for `report.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct RoughingSummary {
+    pub operation: String,
+    pub tool_id: u32,
+    pub tool: String,
+    /// Why this tool.
+    pub chosen: String,
+    pub planning: RoughingTool,
+    /// `blank` for roughing, `rest` for rest-roughing (only where material stands).
+    pub material: &'static str,
+    pub stock_to_leave_mm: f64,
+    pub shape_triangles: usize,
+    pub layers: Vec<LayerReport>,
+    pub not_reached: Option<NotReached>,
+    pub moves: usize,
+    pub cutting_length_mm: f64,
+    /// The tool's moves as read back from the posted program, against its offset shape and
+    /// against the part (filled in after posting).
+    pub overcut_vs_shape: Option<OvercutReport>,
+    pub overcut_vs_part: Option<OvercutReport>,
+}
+
+/// A roughing operation, planned: its tool, its moves (from the safe plane back to it) and
+/// the offset shape it roughs to, for the check of the posted program.
+pub struct PlannedRoughing {
+    pub tool: ToolAssembly,
+    pub toolpath: Toolpath,
+    pub shape: Mesh,
+    pub summary: RoughingSummary,
+}
+
+/// What the roughing operations of a plan share: the blank as layers and as a planning
+/// stock model, the library and the offset shapes already built.
+pub struct RoughingContext {
+    library: ToolLibrary,
+    blank: crate::rough::Blank,
+    stock: Stock,
+    floor: f64,
+    shapes: Vec<(f64, Mesh)>,
+    previous_diameter: Option<f64>,
+}
+
+impl RoughingContext {
+    /// The blank of `job` around `part` (as planned, the table's top at `table_z`), the
+    /// planning stock model and the library.
+    pub fn new(part: &Mesh, units: &str, job: &Job, table_z: f64) -> Result<Self> {
+        let spec = job.stock.blank_spec()?.ok_or_else(|| {
+            Error::JobFile(JobError::Operations(
+                "roughing clears a blank: name one in [stock] (e.g. blank = \"cylinder\")".into(),
+            ))
+        })?;
+        let spec = spec.resolved(part);
+        let blank = layer_blank(&spec, part)?;
+        let spacing = job
+            .stock
+            .resolution
+            .unwrap_or_else(|| default_resolution(part));
+        let stock = blank_stock(part, &spec, units, spacing, DEFAULT_MAX_DEXELS)?;
+        // The tip keeps the table margin above the table, as every ball pose does.
+        let floor = (table_z + job.safety.table_margin).max(part.aabb().min.z);
+        Ok(RoughingContext {
+            library: job.roughing.tool_library()?,
+            blank,
+            stock,
+            floor,
+            shapes: Vec::new(),
+            previous_diameter: None,
+        })
+    }
+
+    /// The part's verified offset shape at `allowance`, built once per allowance.
+    fn shape(&mut self, part: &Mesh, allowance: f64) -> Result<Mesh> {
+        if let Some((_, shape)) = self.shapes.iter().find(|(a, _)| *a == allowance) {
+            return Ok(shape.clone());
+        }
+        let shapes = stock_shapes(part, &Default::default(), &[allowance])?;
+        let shape = shapes
+            .into_iter()
+            .next()
+            .ok_or_else(|| Error::Internal("no offset shape was built".into()))?
+            .1
+            .mesh;
+        self.shapes.push((allowance, shape.clone()));
+        Ok(shape)
+    }
+}
+
+/// Plans `operation` (a `rough` or `rest-rough`) on `part`: chooses its tool, roughs its
+/// layers from the blank or from what the roughing before it left, and takes its moves off
+/// the planning stock for the next one.
+pub fn plan_roughing(
+    context: &mut RoughingContext,
+    part: &Mesh,
+    job: &Job,
+    setup: &PlanSetup,
+    operation: &Operation,
+) -> Result<PlannedRoughing> {
+    let depth = context.blank.top - context.floor;
+    let margin = job.safety.holder_margin;
+    let from_blank = operation.kind == OperationKind::Rough;
+    let fail = |reason: String| {
+        Error::JobFile(JobError::Operations(format!(
+            "operation '{}': {reason}",
+            operation.name
+        )))
+    };
+    let (tool, chosen) = match (from_blank, context.previous_diameter) {
+        (true, _) | (false, None) => {
+            first_rougher(&context.library, operation.library_tool, depth, margin)?
+        }
+        (false, Some(previous)) => next_rougher(
+            &context.library,
+            operation.library_tool,
+            previous,
+            depth,
+            margin,
+        )?
+        .ok_or_else(|| {
+            fail(format!(
+                "the library has no flat or bull-nose end mill at most 3/4 of the \
+                         D{previous} before it to rest-rough with"
+            ))
+        })?,
+    };
+    if tool.id == job.tool.id && tool != job.tool.assembly() {
+        return Err(fail(format!(
+            "library tool T{} ({}) has the number of the job's [tool] ({}): one number, one \
+             tool in the magazine",
+            tool.id,
+            tool.describe(),
+            job.tool.assembly().describe()
+        )));
+    }
+    let shape = context.shape(part, operation.stock_to_leave)?;
+    let feeds = RoughingFeeds {
+        cut: job.roughing.cut_feed,
+        entry: job.roughing.entry_feed,
+        rapid: job.machine.rapid_feed,
+    };
+    let (planning, roughing) = rough_with_tool(
+        &shape,
+        &context.blank,
+        &tool,
+        &ToolRoughing {
+            holder_margin: margin,
+            floor: context.floor,
+            feeds: &feeds,
+            tolerance: job.strategy.tolerance,
+        },
+        &mut context.stock,
+        from_blank,
+    )
+    .map_err(|e| fail(format!("roughing with T{}: {e}", tool.id)))?;
+    if from_blank
+        && !roughing
+            .toolpath
+            .moves
+            .iter()
+            .any(|m| m.kind == MoveKind::Cut)
+    {
+        return Err(Error::NothingToCut(format!(
+            "operation '{}': the blank holds no material outside the part's offset shape \
+             that T{} can reach",
+            operation.name, tool.id
+        )));
+    }
+    context.previous_diameter = Some(tool.cutter.diameter());
+    let moves = roughing.toolpath.moves.len();
+    let cutting_length_mm = roughing
+        .toolpath
+        .moves
+        .windows(2)
+        .filter(|w| w[1].kind == MoveKind::Cut)
+        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+        .sum();
+    let toolpath = from_safe_plane(roughing.toolpath, setup);
+    Ok(PlannedRoughing {
+        summary: RoughingSummary {
+            operation: operation.name.clone(),
+            tool_id: tool.id,
+            tool: tool.describe(),
+            chosen,
+            planning,
+            material: if from_blank { "blank" } else { "rest" },
+            stock_to_leave_mm: operation.stock_to_leave,
+            shape_triangles: shape.triangles.len(),
+            layers: roughing.layers,
+            not_reached: roughing.not_reached,
+            moves,
+            cutting_length_mm,
+            overcut_vs_shape: None,
+            overcut_vs_part: None,
+        },
+        tool,
+        toolpath,
+        shape,
+    })
+}
+
+impl RoughingContext {
+    /// Turns the rapids of the ball operations' moves `ball_paths` (in machining order) that would pass
+    /// through the material roughing leaves into feed moves at `approach_feed`; returns how
+    /// many. The ball's passes and links were planned against the part alone: the last rapid
+    /// of a link stops a clearance above the entry along the tool axis, which may be inside
+    /// the rest of a terrace or of the floor the table margin leaves. Each operation's moves
+    /// are taken off a copy of the planning stock in turn, so a rapid over material an earlier
+    /// pass cleared stays a rapid. A rapid counts as through material when it would remove
+    /// more than the stock run's allowance (tolerance × dexel spacing², its model's skin).
+    pub fn feed_rapids_through_rest<'a>(
+        &self,
+        ball_paths: impl IntoIterator<Item = &'a mut Toolpath>,
+        ball: &ToolAssembly,
+        approach_feed: f64,
+        tolerance: f64,
+    ) -> usize {
+        let mut stock = self.stock.clone();
+        let body = crate::stock::cutter::CuttingBody::of(&ball.cutter);
+        let allowance = tolerance * stock.spacing() * stock.spacing();
+        let mut last: Option<Move> = None;
+        let mut fed = 0;
+        for op in planned
+            .iter_mut()
+            .filter(|p| !p.operation.kind.is_roughing())
+        {
+            // From where the operation before it left the tool.
+            let moves: Vec<Move> = last
+                .iter()
+                .copied()
+                .chain(path.moves.iter().copied())
+                .collect();
+            let offset = usize::from(last.is_some());
+            let removed = stock.remove_cutting(
+                &Toolpath {
+                    tool_id: ball.id,
+                    moves,
+                },
+                &body,
+                tolerance,
+            );
+            for (k, m) in path.moves.iter_mut().enumerate() {
+                if m.kind == MoveKind::Rapid && removed[k + offset] > allowance {
+                    m.kind = MoveKind::Approach;
+                    m.feed = approach_feed;
+                    fed += 1;
+                }
+            }
+            last = path.moves.last().copied();
+        }
+        fed
+    }
+}
+
+/// `toolpath` (vertical axis, starting and ending on its own safe height above the blank)
+/// begun and ended on the plan's safe plane, where tools change and where the ball
+/// operations start: machine Z at `safe_distance` from the pivot, whatever C is.
+fn from_safe_plane(mut toolpath: Toolpath, setup: &PlanSetup) -> Toolpath {
+    let plane_z = setup.pivot.z + setup.safe_distance;
+    let lifted = |m: &Move| {
+        let mut up = *m;
+        up.kind = MoveKind::Rapid;
+        up.pose.tip = Point3::new(m.pose.tip.x, m.pose.tip.y, plane_z.max(m.pose.tip.z));
+        up
+    };
+    if let (Some(first), Some(last)) = (toolpath.moves.first(), toolpath.moves.last()) {
+        let (start, end) = (lifted(first), lifted(last));
+        toolpath.moves.insert(0, start);
+        toolpath.moves.push(end);
+    }
+    toolpath
+}
+
+/// Checks the roughing tools' moves as read back from `gcode` (the first sections of the
+/// program, one per roughing operation, in order) against each one's offset shape and the
+/// part, exactly; fills in the summaries and returns what is wrong, if anything.
+pub fn check_posted_roughing(
+    gcode: &str,
+    model: &crate::verify::MachineModel,
+    part: &Mesh,
+    roughing: &mut [PlannedRoughing],
+    tool_changes: usize,
+    max_error: f64,
+) -> Result<Option<String>> {
+    if roughing.is_empty() {
+        return Ok(None);
+    }
+    let (posted, lines) = crate::verify::program_toolpath(gcode, model, max_error)
+        .map_err(|e| Error::Internal(format!("the posted program does not read back: {e}")))?;
+    let sections = super::rough::split_at_tool_changes(gcode, &posted, &lines, tool_changes)?;
+    // Rounding to the posted decimals may bring a move 5e-5 mm nearer; the check allows that.
+    let rounding = 1e-4;
+    let mut problems = Vec::new();
+    for (planned, section) in roughing.iter_mut().zip(sections) {
+        let label = format!("'{}' (T{})", planned.summary.operation, planned.tool.id);
+        if let Some(k) = section
+            .moves
+            .iter()
+            .position(|m| m.pose.axis.z < 1.0 - 1e-9)
+        {
+            problems.push(format!(
+                "{label}: read-back move {k} is not along the vertical axis the roughing is \
+                 checked for"
+            ));
+        }
+        let radius = planned.summary.planning.radius;
+        let shape = overcuts(&planned.shape, &section, radius, rounding);
+        let against_part = overcuts(part, &section, radius, rounding);
+        for (what, report) in [("its offset shape", &shape), ("the part", &against_part)] {
+            if let Some(o) = report.overcuts.first() {
+                problems.push(format!(
+                    "{label}: {} posted move(s) into {what}, the first by {:.4} mm",
+                    report.overcuts.len(),
+                    o.depth_mm
+                ));
+            }
+        }
+        planned.summary.overcut_vs_shape = Some(shape);
+        planned.summary.overcut_vs_part = Some(against_part);
+    }
+    Ok((!problems.is_empty()).then(|| problems.join("; ")))
+}
