@@ -23,6 +23,7 @@ pub mod cli;
 pub mod collide;
 pub mod contour;
 pub mod error;
+pub mod feed;
 pub mod geom;
 pub mod job;
 pub mod mesh;

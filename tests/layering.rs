@@ -21,6 +21,7 @@ const LAYERS: &[&str] = &[
     "stock",       // in-process material (tri-dexel) and its removal
     "contour",     // 2.5D contour paths
     "rough",       // layer roughing down to an offset shape
+    "feed",        // feeds from engagement (cutting-force model)
     "collide",     // tool bodies against part and table (parry3d)
     "orient",      // tool axes
     "path",        // finishing passes and linking

@@ -129,6 +129,26 @@ fn a_frustum_is_roughed_rest_roughed_and_finished_from_a_box_in_one_program() {
             "T{}: {closest}",
             summary.tool_id
         );
+        // Feed control: every cutting move within the machine's limits and at most the target
+        // force (none needed the minimum feed here), the whole faster than as programmed.
+        let feed = summary
+            .feed_control
+            .as_ref()
+            .expect("feed control is on by default");
+        let limits = job.cutting.min_feed..=job.cutting.max_feed;
+        assert!(
+            moves
+                .iter()
+                .filter(|m| m.kind != MoveKind::Rapid)
+                .all(|m| limits.contains(&m.feed))
+        );
+        assert_eq!(feed.over_target_at_min_feed, 0);
+        assert!(feed.force_after.max <= feed.target_force_n * (1.0 + 1e-9));
+        assert!(
+            feed.force_after.max <= feed.force_before.max.max(feed.target_force_n) + 1e-9,
+            "{feed:?}"
+        );
+        assert!(feed.time_after_s < feed.time_before_s);
         // The tip never goes below the floor the table margin sets.
         assert!(
             moves

@@ -90,7 +90,12 @@ fn a_finishing_program_run_on_a_raw_box_fails_with_its_collisions() {
         b.max.y + 2.0,
         b.max.z + 5.0
     );
-    let out = plan(&coarse_job(&blank));
+    // Finishing alone, as listed: a box blank would otherwise be roughed first.
+    let mut job = coarse_job(&blank);
+    job.operations = toml::from_str::<Job>("[[operation]]\nkind = \"finish\"\n")
+        .expect("operations")
+        .operations;
+    let out = plan(&job);
     let failure = out.verification_failure.clone().expect("a failure");
     assert!(
         failure.contains("operation 'finish' on the stock"),

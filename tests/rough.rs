@@ -53,6 +53,13 @@ fn the_sample_is_roughed_to_its_offset_shape_without_a_touch() {
         );
         assert!(t.layers.iter().all(|l| l.plunges_into_material == 0));
         assert!(out.gcode.contains(&format!("\nT{} M6\n", t.tool.id)));
+        // Feed control (on by default) holds the target force, and saves time.
+        let feed = t.feed_control.as_ref().expect("feed control");
+        assert!(
+            feed.force_after.p99 <= feed.target_force_n * (1.0 + 1e-9),
+            "{feed:?}"
+        );
+        assert!(feed.time_after_s < feed.time_before_s, "{feed:?}");
     }
     // The volume adds up, and roughing takes most of what stands outside the part.
     let removed: f64 = r.tools.iter().map(|t| t.stock.removed_volume_mm3).sum();

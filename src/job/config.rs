@@ -33,6 +33,7 @@ pub struct Job {
     pub limits: LimitsSection,
     pub stock: StockSection,
     pub roughing: RoughingSection,
+    pub cutting: CuttingSection,
     /// The operations, in order (`[[operation]]` tables); empty: the ones today's
     /// `[strategy]` keys describe (see [`Job::operations`]).
     #[serde(rename = "operation", skip_serializing_if = "Vec::is_empty")]
@@ -129,6 +130,52 @@ impl RoughingSection {
             None => crate::tool::ToolLibrary::parse(BUNDLED_LIBRARY, "the bundled data/tools.toml"),
         };
         read.map_err(|e| invalid("roughing.library", e.to_string()))
+    }
+}
+
+/// `[cutting]`: the material's cutting-force model and the machine's feed limits. The
+/// roughing operations' feeds are set from each move's engagement so the mean tangential
+/// force stays at the target ([`crate::feed`], seed 004 ch. 5 step 8).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CuttingSection {
+    /// What is cut, for the report.
+    pub material: String,
+    /// K_t, N/mm²: 800 for aluminium 7075, about 2000 for Ti-6Al-4V, 3000 for Inconel 718.
+    pub specific_force: f64,
+    /// The force to hold, N; leave out for each tool's nominal cut (D/2 wide, D/2 deep, at the
+    /// programmed cut feed).
+    pub target_force: Option<f64>,
+    /// The machine's feed limits, mm/min.
+    pub min_feed: f64,
+    pub max_feed: f64,
+    /// Off: the programmed feeds throughout.
+    pub feed_control: bool,
+}
+
+impl Default for CuttingSection {
+    fn default() -> Self {
+        let model = crate::feed::CuttingModel::default();
+        Self {
+            material: "aluminium 7075".into(),
+            specific_force: model.specific_force,
+            target_force: model.target_force,
+            min_feed: model.min_feed,
+            max_feed: model.max_feed,
+            feed_control: true,
+        }
+    }
+}
+
+impl CuttingSection {
+    /// The cutting model, or `None` with feed control off.
+    pub fn model(&self) -> Option<crate::feed::CuttingModel> {
+        self.feed_control.then_some(crate::feed::CuttingModel {
+            specific_force: self.specific_force,
+            target_force: self.target_force,
+            min_feed: self.min_feed,
+            max_feed: self.max_feed,
+        })
     }
 }
 
@@ -460,6 +507,9 @@ impl Job {
         positive("roughing.allowance", self.roughing.allowance)?;
         positive("roughing.cut_feed", self.roughing.cut_feed)?;
         positive("roughing.entry_feed", self.roughing.entry_feed)?;
+        if let Some(model) = self.cutting.model() {
+            model.validate().map_err(|e| invalid("cutting", e))?;
+        }
         if let Some(e) = self.surface.base_max_error {
             non_negative("surface.base_max_error", e)?;
         }

@@ -25,6 +25,7 @@ mod preview;
 mod render;
 mod report;
 mod rough;
+mod rough_stages;
 mod samples;
 mod semi_finish;
 mod setup;
@@ -39,9 +40,9 @@ pub use access::{
 pub use blank::BlankSpec;
 pub use budget::ToleranceBudget;
 pub use config::{
-    FeedSection, Job, JobError, LimitsSection, MachineSection, Operation, OperationKind,
-    OperationSection, PartSection, RoughingSection, SafetySection, StockSection, StrategySection,
-    ToolSection, unit_direction,
+    CuttingSection, FeedSection, Job, JobError, LimitsSection, MachineSection, Operation,
+    OperationKind, OperationSection, PartSection, RoughingSection, SafetySection, StockSection,
+    StrategySection, ToolSection, unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,

@@ -521,7 +521,7 @@ pub fn plan(
                     .map(|m| (tool.id, *m))
             })
             .collect();
-        super::rough::cl_csv_of(&rows)
+        super::rough_stages::cl_csv_of(&rows)
     };
     let time = post::estimate_time(&program, job.machine.max_rotary_speed);
     timings.post = ms(t);

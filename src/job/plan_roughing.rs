@@ -12,7 +12,10 @@ use serde::Serialize;
 
 use super::config::{Job, Operation, OperationKind};
 use super::offsets::stock_shapes;
-use super::rough::{ToolRoughing, first_rougher, layer_blank, next_rougher, rough_with_tool};
+use super::rough_stages::{
+    ToolLayers, ToolRoughing, first_rougher, layer_blank, next_rougher, rough_with_tool,
+    split_at_tool_changes,
+};
 use super::setup::PlanSetup;
 use super::stock_model::{blank_stock, default_resolution};
 use crate::error::{Error, JobError, Result};
@@ -34,6 +37,8 @@ pub struct RoughingSummary {
     pub planning: RoughingTool,
     /// `blank` for roughing, `rest` for rest-roughing (only where material stands).
     pub material: &'static str,
+    /// What feed control made of the programmed feeds (`[cutting]`); `None` when off.
+    pub feed_control: Option<crate::feed::FeedReport>,
     pub stock_to_leave_mm: f64,
     pub shape_triangles: usize,
     pub layers: Vec<LayerReport>,
@@ -163,7 +168,11 @@ pub fn plan_roughing(
         entry: job.roughing.entry_feed,
         rapid: job.machine.rapid_feed,
     };
-    let (planning, roughing) = rough_with_tool(
+    let ToolLayers {
+        tool: planning,
+        layers: roughing,
+        feed_control,
+    } = rough_with_tool(
         &shape,
         &context.blank,
         &tool,
@@ -172,6 +181,10 @@ pub fn plan_roughing(
             floor: context.floor,
             feeds: &feeds,
             tolerance: job.strategy.tolerance,
+            feed_control: job
+                .cutting
+                .model()
+                .map(|model| (model, f64::from(job.roughing.spindle_rpm))),
         },
         &mut context.stock,
         from_blank,
@@ -208,6 +221,7 @@ pub fn plan_roughing(
             chosen,
             planning,
             material: if from_blank { "blank" } else { "rest" },
+            feed_control,
             stock_to_leave_mm: operation.stock_to_leave,
             shape_triangles: shape.triangles.len(),
             layers: roughing.layers,
@@ -244,10 +258,7 @@ impl RoughingContext {
         let allowance = tolerance * stock.spacing() * stock.spacing();
         let mut last: Option<Move> = None;
         let mut fed = 0;
-        for op in planned
-            .iter_mut()
-            .filter(|p| !p.operation.kind.is_roughing())
-        {
+        for path in ball_paths {
             // From where the operation before it left the tool.
             let moves: Vec<Move> = last
                 .iter()
@@ -311,7 +322,7 @@ pub fn check_posted_roughing(
     }
     let (posted, lines) = crate::verify::program_toolpath(gcode, model, max_error)
         .map_err(|e| Error::Internal(format!("the posted program does not read back: {e}")))?;
-    let sections = super::rough::split_at_tool_changes(gcode, &posted, &lines, tool_changes)?;
+    let sections = split_at_tool_changes(gcode, &posted, &lines, tool_changes)?;
     // Rounding to the posted decimals may bring a move 5e-5 mm nearer; the check allows that.
     let rounding = 1e-4;
     let mut problems = Vec::new();

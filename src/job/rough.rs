@@ -14,26 +14,26 @@ use serde::Serialize;
 use super::blank::BlankSpec;
 use super::offsets::stock_shapes;
 use super::output::{OutputKind, write_output_set};
+use super::rough_stages::{
+    ToolRoughing, cl_csv_of, first_rougher, layer_blank, next_rougher, rough_with_tool,
+    split_at_tool_changes,
+};
 use super::stock_model::{
     CollisionReport, blank_stock, default_resolution, stock_error, stock_model_glb,
 };
-use crate::contour::geometry::Point2;
 use crate::error::{Error, Result};
-use crate::geom::{MoveKind, Point3};
+use crate::geom::MoveKind;
 use crate::mesh::io::RawMesh;
 use crate::post::{
     GcodeOptions, GcodeWriter, LineariseOptions, ProgramHeader, ProgramSink, ThreeAxis,
 };
 use crate::rough::check::{OvercutReport, overcuts};
-use crate::rough::{
-    Blank, LayerReport, Material, NotReached, RoughingFeeds, RoughingOptions, RoughingTool,
-    rough_layers,
-};
+use crate::rough::{LayerReport, NotReached, RoughingFeeds, RoughingTool};
 use crate::stock::cutter::CuttingBody;
 use crate::stock::rest::{Rest, rest_over};
 use crate::stock::simulate::{SimulationOptions, simulate};
 use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
-use crate::tool::{Cutter, ToolAssembly, ToolLibrary};
+use crate::tool::{ToolAssembly, ToolLibrary};
 use crate::verify::{MachineModel, program_toolpath};
 
 /// What `rough` is asked to do.
@@ -62,6 +62,9 @@ pub struct RoughOptions {
     pub resolution: Option<f64>,
     /// Chord and post tolerance, and the depth a touch must exceed to count, mm.
     pub tolerance: f64,
+    /// Feeds from each move's engagement, to hold a cutting force ([`crate::feed`]); `None`:
+    /// the programmed feeds throughout.
+    pub feed_control: Option<crate::feed::CuttingModel>,
 }
 
 impl Default for RoughOptions {
@@ -82,6 +85,7 @@ impl Default for RoughOptions {
             },
             resolution: None,
             tolerance: 0.01,
+            feed_control: Some(crate::feed::CuttingModel::default()),
         }
     }
 }
@@ -118,6 +122,8 @@ pub struct RoughToolRun {
     pub tool: RoughToolReport,
     /// `blank` for the first tool, `rest` for the ones after it (only where material stands).
     pub material: &'static str,
+    /// What feed control made of the programmed feeds ([`crate::feed`]); `None` when off.
+    pub feed_control: Option<crate::feed::FeedReport>,
     pub layers: Vec<LayerReport>,
     pub not_reached: Option<NotReached>,
     pub moves: usize,
@@ -218,7 +224,11 @@ pub fn rough(
     let mut planned = Vec::with_capacity(sequence.len());
     for (k, (assembly, _)) in sequence.iter().enumerate() {
         let from_blank = k == 0;
-        let (tool, layers) = rough_with_tool(
+        let super::rough_stages::ToolLayers {
+            tool,
+            layers,
+            feed_control,
+        } = rough_with_tool(
             shape,
             &blank,
             assembly,
@@ -227,6 +237,9 @@ pub fn rough(
                 floor,
                 feeds: &options.feeds,
                 tolerance: options.tolerance,
+                feed_control: options
+                    .feed_control
+                    .map(|model| (model, f64::from(options.spindle_rpm))),
             },
             &mut planning_stock,
             from_blank,
@@ -245,7 +258,7 @@ pub fn rough(
                 spec.describe()
             )));
         }
-        planned.push((tool, layers));
+        planned.push((tool, layers, feed_control));
     }
     timings.insert("layers", ms(t));
 
@@ -270,7 +283,7 @@ pub fn rough(
     };
     let mut writer = GcodeWriter::new(&ThreeAxis, GcodeOptions::default());
     let mut all_moves = Vec::new();
-    for (k, ((assembly, _), (_, layers))) in sequence.iter().zip(&planned).enumerate() {
+    for (k, ((assembly, _), (_, layers, _))) in sequence.iter().zip(&planned).enumerate() {
         let blocks = crate::post::linearise_opt(&ThreeAxis, &layers.toolpath, &linearise)
             .map_err(|e| Error::Internal(format!("posting the roughing program: {e}")))?;
         if k == 0 {
@@ -304,7 +317,7 @@ pub fn rough(
     let rounding = 1e-4;
     let mut runs = Vec::with_capacity(sequence.len());
     let mut problems = Vec::new();
-    for (((assembly, chosen), (tool, layers)), section) in
+    for (((assembly, chosen), (tool, layers, feed_control)), section) in
         sequence.iter().zip(planned).zip(sections)
     {
         let overcut_vs_shape = overcuts(shape, &section, tool.radius, rounding);
@@ -352,6 +365,7 @@ pub fn rough(
                 planning: tool,
             },
             material: if runs.is_empty() { "blank" } else { "rest" },
+            feed_control,
             layers: layers.layers,
             not_reached: layers.not_reached,
             moves: moves.len(),
@@ -413,134 +427,6 @@ pub fn rough(
     })
 }
 
-/// The layer-roughing blank of a box or cylinder spec (others are refused: layers clear a
-/// prism).
-pub(super) fn layer_blank(spec: &BlankSpec, part: &crate::mesh::Mesh) -> Result<Blank> {
-    match spec.resolved(part) {
-        BlankSpec::Cylinder { radius, z0, z1 } => {
-            let centre = part.aabb().center();
-            Ok(Blank::cylinder(
-                Point2::new(centre.x, centre.y),
-                radius,
-                z0,
-                z1,
-            ))
-        }
-        BlankSpec::Box(b) => Ok(Blank::cuboid(
-            Point3::new(b[0], b[1], b[2]),
-            Point3::new(b[3], b[4], b[5]),
-        )),
-        other => Err(Error::Usage(format!(
-            "blank `{}`: layer roughing clears a box or a cylinder blank",
-            other.describe()
-        ))),
-    }
-}
-
-/// How one tool roughs, beyond its shape and blank.
-pub(super) struct ToolRoughing<'a> {
-    /// The holder stays this far above the blank, mm.
-    pub holder_margin: f64,
-    /// The lowest the tool tip goes, mm.
-    pub floor: f64,
-    pub feeds: &'a RoughingFeeds,
-    pub tolerance: f64,
-}
-
-/// Layers of one tool down to `shape`: from the whole blank (`from_blank`; its moves are then
-/// taken off `stock`), else only where `stock` still holds material (each layer taken off as
-/// it is planned). `stock` is the planning model the next tool starts from.
-pub(super) fn rough_with_tool(
-    shape: &crate::mesh::Mesh,
-    blank: &Blank,
-    assembly: &ToolAssembly,
-    how: &ToolRoughing,
-    stock: &mut Stock,
-    from_blank: bool,
-) -> std::result::Result<(RoughingTool, crate::rough::Roughing), crate::rough::RoughError> {
-    let tool = RoughingTool::of(assembly, how.holder_margin);
-    let mut options = RoughingOptions::for_radius(tool.radius);
-    options.floor = Some(how.floor);
-    options.feeds = how.feeds.clone();
-    options.tolerance = how.tolerance;
-    let body = CuttingBody::of(&assembly.cutter);
-    let material = if from_blank {
-        Material::Blank
-    } else {
-        Material::Stock {
-            stock: &mut *stock,
-            body: &body,
-        }
-    };
-    let layers = rough_layers(shape, blank, &tool, assembly.id, material, &options)?;
-    if from_blank {
-        stock.remove_cutting(&layers.toolpath, &body, how.tolerance);
-    }
-    Ok((tool, layers))
-}
-
-/// CL data of several tools' moves, each row with its tool.
-pub(super) fn cl_csv_of(moves: &[(u32, crate::geom::Move)]) -> String {
-    let mut out = String::new();
-    let mut start = 0;
-    while start < moves.len() {
-        let id = moves[start].0;
-        let end = moves[start..]
-            .iter()
-            .position(|(t, _)| *t != id)
-            .map_or(moves.len(), |n| start + n);
-        let text = crate::post::write_cl_csv(&crate::geom::Toolpath {
-            tool_id: id,
-            moves: moves[start..end].iter().map(|(_, m)| *m).collect(),
-        });
-        if start == 0 {
-            out.push_str(&text);
-        } else {
-            // The header line once.
-            out.extend(text.lines().skip(1).flat_map(|l| [l, "\n"]));
-        }
-        start = end;
-    }
-    out
-}
-
-/// The read-back program cut at its tool changes (`T… M6` lines) into one toolpath per tool,
-/// each starting from where the one before it ended.
-pub(super) fn split_at_tool_changes(
-    gcode: &str,
-    posted: &crate::geom::Toolpath,
-    lines: &[usize],
-    tools: usize,
-) -> Result<Vec<crate::geom::Toolpath>> {
-    let changes: Vec<usize> = gcode
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| l.starts_with('T') && l.ends_with(" M6"))
-        .map(|(k, _)| k + 1)
-        .collect();
-    if changes.len() != tools {
-        return Err(Error::Internal(format!(
-            "the roughing program has {} tool changes for {tools} tools",
-            changes.len()
-        )));
-    }
-    let mut sections = Vec::with_capacity(tools);
-    for k in 0..tools {
-        let (from, to) = (
-            changes[k],
-            changes.get(k + 1).copied().unwrap_or(usize::MAX),
-        );
-        let first = lines.iter().position(|&l| l > from).unwrap_or(lines.len());
-        let last = lines.iter().position(|&l| l > to).unwrap_or(lines.len());
-        let begin = first.saturating_sub(1);
-        sections.push(crate::geom::Toolpath {
-            tool_id: posted.tool_id,
-            moves: posted.moves[begin..last.max(begin)].to_vec(),
-        });
-    }
-    Ok(sections)
-}
-
 /// The tools to rough with, in order, and why each: the first is `id` if given, else the
 /// largest flat or bull-nose end mill of the library, the first of them that reaches `depth`
 /// below the blank's top if any does; then up to `rest` smaller ones, each at most 3/4 of the
@@ -561,95 +447,6 @@ fn choose_tools(
         }
     }
     Ok(sequence)
-}
-
-/// The library's flat and bull-nose end mills, largest first.
-fn roughers(library: &ToolLibrary) -> Vec<&ToolAssembly> {
-    library
-        .largest_first()
-        .into_iter()
-        .map(|i| &library.tools[i])
-        .filter(|t| matches!(t.cutter, Cutter::Flat { .. } | Cutter::BullNose { .. }))
-        .collect()
-}
-
-/// The library tool `id`, or an error naming it.
-fn library_tool(library: &ToolLibrary, id: u32) -> Result<(ToolAssembly, String)> {
-    let tool = library
-        .tools
-        .iter()
-        .find(|t| t.id == id)
-        .ok_or_else(|| Error::Usage(format!("the library has no tool with id {id}")))?;
-    if !matches!(tool.cutter, Cutter::Flat { .. } | Cutter::BullNose { .. }) {
-        return Err(Error::Usage(format!(
-            "T{id} ({}) is not a flat or bull-nose end mill: layers are roughed with one",
-            tool.describe()
-        )));
-    }
-    Ok((tool.clone(), format!("asked for (T{id})")))
-}
-
-/// The tool that roughs the blank, and why: `id` if given, else the largest flat or
-/// bull-nose end mill of the library, the first of them that reaches `depth` below the
-/// blank's top (its stickout less `holder_margin`) if any does.
-pub(super) fn first_rougher(
-    library: &ToolLibrary,
-    id: Option<u32>,
-    depth: f64,
-    holder_margin: f64,
-) -> Result<(ToolAssembly, String)> {
-    if let Some(id) = id {
-        return library_tool(library, id);
-    }
-    let roughers = roughers(library);
-    let reaches = |t: &ToolAssembly| t.stickout - holder_margin >= depth;
-    let Some(largest) = roughers.first() else {
-        return Err(Error::Usage(
-            "the library has no flat or bull-nose end mill to rough with".into(),
-        ));
-    };
-    Ok(match roughers.iter().find(|t| reaches(t)) {
-        Some(t) => (
-            (*t).clone(),
-            format!("the largest flat or bull-nose end mill reaching {depth:.1} mm deep"),
-        ),
-        None => (
-            (*largest).clone(),
-            format!("the largest flat or bull-nose end mill; none reaches {depth:.1} mm deep"),
-        ),
-    })
-}
-
-/// The tool that rest-roughs after one of `previous` mm, and why: `id` if given, else the
-/// largest end mill at most 3/4 of it across, preferring one that reaches `depth`; `None`
-/// when the library has no smaller one.
-pub(super) fn next_rougher(
-    library: &ToolLibrary,
-    id: Option<u32>,
-    previous: f64,
-    depth: f64,
-    holder_margin: f64,
-) -> Result<Option<(ToolAssembly, String)>> {
-    if let Some(id) = id {
-        return library_tool(library, id).map(Some);
-    }
-    let reaches = |t: &ToolAssembly| t.stickout - holder_margin >= depth;
-    let smaller: Vec<&ToolAssembly> = roughers(library)
-        .into_iter()
-        .filter(|t| t.cutter.diameter() <= 0.75 * previous)
-        .collect();
-    let Some(next) = smaller.iter().find(|t| reaches(t)).or(smaller.first()) else {
-        return Ok(None);
-    };
-    let why = format!(
-        "rest roughing: the largest end mill at most 3/4 of the D{previous} before it{}",
-        if reaches(next) {
-            ""
-        } else {
-            " (it does not reach the floor)"
-        }
-    );
-    Ok(Some(((*next).clone(), why)))
 }
 
 fn ms(since: Instant) -> f64 {

@@ -47,6 +47,20 @@ pub struct RoughArgs {
     /// Spindle speed, rev/min.
     #[arg(long, default_value_t = 8000)]
     pub spindle_rpm: u32,
+    /// Keep the programmed feeds: no feed control from each move's engagement.
+    #[arg(long)]
+    pub no_feed_control: bool,
+    /// The material's specific cutting force K_t, N/mm² (aluminium 7075: 800, Ti-6Al-4V:
+    /// about 2000, Inconel 718: 3000); feed control holds K_t·A·f/(π·D·n) at the target.
+    #[arg(long, default_value_t = 800.0, value_parser = positive)]
+    pub specific_force: f64,
+    /// The mean tangential force feed control holds, N [default: each tool's nominal cut,
+    /// half its diameter wide and deep at --feed].
+    #[arg(long, value_parser = positive)]
+    pub target_force: Option<f64>,
+    /// The machine's fastest feed, mm/min: passes through air and light cuts go up to it.
+    #[arg(long, default_value_t = 6000.0, value_parser = positive)]
+    pub max_feed: f64,
     /// Distance between dexel lines of the stock model the program is run on, mm [default: the
     /// part's box diagonal / 400, within 0.05 to 1 mm].
     #[arg(long, value_parser = positive)]
@@ -83,8 +97,17 @@ pub fn run(args: &RoughArgs) -> Result<()> {
             ..defaults.feeds.clone()
         },
         resolution: args.resolution,
+        feed_control: (!args.no_feed_control).then_some(crate::feed::CuttingModel {
+            specific_force: args.specific_force,
+            target_force: args.target_force,
+            max_feed: args.max_feed,
+            ..Default::default()
+        }),
         ..defaults
     };
+    if let Some(model) = &options.feed_control {
+        model.validate().map_err(crate::error::Error::Usage)?;
+    }
     let output = job::rough(&raw, &name, &args.units, &library, &options)?;
     job::write_rough_outputs(&args.out, &output, !args.no_timings)?;
     let r = &output.report;
@@ -110,6 +133,16 @@ pub fn run(args: &RoughArgs) -> Result<()> {
             t.stock.rest.mean_mm,
             t.stock.rest.max_mm
         );
+        if let Some(f) = &t.feed_control {
+            say!(
+                "    feed control: {:.1} → {:.1} min; force max/mean {:.2} → {:.2} (target {:.0} N)",
+                f.time_before_s / 60.0,
+                f.time_after_s / 60.0,
+                f.force_before.max_over_mean,
+                f.force_after.max_over_mean,
+                f.target_force_n
+            );
+        }
         if let Some(n) = &t.not_reached {
             say!("    not reached: {}", n.reason);
         }
