@@ -185,6 +185,7 @@ pub fn plan_roughing(
                 .cutting
                 .model()
                 .map(|model| (model, f64::from(job.roughing.spindle_rpm))),
+            uniform_layers: false,
         },
         &mut context.stock,
         from_blank,

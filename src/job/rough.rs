@@ -65,6 +65,9 @@ pub struct RoughOptions {
     /// Feeds from each move's engagement, to hold a cutting force ([`crate::feed`]); `None`:
     /// the programmed feeds throughout.
     pub feed_control: Option<crate::feed::CuttingModel>,
+    /// Equal layers at the largest depth of cut, no extra plane at the flats: with one tool
+    /// and no feed control, the conventional z-level roughing to compare against.
+    pub uniform_layers: bool,
 }
 
 impl Default for RoughOptions {
@@ -86,6 +89,7 @@ impl Default for RoughOptions {
             resolution: None,
             tolerance: 0.01,
             feed_control: Some(crate::feed::CuttingModel::default()),
+            uniform_layers: false,
         }
     }
 }
@@ -143,6 +147,8 @@ pub struct RoughReport {
     pub part: String,
     pub blank: String,
     pub allowance_mm: f64,
+    /// Equal layers, no planes at the flats (the conventional baseline).
+    pub uniform_layers: bool,
     pub shape_triangles: usize,
     pub resolution_mm: f64,
     pub blank_volume_mm3: f64,
@@ -240,6 +246,7 @@ pub fn rough(
                 feed_control: options
                     .feed_control
                     .map(|model| (model, f64::from(options.spindle_rpm))),
+                uniform_layers: options.uniform_layers,
             },
             &mut planning_stock,
             from_blank,
@@ -410,6 +417,7 @@ pub fn rough(
         part: part_name.to_string(),
         blank: spec.describe(),
         allowance_mm: options.allowance,
+        uniform_layers: options.uniform_layers,
         shape_triangles: shape.triangles.len(),
         resolution_mm: spacing,
         blank_volume_mm3: blank_volume,

@@ -47,6 +47,9 @@ pub(super) struct ToolRoughing<'a> {
     /// Feeds from each move's engagement ([`crate::feed`]) at this spindle speed; `None`: the
     /// programmed feeds.
     pub feed_control: Option<(CuttingModel, f64)>,
+    /// Equal layers at the largest depth of cut, without the extra planes at flats (the
+    /// conventional z-level roughing the baseline is).
+    pub uniform_layers: bool,
 }
 
 /// One tool's layers, and what feed control made of their feeds.
@@ -75,6 +78,9 @@ pub(super) fn rough_with_tool(
     options.floor = Some(how.floor);
     options.feeds = how.feeds.clone();
     options.tolerance = how.tolerance;
+    if how.uniform_layers {
+        options.layers.flat_area = f64::INFINITY;
+    }
     let body = CuttingBody::of(&assembly.cutter);
     let material = if from_blank {
         Material::Blank

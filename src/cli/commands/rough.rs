@@ -27,9 +27,10 @@ pub struct RoughArgs {
     #[arg(long)]
     pub tool_id: Option<u32>,
     /// How many smaller end mills of the library rest-rough after the first, each at most 3/4
-    /// of the one before it across, only where the stock still holds material.
-    #[arg(long, default_value_t = 1)]
-    pub rest_tools: usize,
+    /// of the one before it across, only where the stock still holds material [default: 1;
+    /// 0 with --conventional].
+    #[arg(long)]
+    pub rest_tools: Option<usize>,
     /// Material left on the part: roughing stops at its verified offset shape by this much, mm.
     #[arg(long, default_value_t = 0.5, value_parser = positive)]
     pub allowance: f64,
@@ -50,6 +51,10 @@ pub struct RoughArgs {
     /// Keep the programmed feeds: no feed control from each move's engagement.
     #[arg(long)]
     pub no_feed_control: bool,
+    /// The conventional baseline: equal layers at the largest depth of cut (no extra plane at
+    /// the flats), the programmed feeds, and no rest tools unless --rest-tools says so.
+    #[arg(long)]
+    pub conventional: bool,
     /// The material's specific cutting force K_t, N/mm² (aluminium 7075: 800, Ti-6Al-4V:
     /// about 2000, Inconel 718: 3000); feed control holds K_t·A·f/(π·D·n) at the target.
     #[arg(long, default_value_t = 800.0, value_parser = positive)]
@@ -89,7 +94,9 @@ pub fn run(args: &RoughArgs) -> Result<()> {
         up: args.up,
         blank: args.blank.clone(),
         tool_id: args.tool_id,
-        rest_tools: args.rest_tools,
+        rest_tools: args
+            .rest_tools
+            .unwrap_or(if args.conventional { 0 } else { 1 }),
         spindle_rpm: args.spindle_rpm,
         feeds: crate::rough::RoughingFeeds {
             cut: args.feed,
@@ -97,12 +104,15 @@ pub fn run(args: &RoughArgs) -> Result<()> {
             ..defaults.feeds.clone()
         },
         resolution: args.resolution,
-        feed_control: (!args.no_feed_control).then_some(crate::feed::CuttingModel {
-            specific_force: args.specific_force,
-            target_force: args.target_force,
-            max_feed: args.max_feed,
-            ..Default::default()
-        }),
+        uniform_layers: args.conventional,
+        feed_control: (!args.no_feed_control && !args.conventional).then_some(
+            crate::feed::CuttingModel {
+                specific_force: args.specific_force,
+                target_force: args.target_force,
+                max_feed: args.max_feed,
+                ..Default::default()
+            },
+        ),
         ..defaults
     };
     if let Some(model) = &options.feed_control {
