@@ -448,6 +448,7 @@ pub fn plan(
                 .map(|p| &mut p.toolpath),
             &setup.tool,
             job.feeds.approach,
+            job.feeds.clearance,
             job.strategy.tolerance,
         )
     });

@@ -239,19 +239,24 @@ pub fn plan_roughing(
 }
 
 impl RoughingContext {
-    /// Turns the rapids of the ball operations' moves `ball_paths` (in machining order) that would pass
-    /// through the material roughing leaves into feed moves at `approach_feed`; returns how
-    /// many. The ball's passes and links were planned against the part alone: the last rapid
-    /// of a link stops a clearance above the entry along the tool axis, which may be inside
-    /// the rest of a terrace or of the floor the table margin leaves. Each operation's moves
-    /// are taken off a copy of the planning stock in turn, so a rapid over material an earlier
-    /// pass cleared stays a rapid. A rapid counts as through material when it would remove
-    /// more than the stock run's allowance (tolerance × dexel spacing², its model's skin).
+    /// Makes the rapids of the ball operations' moves `ball_paths` (in machining order) that
+    /// would pass through the material roughing leaves into feed moves at `approach_feed`;
+    /// returns how many. The ball's passes and links were planned against the part alone: the
+    /// last rapid of a link stops a clearance above the entry along the tool axis, which may
+    /// be inside the rest of a terrace or of the floor the table margin leaves.
+    ///
+    /// Each operation's moves are taken off a copy of the planning stock in turn, so a rapid
+    /// over material an earlier pass cleared stays a rapid. A rapid counts as through material
+    /// when it would remove more than the stock run's allowance (tolerance × dexel spacing²,
+    /// its model's skin). A straight one (the axis fixed) keeps its rapid up to `clearance`
+    /// mm before the ball would first touch the material the operation starts from, and is
+    /// fed from there.
     pub fn feed_rapids_through_rest<'a>(
         &self,
         ball_paths: impl IntoIterator<Item = &'a mut Toolpath>,
         ball: &ToolAssembly,
         approach_feed: f64,
+        clearance: f64,
         tolerance: f64,
     ) -> usize {
         let mut stock = self.stock.clone();
@@ -260,6 +265,7 @@ impl RoughingContext {
         let mut last: Option<Move> = None;
         let mut fed = 0;
         for path in ball_paths {
+            let before = stock.clone();
             // From where the operation before it left the tool.
             let moves: Vec<Move> = last
                 .iter()
@@ -270,22 +276,78 @@ impl RoughingContext {
             let removed = stock.remove_cutting(
                 &Toolpath {
                     tool_id: ball.id,
-                    moves,
+                    moves: moves.clone(),
                 },
                 &body,
                 tolerance,
             );
-            for (k, m) in path.moves.iter_mut().enumerate() {
-                if m.kind == MoveKind::Rapid && removed[k + offset] > allowance {
+            let mut out = Vec::with_capacity(path.moves.len());
+            for (k, m) in path.moves.iter().enumerate() {
+                let mut m = *m;
+                let from = (k + offset).checked_sub(1).map(|j| moves[j]);
+                if m.kind == MoveKind::Rapid
+                    && removed[k + offset] > allowance
+                    && let Some(from) = from
+                {
+                    if let Some(split) =
+                        clear_until(&before, &body, &from, &m, clearance, tolerance)
+                    {
+                        out.push(split);
+                    }
                     m.kind = MoveKind::Approach;
                     m.feed = approach_feed;
                     fed += 1;
                 }
+                out.push(m);
             }
+            path.moves = out;
             last = path.moves.last().copied();
         }
         fed
     }
+}
+
+/// The rapid part of a straight rapid `from → to` that the ball would drive into `stock`: the
+/// pose `clearance` mm before the first where its sweep from `from` touches material (found by
+/// bisection to 1 % of the move), or `None` when that leaves less than `clearance` to go
+/// rapid, or the axis turns along the move.
+fn clear_until(
+    stock: &Stock,
+    body: &crate::stock::cutter::CuttingBody,
+    from: &Move,
+    to: &Move,
+    clearance: f64,
+    tolerance: f64,
+) -> Option<Move> {
+    if (from.pose.axis.into_inner() - to.pose.axis.into_inner()).norm() > 1e-12 {
+        return None;
+    }
+    let length = (to.pose.tip - from.pose.tip).norm();
+    let at = |t: f64| {
+        let mut m = *to;
+        m.pose.tip = from.pose.tip + (to.pose.tip - from.pose.tip) * t;
+        m
+    };
+    let clear = |t: f64| {
+        body.sweep(&from.pose, &at(t).pose, tolerance)
+            .iter()
+            .all(|solid| stock.touching(solid, |_| 0.0).is_none())
+    };
+    // The largest clear fraction: `low` is clear, `high` is not.
+    let (mut low, mut high) = (0.0, 1.0);
+    if clear(1.0) {
+        return None;
+    }
+    for _ in 0..7 {
+        let mid = 0.5 * (low + high);
+        if clear(mid) {
+            low = mid;
+        } else {
+            high = mid;
+        }
+    }
+    let t = low - clearance / length.max(f64::MIN_POSITIVE);
+    (t * length >= clearance).then(|| at(t))
 }
 
 /// `toolpath` (vertical axis, starting and ending on its own safe height above the blank)
@@ -355,4 +417,52 @@ pub fn check_posted_roughing(
         planned.summary.overcut_vs_part = Some(against_part);
     }
     Ok((!problems.is_empty()).then(|| problems.join("; ")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{Aabb, ToolPose, Vector3};
+
+    fn pose_at(z: f64) -> Move {
+        Move {
+            pose: ToolPose {
+                tip: Point3::new(0.0, 0.0, z),
+                axis: nalgebra::Unit::new_normalize(Vector3::z()),
+            },
+            kind: MoveKind::Rapid,
+            feed: 15000.0,
+        }
+    }
+
+    /// A ball (r = 2) plunging by rapid from z = 30 to 5 onto a block whose top is z = 10 first
+    /// touches it with its tip at 10, 20 mm down the 25 mm move; the rapid part stops 3 mm
+    /// before that, at 13 (within the bisection's 25/128 mm), and its sweep is clear.
+    #[test]
+    fn a_rapid_into_material_keeps_its_rapid_part_up_to_the_clearance() {
+        let bounds = Aabb::from_points(&[
+            Point3::new(-20.0, -20.0, 0.0),
+            Point3::new(20.0, 20.0, 10.0),
+        ]);
+        let stock = Stock::block(&bounds, 0.5, DEFAULT_MAX_DEXELS).unwrap();
+        let body = crate::stock::cutter::CuttingBody::of(&crate::tool::Cutter::Ball {
+            diameter: 4.0,
+            flute_length: 10.0,
+        });
+        let (from, to) = (pose_at(30.0), pose_at(5.0));
+        let split = clear_until(&stock, &body, &from, &to, 3.0, 0.01).expect("a rapid part");
+        let z = split.pose.tip.z;
+        assert!((13.0..=13.0 + 25.0 / 128.0 + 1e-9).contains(&z), "{z}");
+        assert_eq!(split.kind, MoveKind::Rapid);
+        assert!(
+            body.sweep(&from.pose, &split.pose, 0.01)
+                .iter()
+                .all(|s| stock.touching(s, |_| 0.0).is_none())
+        );
+        // Too short to be worth a rapid, or turning: fed all the way.
+        assert!(clear_until(&stock, &body, &pose_at(14.0), &to, 3.0, 0.01).is_none());
+        let mut turned = pose_at(5.0);
+        turned.pose.axis = nalgebra::Unit::new_normalize(Vector3::new(0.1, 0.0, 1.0));
+        assert!(clear_until(&stock, &body, &from, &turned, 3.0, 0.01).is_none());
+    }
 }
