@@ -168,11 +168,7 @@ pub fn plan_roughing(
         entry: job.roughing.entry_feed,
         rapid: job.machine.rapid_feed,
     };
-    let ToolLayers {
-        tool: planning,
-        layers: roughing,
-        feed_control,
-    } = rough_with_tool(
+    let planned = rough_with_tool(
         &shape,
         &context.blank,
         &tool,
@@ -191,13 +187,7 @@ pub fn plan_roughing(
         from_blank,
     )
     .map_err(|e| fail(format!("roughing with T{}: {e}", tool.id)))?;
-    if from_blank
-        && !roughing
-            .toolpath
-            .moves
-            .iter()
-            .any(|m| m.kind == MoveKind::Cut)
-    {
+    if from_blank && !planned.cuts() {
         return Err(Error::NothingToCut(format!(
             "operation '{}': the blank holds no material outside the part's offset shape \
              that T{} can reach",
@@ -205,14 +195,13 @@ pub fn plan_roughing(
         )));
     }
     context.previous_diameter = Some(tool.cutter.diameter());
-    let moves = roughing.toolpath.moves.len();
-    let cutting_length_mm = roughing
-        .toolpath
-        .moves
-        .windows(2)
-        .filter(|w| w[1].kind == MoveKind::Cut)
-        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
-        .sum();
+    let moves = planned.layers.toolpath.moves.len();
+    let cutting_length_mm = planned.cutting_length();
+    let ToolLayers {
+        tool: planning,
+        layers: roughing,
+        feed_control,
+    } = planned;
     let toolpath = from_safe_plane(roughing.toolpath, setup);
     Ok(PlannedRoughing {
         summary: RoughingSummary {

@@ -22,7 +22,6 @@ use super::stock_model::{
     CollisionReport, blank_stock, default_resolution, stock_error, stock_model_glb,
 };
 use crate::error::{Error, Result};
-use crate::geom::MoveKind;
 use crate::mesh::io::RawMesh;
 use crate::post::{
     GcodeOptions, GcodeWriter, LineariseOptions, ProgramHeader, ProgramSink, ThreeAxis,
@@ -230,11 +229,7 @@ pub fn rough(
     let mut planned = Vec::with_capacity(sequence.len());
     for (k, (assembly, _)) in sequence.iter().enumerate() {
         let from_blank = k == 0;
-        let super::rough_stages::ToolLayers {
-            tool,
-            layers,
-            feed_control,
-        } = rough_with_tool(
+        let planned_tool = rough_with_tool(
             shape,
             &blank,
             assembly,
@@ -252,20 +247,20 @@ pub fn rough(
             from_blank,
         )
         .map_err(|e| Error::Usage(format!("{part_name}: roughing with T{}: {e}", assembly.id)))?;
-        if from_blank
-            && !layers
-                .toolpath
-                .moves
-                .iter()
-                .any(|m| m.kind == MoveKind::Cut)
-        {
+        if from_blank && !planned_tool.cuts() {
             return Err(Error::NothingToCut(format!(
                 "{part_name}: the blank `{}` holds no material outside the part's offset \
                  shape that the tool can reach",
                 spec.describe()
             )));
         }
-        planned.push((tool, layers, feed_control));
+        let cutting_length = planned_tool.cutting_length();
+        let super::rough_stages::ToolLayers {
+            tool,
+            layers,
+            feed_control,
+        } = planned_tool;
+        planned.push((tool, layers, feed_control, cutting_length));
     }
     timings.insert("layers", ms(t));
 
@@ -290,7 +285,7 @@ pub fn rough(
     };
     let mut writer = GcodeWriter::new(&ThreeAxis, GcodeOptions::default());
     let mut all_moves = Vec::new();
-    for (k, ((assembly, _), (_, layers, _))) in sequence.iter().zip(&planned).enumerate() {
+    for (k, ((assembly, _), (_, layers, _, _))) in sequence.iter().zip(&planned).enumerate() {
         let blocks = crate::post::linearise_opt(&ThreeAxis, &layers.toolpath, &linearise)
             .map_err(|e| Error::Internal(format!("posting the roughing program: {e}")))?;
         if k == 0 {
@@ -324,7 +319,7 @@ pub fn rough(
     let rounding = 1e-4;
     let mut runs = Vec::with_capacity(sequence.len());
     let mut problems = Vec::new();
-    for (((assembly, chosen), (tool, layers, feed_control)), section) in
+    for (((assembly, chosen), (tool, layers, feed_control, cutting_length)), section) in
         sequence.iter().zip(planned).zip(sections)
     {
         let overcut_vs_shape = overcuts(shape, &section, tool.radius, rounding);
@@ -376,11 +371,7 @@ pub fn rough(
             layers: layers.layers,
             not_reached: layers.not_reached,
             moves: moves.len(),
-            cutting_length_mm: moves
-                .windows(2)
-                .filter(|w| w[1].kind == MoveKind::Cut)
-                .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
-                .sum(),
+            cutting_length_mm: cutting_length,
             estimated_time_s: moves
                 .windows(2)
                 .map(|w| 60.0 * (w[1].pose.tip - w[0].pose.tip).norm() / w[1].feed)

@@ -59,6 +59,28 @@ pub(super) struct ToolLayers {
     pub feed_control: Option<FeedReport>,
 }
 
+impl ToolLayers {
+    /// Whether any move cuts (a blank with nothing outside the shape gives none).
+    pub fn cuts(&self) -> bool {
+        self.layers
+            .toolpath
+            .moves
+            .iter()
+            .any(|m| m.kind == crate::geom::MoveKind::Cut)
+    }
+
+    /// Length of the cutting moves, mm.
+    pub fn cutting_length(&self) -> f64 {
+        self.layers
+            .toolpath
+            .moves
+            .windows(2)
+            .filter(|w| w[1].kind == crate::geom::MoveKind::Cut)
+            .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+            .sum()
+    }
+}
+
 /// Layers of one tool down to `shape`: from the whole blank (`from_blank`; its moves are then
 /// taken off `stock`), else only where `stock` still holds material (each layer taken off as
 /// it is planned). `stock` is the planning model the next tool starts from. With feed
