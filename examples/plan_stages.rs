@@ -13,6 +13,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/data/impeller.glb").into());
     let mut job = Job::default();
+    // The stages of the ball operations; `job::plan` runs roughing from a blank.
+    job.stock.blank = None;
     job.strategy.scallop_height = 0.1;
     job.strategy.semi_finish_allowances = vec![0.5];
     job.validate()?;
@@ -72,7 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .into());
             }
         };
-        let p = job::plan_operation(&setup, operation, target, &stock, &|| ())?;
+        let p = job::plan_operation(&setup, operation, target, &stock, None, &|| ())?;
         let cuts = p
             .toolpath
             .moves

@@ -5,6 +5,8 @@
 //! conversion (a part 200 mm from the origin would otherwise lose a decade of precision), and
 //! every f32 test carries a margin of [`F32_SLACK`], far above f32 rounding at these sizes.
 
+use std::sync::Arc;
+
 use glam::{Quat, Vec3};
 use parry3d::math::Pose;
 use parry3d::query::{self, ClosestPoints};
@@ -14,6 +16,8 @@ use crate::geom::ToolPose;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 use crate::mesh::SurfaceDistance;
+use crate::stock::clearance::MaterialClearance;
+use crate::stock::sweep::Frustum;
 use crate::tool::{Body, BodyRole, Cutter, ToolAssembly};
 
 /// mm. Larger than f32 rounding of coordinates within ±1000 mm of the part centre (~1e-4 mm).
@@ -28,6 +32,9 @@ pub enum Collision {
     Body { role: BodyRole },
     /// Some part of the tool comes closer to the table than its margin.
     Table,
+    /// A body above the flutes comes closer to the stock's material (what the operations
+    /// before left, [`PartCollider::with_material`]) than its margin allows.
+    Material { role: BodyRole },
 }
 
 /// Distance from each kind of body to the part at one pose, capped at the search distance.
@@ -62,12 +69,19 @@ pub enum ColliderError {
     Mesh(String),
 }
 
-/// The part (and the table it stands on), ready for tool queries.
+/// The part (and the table it stands on, and the material standing around it), ready for
+/// tool queries. Cloning shares the part's structures.
+#[derive(Clone)]
 pub struct PartCollider {
-    surface: SurfaceDistance,
-    trimesh: TriMesh,
+    part: Arc<PartStructures>,
     origin: Point3,
     table: Option<Table>,
+    material: Option<Arc<MaterialClearance>>,
+}
+
+struct PartStructures {
+    surface: SurfaceDistance,
+    trimesh: TriMesh,
 }
 
 impl PartCollider {
@@ -82,10 +96,39 @@ impl PartCollider {
         let trimesh = TriMesh::new(vertices, mesh.triangles.clone())
             .map_err(|e| ColliderError::Mesh(format!("{e:?}")))?;
         Ok(Self {
-            surface: SurfaceDistance::new(mesh),
-            trimesh,
+            part: Arc::new(PartStructures {
+                surface: SurfaceDistance::new(mesh),
+                trimesh,
+            }),
             origin,
             table: None,
+            material: None,
+        })
+    }
+
+    /// The same part with the stock's `material` around it: the bodies above the flutes
+    /// (shank, neck, holder) must then also keep their margins from it. The flutes and the
+    /// cutting end are the tool's cutting part and may be in material. This is how the ball
+    /// operations after roughing keep their shank and holder out of the rest.
+    pub fn with_material(&self, material: Arc<MaterialClearance>) -> Self {
+        Self {
+            material: Some(material),
+            ..self.clone()
+        }
+    }
+
+    /// Whether `geometry` (a body of the tool, grown as checked) at `pose` is clear of the
+    /// material; always without material.
+    fn clear_of_material(&self, geometry: &Revolved, pose: &ToolPose) -> bool {
+        self.material.as_ref().is_none_or(|m| {
+            m.frustum_is_clear(&Frustum {
+                base: pose.tip,
+                axis: pose.axis.into_inner(),
+                from: geometry.from,
+                to: geometry.to,
+                radius_from: geometry.radius_from,
+                radius_to: geometry.radius_to,
+            })
         })
     }
 
@@ -119,7 +162,7 @@ impl PartCollider {
     }
 
     pub fn surface(&self) -> &SurfaceDistance {
-        &self.surface
+        &self.part.surface
     }
 
     fn local(&self, p: &Point3) -> Vec3 {
@@ -135,6 +178,7 @@ impl PartCollider {
         tolerance: f64,
     ) -> Result<f64, Collision> {
         let (d, _) = self
+            .part
             .surface
             .signed_distance(centre)
             .ok_or(Collision::Gouge { depth: radius })?;
@@ -202,6 +246,26 @@ impl PartCollider {
                 return Err(Collision::Body { role: body.role });
             }
         }
+        self.check_material(tool, pose, 0.0)
+    }
+
+    /// The bodies above the flutes, grown by their margins and extended `sweep` mm up the
+    /// axis, against the material (none without it).
+    fn check_material(
+        &self,
+        tool: &PreparedTool,
+        pose: &ToolPose,
+        sweep: f64,
+    ) -> Result<(), Collision> {
+        if self.material.is_none() {
+            return Ok(());
+        }
+        for body in tool.bodies.iter().filter(|b| b.role != BodyRole::Flutes) {
+            let grown = body.geometry.grown(body.check_grow).swept(sweep);
+            if !self.clear_of_material(&grown, pose) {
+                return Err(Collision::Material { role: body.role });
+            }
+        }
         Ok(())
     }
 
@@ -221,7 +285,7 @@ impl PartCollider {
                 return Err(Collision::Body { role: body.role });
             }
         }
-        Ok(())
+        self.check_material(tool, pose, sweep)
     }
 
     /// The ball swept `sweep` mm along the axis from `pose` (a capsule), tested without touching.
@@ -280,7 +344,7 @@ impl PartCollider {
                 &at,
                 body.exact.as_ref(),
                 &Pose::IDENTITY,
-                &self.trimesh,
+                &self.part.trimesh,
                 limit as f32,
             ) {
                 Ok(ClosestPoints::WithinMargin(a, b)) => (a.distance(b) as f64 + shrink).min(limit),
@@ -312,7 +376,7 @@ impl PartCollider {
     }
 
     fn intersects(&self, shape: &dyn Shape, at: &Pose) -> bool {
-        query::intersection_test(at, shape, &Pose::IDENTITY, &self.trimesh)
+        query::intersection_test(at, shape, &Pose::IDENTITY, &self.part.trimesh)
             .map(|i| i.intersecting)
             .unwrap_or(true)
     }
@@ -631,6 +695,63 @@ pub(crate) mod tests {
             shank: 50.0,
             holder: 50.0,
         }
+    }
+
+    /// Material left around a plate: a block to z = 40 with a round pocket (radius 8, down to
+    /// 0.5 above the plate) about the z axis.
+    fn material_around_the_plate() -> Arc<MaterialClearance> {
+        let bounds = crate::geom::Aabb::from_points(&[
+            Point3::new(-30.0, -30.0, 0.0),
+            Point3::new(30.0, 30.0, 40.0),
+        ]);
+        let mut stock = crate::stock::Stock::block(&bounds, 0.25, 10_000_000).unwrap();
+        stock.remove(&Frustum {
+            base: Point3::new(0.0, 0.0, 20.5),
+            axis: Vector3::z(),
+            from: 0.0,
+            to: 30.0,
+            radius_from: 8.0,
+            radius_to: 8.0,
+        });
+        Arc::new(MaterialClearance::new(&stock))
+    }
+
+    /// A tool 1.5 mm above the plate, tilted 20° toward the pocket's wall: where its shank
+    /// passes the block's top (19.7 mm up the axis) it reaches 19.7 sin 20° + 3 + 0.5 margin =
+    /// 10.2 mm off the pocket's axis, past the wall at 8. The part alone lets it stand, the
+    /// material does not. Upright, or tilted 5°, it keeps its margin.
+    #[test]
+    fn the_shank_keeps_its_margin_from_the_material_left() {
+        let part = plate();
+        let with_material = part.with_material(material_around_the_plate());
+        let tool = prepared();
+        let upright = pose([0.0, 0.0, 21.5], [0.0, 0.0, 1.0]);
+        let tilted = |degrees: f64| {
+            let a = degrees.to_radians();
+            pose([0.0, 0.0, 21.5], [a.sin(), 0.0, a.cos()])
+        };
+        assert!(with_material.check_bodies(&tool, &upright).is_ok());
+        assert!(part.check_bodies(&tool, &tilted(20.0)).is_ok());
+        assert_eq!(
+            with_material.check_bodies(&tool, &tilted(20.0)),
+            Err(Collision::Material {
+                role: BodyRole::Shank
+            })
+        );
+        assert!(with_material.check_bodies(&tool, &tilted(5.0)).is_ok());
+        // Retracting upright 100 mm stays inside the pocket's bore and then above the block;
+        // tilted toward the wall, the shank's sweep meets it too.
+        assert!(
+            with_material
+                .check_bodies_swept(&tool, &upright, 100.0)
+                .is_ok()
+        );
+        assert_eq!(
+            with_material.check_bodies_swept(&tool, &tilted(20.0), 100.0),
+            Err(Collision::Material {
+                role: BodyRole::Shank
+            })
+        );
     }
 
     #[test]

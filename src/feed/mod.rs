@@ -24,8 +24,10 @@
 //! **Limits.** Every feed stays within the machine's `[min_feed, max_feed]`. A pass through
 //! air goes at `max_feed`. Moves programmed slower than the pass feed (ramps into material)
 //! are only ever slowed, never sped up: their feed is bounded by what the tool can take
-//! axially, which this model does not see. Rapids are left alone. A move that removes material
-//! even at `min_feed` above the target is reported (`over_target_at_min_feed`).
+//! axially, which this model does not see. A finishing tool's cutting moves are only slowed
+//! too ([`Cutter::speed_up`] off): their feed per tooth also sets the surface the ball leaves,
+//! which the force does not. Rapids are left alone. A move that removes material even at
+//! `min_feed` above the target is reported (`over_target_at_min_feed`).
 //!
 //! This stage takes plain data: the moves and the volume each removes (from
 //! [`crate::stock::Stock::remove_cutting`] on the stock the operations before leave), and
@@ -110,6 +112,10 @@ pub struct Cutter {
     pub pass_feed: f64,
     /// Rapid rate, mm/min, for the time of the rapids.
     pub rapid_feed: f64,
+    /// Whether cutting passes lighter than the target may go faster than programmed (up to
+    /// `max_feed`): yes for roughing, no for finishing (module docs). Passes through air go
+    /// at `max_feed` either way.
+    pub speed_up: bool,
 }
 
 /// A distribution of forces over the moves that cut, N.
@@ -195,20 +201,26 @@ pub fn control_feeds(
             report.time_after_s += t;
             continue;
         }
-        // Entries keep at most their programmed feed; passes may go up to the machine's.
-        let cap = if m.feed < cutter.pass_feed {
+        // Entries keep at most their programmed feed; passes may go up to the machine's in air,
+        // and when cutting if the tool may speed up.
+        let air_cap = if m.feed < cutter.pass_feed {
             m.feed
         } else {
             model.max_feed
+        };
+        let cap = if cutter.speed_up {
+            air_cap
+        } else {
+            air_cap.min(m.feed)
         };
         let volume = removed.get(k).copied().unwrap_or(0.0);
         let feed = if length <= 0.0 {
             m.feed
         } else if volume <= skin {
-            if cap > m.feed {
+            if air_cap > m.feed {
                 report.moves_in_air += 1;
             }
-            cap
+            air_cap
         } else {
             let area = volume / length;
             before.push(model.force(area, m.feed, cutter.diameter, cutter.spindle_rpm));
@@ -264,6 +276,7 @@ mod tests {
         spindle_rpm: 8000.0,
         pass_feed: 2000.0,
         rapid_feed: 15000.0,
+        speed_up: true,
     };
 
     /// The force is K_t·A·f/(πDn): a D10 at 8000 rev/min taking 5 × 5 mm at 2000 mm/min in
@@ -311,6 +324,34 @@ mod tests {
         let after = t(15000.0) + t(2000.0) + t(1000.0) + 2.0 * t(6000.0) + t(800.0);
         assert!((r.time_before_s - before).abs() < 1e-9);
         assert!((r.time_after_s - after).abs() < 1e-9);
+    }
+
+    /// A finishing tool on the same moves: the slot and the ramp are slowed as before, the
+    /// skim keeps its programmed feed (no faster for a light cut), air still goes at the limit.
+    #[test]
+    fn a_finishing_tool_is_only_slowed_where_it_cuts() {
+        let p = path(&[
+            (0.0, MoveKind::Rapid, 15000.0),
+            (10.0, MoveKind::Rapid, 15000.0),
+            (20.0, MoveKind::Cut, 2000.0),
+            (30.0, MoveKind::Cut, 2000.0),
+            (40.0, MoveKind::Cut, 2000.0),
+            (50.0, MoveKind::Cut, 2000.0),
+            (60.0, MoveKind::Cut, 800.0),
+        ]);
+        let removed = [0.0, 0.0, 250.0, 500.0, 25.0, 0.0, 500.0];
+        let finishing = Cutter {
+            speed_up: false,
+            ..CUTTER
+        };
+        let (feeds, r) = control_feeds(&p, &removed, &finishing, &Default::default(), 1e-6);
+        assert_eq!(feeds[2], 2000.0);
+        assert!((feeds[3] - 1000.0).abs() < 1e-9);
+        assert_eq!(feeds[4], 2000.0);
+        assert_eq!(feeds[5], 6000.0);
+        assert!((feeds[6] - 800.0).abs() < 1e-9);
+        assert_eq!((r.moves_slower, r.moves_faster, r.moves_in_air), (1, 1, 1));
+        assert!(r.force_after.max <= r.target_force_n + 1e-9);
     }
 
     /// A cut too heavy for the target even at the minimum feed is reported, at the minimum.

@@ -16,13 +16,14 @@
 
 use std::borrow::Cow;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 use super::budget::ToleranceBudget;
 use super::config::{Job, Operation, OperationKind, SurfaceSection};
 use super::offsets::stock_shapes;
 use super::operation::InProcessStock;
-use super::plan_roughing::{RoughingContext, check_posted_roughing, plan_roughing};
+use super::plan_roughing::{BallTakeOff, RoughingContext, check_posted_roughing, plan_roughing};
 use super::preview::preview;
 use super::report::*;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
@@ -35,6 +36,7 @@ use crate::multires::Hierarchy;
 use crate::offset::OffsetShape;
 use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader, ProgramSink};
+use crate::stock::clearance::MaterialClearance;
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
@@ -210,11 +212,14 @@ pub enum OperationTarget<'a> {
 
 /// Plans one operation on `target` from the material `stock` the operations before it leave;
 /// refuses an operation that would leave as much as is already there (it would cut nothing).
+/// With `material` (the stock roughing and the operations since left, as a model), the shank
+/// and holder keep their margins from it as well as from the part.
 pub fn plan_operation(
     setup: &PlanSetup,
     operation: &Operation,
     target: OperationTarget,
     stock: &InProcessStock,
+    material: Option<Arc<MaterialClearance>>,
     advance: &(dyn Fn() + Sync),
 ) -> Result<PlannedOperation> {
     if let InProcessStock::AtLeast { stock_to_leave } = *stock
@@ -234,8 +239,14 @@ pub fn plan_operation(
     };
     match (operation.kind, target) {
         (OperationKind::SemiFinish, OperationTarget::Shape { level, shape }) => {
-            let semi =
-                semi_finish_operation(setup, level, shape, operation.scallop_height, advance)?;
+            let semi = semi_finish_operation(
+                setup,
+                level,
+                shape,
+                operation.scallop_height,
+                material,
+                advance,
+            )?;
             Ok(planned(
                 semi.toolpath,
                 OperationDetails::SemiFinish(semi.summary),
@@ -244,17 +255,19 @@ pub fn plan_operation(
         }
         (OperationKind::Finish, OperationTarget::DriveSurface(drive)) => {
             let reachable = |axis: &Vector3| setup.reachable(axis);
-            let ctx = setup.finishing_context(&setup.collider, &setup.rays, &reachable);
+            let with_material = material.map(|m| setup.collider.with_material(m));
+            let collider = with_material.as_ref().unwrap_or(&setup.collider);
+            let ctx = setup.finishing_context(collider, &setup.rays, &reachable);
             let options = FinishingOptions {
                 scallop_height: operation.scallop_height,
                 ..setup.finishing.clone()
             };
             // Sections follow the drive surface; every pose is placed and checked against
-            // the part.
+            // the part (and the material).
             let passes = path::finishing_passes(drive, &ctx, &options, advance);
             let (toolpath, linking) = path::link(
                 &passes.segments,
-                &setup.collider,
+                collider,
                 &setup.prepared_tool,
                 setup.tool.id,
                 &setup.link,
@@ -372,6 +385,11 @@ pub fn plan(
     // The tool each operation cuts with, in order: a library end mill or the job's ball.
     let mut tools = Vec::with_capacity(operations.len());
     let advance = || observer.advance();
+    // Ball rapids made feed moves through the rest (with a raw blank), and where the ball's
+    // last operation left it.
+    let mut rapids_fed: Option<usize> = None;
+    let mut last_ball_move: Option<Move> = None;
+    let mut ball_feed_control = Vec::new();
     for operation in &operations {
         if operation.kind.is_roughing() {
             let t = Instant::now();
@@ -430,30 +448,56 @@ pub fn plan(
             }
         };
         let t = Instant::now();
-        planned.push(plan_operation(&setup, operation, target, &stock, &advance)?);
-        tools.push(setup.tool.clone());
+        let material = roughing_context.as_ref().map(RoughingContext::material);
+        let mut operation_planned =
+            plan_operation(&setup, operation, target, &stock, material, &advance)?;
         if operation.kind == OperationKind::Finish {
             timings.finishing_passes += ms(t);
         }
+        // After roughing, each ball operation comes off the planning stock before the next is
+        // planned against it; rapids its links drive into the rest become feed moves.
+        if let Some(context) = roughing_context.as_mut() {
+            let t = Instant::now();
+            let how = BallTakeOff {
+                ball: &setup.tool,
+                approach_feed: job.feeds.approach,
+                clearance: job.feeds.clearance,
+                tolerance: job.strategy.tolerance,
+                feed_control: job.cutting.model().map(|model| {
+                    let cutter = crate::feed::Cutter {
+                        diameter: job.tool.diameter,
+                        spindle_rpm: f64::from(job.tool.spindle_rpm),
+                        pass_feed: job.feeds.cut,
+                        rapid_feed: job.machine.rapid_feed,
+                        speed_up: false,
+                    };
+                    (model, cutter)
+                }),
+            };
+            let taken = context.take_off_ball_operation(
+                &mut operation_planned.toolpath,
+                last_ball_move.as_ref(),
+                &how,
+            );
+            *rapids_fed.get_or_insert(0) += taken.rapids_fed;
+            if let Some(feed_control) = taken.feed_control {
+                ball_feed_control.push(BallFeedControl {
+                    operation: operation.name.clone(),
+                    feed_control,
+                });
+            }
+            timings.linking += ms(t);
+        }
+        last_ball_move = operation_planned.toolpath.moves.last().copied();
+        planned.push(operation_planned);
+        tools.push(setup.tool.clone());
         stock = stock.after(operation);
     }
 
     let t = Instant::now();
     observer.stage("linking", 0);
-    let rapids_fed = roughing_context.as_ref().map(|context| {
-        context.feed_rapids_through_rest(
-            planned
-                .iter_mut()
-                .filter(|p| !p.operation.kind.is_roughing())
-                .map(|p| &mut p.toolpath),
-            &setup.tool,
-            job.feeds.approach,
-            job.feeds.clearance,
-            job.strategy.tolerance,
-        )
-    });
     let (toolpath, spans) = join_operations(&planned);
-    timings.linking = ms(t);
+    timings.linking += ms(t);
 
     let t = Instant::now();
     observer.stage("verification", 0);
@@ -680,6 +724,7 @@ pub fn plan(
         stock_to_leave: semi_summaries,
         roughing: roughing.into_iter().map(|r| r.summary).collect(),
         rapids_fed_through_rest: rapids_fed,
+        ball_feed_control,
         poses: pose_counts(&toolpath),
         cutting_length_mm: length(MoveKind::Cut),
         approach_length_mm: length(MoveKind::Approach),
@@ -926,8 +971,9 @@ mod tests {
 
     fn plan_block() -> PlanOutput {
         // A 30 x 30 x 10 block: the top is reachable straight down, the sides with the axis
-        // tilted, the bottom stands on the table.
+        // tilted, the bottom stands on the table. Finishing only: the block is taken as roughed.
         let mut job = Job::default();
+        job.stock.blank = None;
         job.strategy.scallop_height = 0.5;
         job.strategy.max_step = 3.0;
         let raw = RawMesh {
@@ -1010,6 +1056,7 @@ mod tests {
     #[test]
     fn semi_finishing_leaves_the_stock_of_each_shape() {
         let mut job = Job::default();
+        job.stock.blank = None;
         job.strategy.scallop_height = 0.5;
         job.strategy.max_step = 3.0;
         job.strategy.semi_finish_allowances = vec![1.0, 0.3];

@@ -8,6 +8,8 @@
 //! offset shape and the part ([`crate::rough::check`], sharing no code with the planning); the
 //! stock run then runs them on the tri-dexel blank with each tool's whole assembly.
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
 use super::config::{Job, Operation, OperationKind};
@@ -19,10 +21,12 @@ use super::rough_stages::{
 use super::setup::PlanSetup;
 use super::stock_model::{blank_stock, default_resolution};
 use crate::error::{Error, JobError, Result};
+use crate::feed::{Cutter as FeedCutter, CuttingModel, FeedReport, control_feeds};
 use crate::geom::{Move, MoveKind, Point3, Toolpath};
 use crate::mesh::Mesh;
 use crate::rough::check::{OvercutReport, overcuts};
 use crate::rough::{LayerReport, NotReached, RoughingFeeds, RoughingTool};
+use crate::stock::clearance::MaterialClearance;
 use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
 use crate::tool::{ToolAssembly, ToolLibrary};
 
@@ -228,72 +232,106 @@ pub fn plan_roughing(
 }
 
 impl RoughingContext {
-    /// Makes the rapids of the ball operations' moves `ball_paths` (in machining order) that
-    /// would pass through the material roughing leaves into feed moves at `approach_feed`;
-    /// returns how many. The ball's passes and links were planned against the part alone: the
-    /// last rapid of a link stops a clearance above the entry along the tool axis, which may
-    /// be inside the rest of a terrace or of the floor the table margin leaves.
+    /// The material standing now — the blank less every operation taken off so far — ready
+    /// for the ball operations' shank and holder checks ([`PartCollider::with_material`]).
     ///
-    /// Each operation's moves are taken off a copy of the planning stock in turn, so a rapid
-    /// over material an earlier pass cleared stays a rapid. A rapid counts as through material
-    /// when it would remove more than the stock run's allowance (tolerance × dexel spacing²,
-    /// its model's skin). A straight one (the axis fixed) keeps its rapid up to `clearance`
-    /// mm before the ball would first touch the material the operation starts from, and is
-    /// fed from there.
-    pub fn feed_rapids_through_rest<'a>(
-        &self,
-        ball_paths: impl IntoIterator<Item = &'a mut Toolpath>,
-        ball: &ToolAssembly,
-        approach_feed: f64,
-        clearance: f64,
-        tolerance: f64,
-    ) -> usize {
-        let mut stock = self.stock.clone();
-        let body = crate::stock::cutter::CuttingBody::of(&ball.cutter);
-        let allowance = tolerance * stock.spacing() * stock.spacing();
-        let mut last: Option<Move> = None;
-        let mut fed = 0;
-        for path in ball_paths {
-            let before = stock.clone();
-            // From where the operation before it left the tool.
-            let moves: Vec<Move> = last
-                .iter()
-                .copied()
-                .chain(path.moves.iter().copied())
-                .collect();
-            let offset = usize::from(last.is_some());
-            let removed = stock.remove_cutting(
-                &Toolpath {
-                    tool_id: ball.id,
-                    moves: moves.clone(),
-                },
-                &body,
-                tolerance,
-            );
-            let mut out = Vec::with_capacity(path.moves.len());
-            for (k, m) in path.moves.iter().enumerate() {
-                let mut m = *m;
-                let from = (k + offset).checked_sub(1).map(|j| moves[j]);
-                if m.kind == MoveKind::Rapid
-                    && removed[k + offset] > allowance
-                    && let Some(from) = from
-                {
-                    if let Some(split) =
-                        clear_until(&before, &body, &from, &m, clearance, tolerance)
-                    {
-                        out.push(split);
-                    }
-                    m.kind = MoveKind::Approach;
-                    m.feed = approach_feed;
-                    fed += 1;
-                }
-                out.push(m);
-            }
-            path.moves = out;
-            last = path.moves.last().copied();
-        }
-        fed
+    /// [`PartCollider::with_material`]: crate::collide::PartCollider::with_material
+    pub fn material(&self) -> Arc<MaterialClearance> {
+        Arc::new(MaterialClearance::new(&self.stock))
     }
+
+    /// Takes a ball operation's moves `path` off the planning stock, from `last` (where the
+    /// operation before left the tool), so the next operation is planned against what it
+    /// leaves. On the way, from the volume each move removes:
+    ///
+    /// * rapids that would pass through the material become feed moves at the approach feed.
+    ///   The ball's links are planned against the part: the last rapid of a link stops a
+    ///   clearance above the entry along the tool axis, which may be inside the rest of a
+    ///   terrace or of the floor the table margin leaves. A rapid counts as through material
+    ///   when it would remove more than the stock run's allowance (tolerance × dexel spacing²,
+    ///   its model's skin). A straight one (the axis fixed) keeps its rapid up to the
+    ///   clearance before the ball would first touch the material the operation starts from,
+    ///   and is fed from there;
+    /// * with feed control, the cutting moves are slowed where they take more than the target
+    ///   force allows (the rest a roughing tool could not reach), and passes through air go
+    ///   at the machine's limit ([`crate::feed`]; a finishing tool is never sped up in cut).
+    pub fn take_off_ball_operation(
+        &mut self,
+        path: &mut Toolpath,
+        last: Option<&Move>,
+        how: &BallTakeOff,
+    ) -> TakenOff {
+        let before = self.stock.clone();
+        let body = crate::stock::cutter::CuttingBody::of(&how.ball.cutter);
+        let skin = how.tolerance * before.spacing() * before.spacing();
+        let moves: Vec<Move> = last
+            .into_iter()
+            .copied()
+            .chain(path.moves.iter().copied())
+            .collect();
+        let offset = usize::from(last.is_some());
+        let as_toolpath = Toolpath {
+            tool_id: how.ball.id,
+            moves,
+        };
+        let removed = self
+            .stock
+            .remove_cutting(&as_toolpath, &body, how.tolerance);
+        let feed_control = how.feed_control.map(|(model, cutter)| {
+            let (feeds, report) = control_feeds(&as_toolpath, &removed, &cutter, &model, skin);
+            for (m, feed) in path.moves.iter_mut().zip(&feeds[offset..]) {
+                m.feed = *feed;
+            }
+            report
+        });
+        let moves = &as_toolpath.moves;
+        let mut rapids_fed = 0;
+        let mut out = Vec::with_capacity(path.moves.len());
+        for (k, m) in path.moves.iter().enumerate() {
+            let mut m = *m;
+            let from = (k + offset).checked_sub(1).map(|j| moves[j]);
+            if m.kind == MoveKind::Rapid
+                && removed[k + offset] > skin
+                && let Some(from) = from
+            {
+                if let Some(split) =
+                    clear_until(&before, &body, &from, &m, how.clearance, how.tolerance)
+                {
+                    out.push(split);
+                }
+                m.kind = MoveKind::Approach;
+                m.feed = how.approach_feed;
+                rapids_fed += 1;
+            }
+            out.push(m);
+        }
+        path.moves = out;
+        TakenOff {
+            rapids_fed,
+            feed_control,
+        }
+    }
+}
+
+/// How [`RoughingContext::take_off_ball_operation`] treats a ball operation's moves.
+#[derive(Clone, Copy, Debug)]
+pub struct BallTakeOff<'a> {
+    pub ball: &'a ToolAssembly,
+    /// The feed of rapids made feed moves, mm/min.
+    pub approach_feed: f64,
+    /// How far before the material such a rapid stops being one, mm.
+    pub clearance: f64,
+    pub tolerance: f64,
+    /// Feed control (`[cutting]`): the model, and the ball as programmed.
+    pub feed_control: Option<(CuttingModel, FeedCutter)>,
+}
+
+/// What taking a ball operation off the planning stock changed.
+#[derive(Clone, Debug)]
+pub struct TakenOff {
+    /// Rapids made feed moves.
+    pub rapids_fed: usize,
+    pub feed_control: Option<FeedReport>,
 }
 
 /// The rapid part of a straight rapid `from → to` that the ball would drive into `stock`: the

@@ -29,6 +29,10 @@ pub struct PlanReport {
     /// material roughing leaves, made feed moves at the approach feed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rapids_fed_through_rest: Option<usize>,
+    /// After roughing, with `[cutting] feed_control`: what feed control made of each ball
+    /// operation's feeds (slowed where it meets the rest, at the limit in air).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ball_feed_control: Vec<BallFeedControl>,
     /// Poses, lengths, time, clearances and blocks are of the whole program (semi-finishing
     /// and finishing); the strategy and unreachable figures are of the finishing passes.
     pub poses: PoseCounts,
@@ -53,6 +57,13 @@ pub struct PlanReport {
     /// Milliseconds per stage; the only part of the outputs that changes between runs.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings_ms: Option<StageTimings>,
+}
+
+/// Feed control of one ball operation.
+#[derive(Clone, Debug, Serialize)]
+pub struct BallFeedControl {
+    pub operation: String,
+    pub feed_control: crate::feed::FeedReport,
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -124,6 +124,7 @@ pub(super) fn rough_with_tool(
             spindle_rpm,
             pass_feed: how.feeds.cut,
             rapid_feed: how.feeds.rapid,
+            speed_up: true,
         };
         let skin = how.tolerance * stock.spacing() * stock.spacing();
         let (feeds, report) = control_feeds(&layers.toolpath, &removed, &cutter, &model, skin);

@@ -9,9 +9,12 @@
 //! operation is re-verified against its shape and, independently, its ball centres are
 //! measured against the part itself.
 //!
-//! The shank, holder and table are checked against Sⱼ, which holds the part: an honest model of
-//! the material left by the operation before would be the previous, larger shape (or the raw
-//! stock), which this planner does not yet track.
+//! The shank, holder and table are checked against Sⱼ, which holds the part, and — after
+//! roughing from a blank — against the material the operations before actually left (the
+//! planning stock model, [`crate::collide::PartCollider::with_material`]): the rest under an
+//! overhang or in a corner no end mill reached is not inside any offset shape.
+
+use std::sync::Arc;
 
 use serde::Serialize;
 
@@ -22,6 +25,7 @@ use crate::error::{Error, Result};
 use crate::geom::{MoveKind, Toolpath};
 use crate::offset::OffsetShape;
 use crate::path::{self, FinishingOptions};
+use crate::stock::clearance::MaterialClearance;
 use crate::verify::verify;
 
 /// One semi-finishing operation in `report.json`: the shape it machined to and what the checks
@@ -69,6 +73,7 @@ pub fn semi_finish_operation(
     level: usize,
     shape: &OffsetShape,
     scallop_height: f64,
+    material: Option<Arc<MaterialClearance>>,
     advance: &(dyn Fn() + Sync),
 ) -> Result<SemiFinishPlan> {
     let tolerance = setup.finishing.tolerance;
@@ -86,6 +91,10 @@ pub fn semi_finish_operation(
             error,
         })?
         .with_table(setup.table);
+    let collider = match material {
+        Some(material) => collider.with_material(material),
+        None => collider,
+    };
     let rays = RayScene::new(&shape.mesh);
     let reachable = |axis: &crate::geom::Vector3| setup.reachable(axis);
     let finishing_ctx = setup.finishing_context(&collider, &rays, &reachable);

@@ -77,6 +77,9 @@ pub enum NoAxis {
     Collision,
     /// Every candidate brings the tool too close to the machine table.
     Table,
+    /// Candidates cleared the part, but the shank or holder would touch the material the
+    /// operations before left.
+    Material,
 }
 
 /// The preferred axis at a contact point (unit normal `normal`, feed direction `feed`).
@@ -118,6 +121,7 @@ pub fn axis_is_valid(
     };
     part.check_bodies(tool, &pose).map_err(|c| match c {
         Collision::Table => NoAxis::Table,
+        Collision::Material { .. } => NoAxis::Material,
         _ => NoAxis::Collision,
     })
 }
@@ -229,8 +233,12 @@ impl AxisChooser {
                         why = cheap;
                     }
                 }
-                Err(NoAxis::Collision) => {
-                    why = NoAxis::Collision;
+                Err(exact @ (NoAxis::Collision | NoAxis::Material)) => {
+                    // An axis that only the material blocks says more: the point opens up
+                    // once that material comes off.
+                    if why != NoAxis::Material {
+                        why = exact;
+                    }
                     exact_tests += 1;
                     if exact_tests >= self.options.max_exact_tests {
                         break;

@@ -93,6 +93,9 @@ pub enum Unreachable {
     /// The tool would come too close to the machine table for every candidate axis (the
     /// part's underside, which stands on the table).
     Table,
+    /// The shank or holder would touch the material the operations before left, for every
+    /// candidate axis that clears the part.
+    Material,
 }
 
 impl From<NoAxis> for Unreachable {
@@ -102,6 +105,7 @@ impl From<NoAxis> for Unreachable {
             NoAxis::Occluded => Unreachable::Occluded,
             NoAxis::Collision => Unreachable::Collision,
             NoAxis::Table => Unreachable::Table,
+            NoAxis::Material => Unreachable::Material,
         }
     }
 }

@@ -21,6 +21,7 @@
 //! The model's error is in the directions across the lines: a surface is known to within the
 //! spacing between lines, exactly along them.
 
+pub mod clearance;
 pub mod convex;
 pub mod cutter;
 pub mod replay;

@@ -99,7 +99,7 @@ impl Refusal {
         match collision {
             Collision::Gouge { .. } => Refusal::Gouge,
             Collision::Table => Refusal::Table,
-            Collision::Body { role } => match role {
+            Collision::Body { role } | Collision::Material { role } => match role {
                 BodyRole::Flutes => Refusal::Flutes,
                 BodyRole::Shank => Refusal::Shank,
                 BodyRole::Holder => Refusal::Holder,
