@@ -14,6 +14,8 @@ fn plan(c: &mut Criterion) {
     for scallop in [0.2, 0.05] {
         let mut job = job_file.clone();
         job.strategy.scallop_height = scallop;
+        // Finishing only, as this benchmark has always measured (the part taken as roughed).
+        job.stock.blank = None;
         g.bench_function(format!("scallop_{scallop}mm"), |b| {
             b.iter(|| job::plan(&raw, "impeller", "mm", &job, &Quiet).unwrap())
         });

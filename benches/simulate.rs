@@ -28,7 +28,9 @@ const MOVES: usize = 4000;
 fn finishing_program(c: &mut Criterion) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let raw = job::load_part(&root.join("data/impeller.glb"), "mm").unwrap();
-    let job = Job::default();
+    let mut job = Job::default();
+    // The finishing program alone (the part taken as roughed).
+    job.stock.blank = None;
     let plan = job::plan(&raw, "impeller", "mm", &job, &Quiet).unwrap();
     let finishing = plan.operations.last().unwrap().moves.clone();
     let program = Toolpath {

@@ -142,6 +142,8 @@ fn plan_writes_four_identical_outputs_for_any_thread_count() {
             job.to_str().unwrap(),
             "--threads",
             threads,
+            "--blank",
+            "none",
             "--no-timings",
             "--out",
             dir.to_str().unwrap(),

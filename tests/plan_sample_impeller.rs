@@ -16,6 +16,8 @@ use wavemill::job::{self, Job, Quiet};
 fn coarse_job() -> Job {
     let mut job = Job::load(&repo_file("data/impeller.toml")).expect("data/impeller.toml");
     job.strategy.scallop_height = 0.4;
+    // Finishing only: the part is taken as roughed (tests/plan_stock.rs roughs it).
+    job.stock.blank = None;
     job.strategy.max_step = 2.0;
     job
 }

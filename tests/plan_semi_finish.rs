@@ -12,6 +12,8 @@ use wavemill::job::{self, Job, Quiet};
 /// Few passes, a small hierarchy base: the checks do not depend on the density.
 fn semi_job() -> Job {
     let mut job = Job::default();
+    // Semi-finishing and finishing only: the part is taken as roughed.
+    job.stock.blank = None;
     job.strategy.scallop_height = 0.4;
     job.strategy.max_step = 2.0;
     job.strategy.semi_finish_allowances = vec![0.5, 0.2];

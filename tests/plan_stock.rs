@@ -1,10 +1,12 @@
 //! `plan` with a `[stock]` blank: the planned operations run on the in-process stock.
 //!
-//! Two cases on the bundled sample impeller (a coarse job, so a debug build stays quick):
+//! Three cases on the bundled sample impeller (a coarse job, so a debug build stays quick):
 //! a blank that is the part itself, which a finishing program within tolerance leaves as it
-//! is (nothing removed beyond the tolerance's skin, no rest, no collision), and a box over the
+//! is (nothing removed beyond the tolerance's skin, no rest, no collision); a box over the
 //! whole part, through which the same program rapids and drags its shank and holder, which
-//! must fail the plan with only the report written.
+//! must fail the plan with only the report written; and the default bar stock, roughed,
+//! rest-roughed and finished with the ball's shank and holder kept off the material the
+//! roughing left.
 
 mod common;
 
@@ -128,4 +130,47 @@ fn a_finishing_program_run_on_a_raw_box_fails_with_its_collisions() {
     let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
     assert!(report.contains("\"collision_count\""));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The job's default blank, the bar stock: two end mills rough it, and the ball finishes with
+/// its axes chosen clear of the material they leave, so the stock run (the independent check)
+/// finds no shank or holder in material, no gouge and no rapid through material; the points
+/// only that material blocks are reported, and so is the rest left on the part.
+#[test]
+fn the_bar_stock_is_roughed_and_finished_without_touching_the_rest() {
+    let mut job = coarse_job("cylinder");
+    job.stock.blank = Job::default().stock.blank;
+    job.stock.resolution = Some(1.0);
+    let out = plan(&job);
+    assert_eq!(out.verification_failure, None);
+    let stock = out.report.stock.as_ref().expect("a stock run");
+    assert_eq!(stock.blank, "cylinder");
+    let names: Vec<&str> = stock.operations.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["rough to 0.5 mm", "rest-rough to 0.5 mm", "finish"]);
+    for op in &stock.operations {
+        assert_eq!(op.collision_count, 0, "{}", op.name);
+        assert_eq!(op.rapids_through_material, 0, "{}", op.name);
+        assert_eq!(op.gouge.count, 0, "{}", op.name);
+        assert!(op.removed_volume_mm3 > 0.0, "{}", op.name);
+    }
+    let material = out
+        .report
+        .unreachable
+        .by_reason
+        .get("material")
+        .copied()
+        .unwrap_or(0);
+    assert!(material > 0, "{:?}", out.report.unreachable.by_reason);
+    let finish = stock.operations.last().unwrap();
+    assert!(
+        finish.rest.max_mm > 0.0 && finish.rest.mean_mm < 1.0,
+        "{:?}",
+        finish.rest
+    );
+    let changes: Vec<&str> = out
+        .gcode
+        .lines()
+        .filter(|l| l.starts_with('T') && l.ends_with(" M6"))
+        .collect();
+    assert_eq!(changes, ["T2 M6", "T7 M6", "T1 M6"]);
 }

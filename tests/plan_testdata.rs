@@ -17,6 +17,8 @@ fn real_blower_posted_program_is_gouge_free_and_its_passes_move_forward() {
     let path = dir.join("meshes/impeller_blower_9blade__necro-nemesis_aero2205.stl");
     // `--tool ball:3`, coarser than a finishing scallop so that a debug build stays quick.
     let mut job = Job::default();
+    // Finishing only: the part is taken as roughed.
+    job.stock.blank = None;
     job.tool.diameter = 3.0;
     job.tool.shank_diameter = 3.0;
     job.strategy.scallop_height = 0.5;

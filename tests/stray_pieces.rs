@@ -52,6 +52,8 @@ fn a_block_with_a_far_stray_triangle_is_planned_and_the_triangle_reported() {
         warnings: Vec::new(),
     };
     let mut job = Job::default();
+    // Finishing only: the part is taken as roughed.
+    job.stock.blank = None;
     job.strategy.scallop_height = 0.5;
     job.strategy.max_step = 3.0;
     let out = job::plan(&raw, "block+stray", "mm", &job, &Quiet).unwrap();

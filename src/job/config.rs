@@ -61,27 +61,42 @@ impl Default for LimitsSection {
     }
 }
 
-/// `[stock]`: the blank the job starts from. With a `blank`, every operation's moves are run
-/// on the in-process stock (a tri-dexel model, [`crate::stock`]) in order, and a shank, neck or
-/// holder touching material, a rapid through it or a gouge fails the plan; without one the part
-/// is taken as already roughed and nothing is simulated.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// `[stock]`: the blank the job starts from. By default the part's bar stock (`cylinder`):
+/// it is roughed first, and every operation's moves are run on the in-process stock (a
+/// tri-dexel model, [`crate::stock`]) in order; a shank, neck or holder touching material, a
+/// rapid through it or a gouge fails the plan. `blank = "none"` takes the part as already
+/// roughed: nothing is roughed or simulated.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct StockSection {
-    /// `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1` (about the vertical line through the part's
-    /// box centre), `offset:M` (the part grown by M) or `mesh:FILE` (relative to the job
-    /// file), mm, in the part's frame as planned.
+    /// `cylinder` (about the part's vertical axis, holding it with 2 mm to spare, the
+    /// default), `box:X0,Y0,Z0,X1,Y1,Z1`, `cylinder:R,Z0,Z1` (about the vertical line through
+    /// the part's box centre), `offset:M` (the part grown by M) or `mesh:FILE` (relative to the
+    /// job file), mm, in the part's frame as planned; `none` (or no value) for no blank.
     pub blank: Option<String>,
     /// Distance between dexel lines, mm; leave out for the part's box diagonal / 400, within
     /// 0.05 to 1 mm.
     pub resolution: Option<f64>,
 }
 
+/// What `blank = "none"` says: the part is already roughed.
+pub const NO_BLANK: &str = "none";
+
+impl Default for StockSection {
+    fn default() -> Self {
+        Self {
+            blank: Some("cylinder".into()),
+            resolution: None,
+        }
+    }
+}
+
 impl StockSection {
-    /// The blank, read; `None` without one.
+    /// The blank, read; `None` for `none` (or no value): the part is taken as roughed.
     pub fn blank_spec(&self) -> Result<Option<super::blank::BlankSpec>, JobError> {
         self.blank
             .as_deref()
+            .filter(|text| text.trim() != NO_BLANK)
             .map(|text| super::blank::BlankSpec::parse(text).map_err(|e| invalid("stock.blank", e)))
             .transpose()
     }
@@ -1018,6 +1033,29 @@ mod tests {
             Some(super::super::blank::BlankSpec::Mesh(dir.join("blank.stl")))
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Without `[stock]` the blank is the part's bar stock; `none` takes the part as roughed,
+    /// and then no roughing is listed.
+    #[test]
+    fn the_default_blank_is_the_bar_stock_and_none_takes_the_part_as_roughed() {
+        let job = Job::default();
+        assert_eq!(
+            job.stock.blank_spec().unwrap(),
+            Some(super::super::blank::BlankSpec::EnclosingCylinder {
+                margin: super::super::blank::ENCLOSING_MARGIN
+            })
+        );
+        assert!(job.operations().unwrap()[0].kind.is_roughing());
+        let roughed = Job::from_toml("[stock]\nblank = \"none\"\n", "j.toml").unwrap();
+        assert_eq!(roughed.stock.blank_spec().unwrap(), None);
+        assert!(
+            roughed
+                .operations()
+                .unwrap()
+                .iter()
+                .all(|op| !op.kind.is_roughing())
+        );
     }
 
     #[test]

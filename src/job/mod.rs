@@ -40,7 +40,7 @@ pub use access::{
 pub use blank::BlankSpec;
 pub use budget::ToleranceBudget;
 pub use config::{
-    CuttingSection, FeedSection, Job, JobError, LimitsSection, MachineSection, Operation,
+    CuttingSection, FeedSection, Job, JobError, LimitsSection, MachineSection, NO_BLANK, Operation,
     OperationKind, OperationSection, PartSection, RoughingSection, SafetySection, StockSection,
     StrategySection, ToolSection, unit_direction,
 };

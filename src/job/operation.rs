@@ -40,11 +40,13 @@ mod tests {
             .map_err(|e| e.to_string())
     }
 
-    /// Today's keys still mean one semi-finishing operation per allowance, then finishing.
+    /// Today's keys still mean one semi-finishing operation per allowance, then finishing, on
+    /// a part taken as roughed.
     #[test]
     fn a_job_without_operation_tables_reads_as_before() {
-        let ops = job("[strategy]\nsemi_finish_allowances = [1.0, 0.3]\nscallop_height = 0.02\n")
-            .expect("job");
+        let ops = job("[stock]\nblank = \"none\"\n\
+             [strategy]\nsemi_finish_allowances = [1.0, 0.3]\nscallop_height = 0.02\n")
+        .expect("job");
         let kinds: Vec<(OperationKind, f64, f64)> = ops
             .iter()
             .map(|o| (o.kind, o.stock_to_leave, o.scallop_height))
@@ -57,20 +59,27 @@ mod tests {
                 (OperationKind::Finish, 0.0, 0.02),
             ]
         );
-        assert_eq!(job("").expect("defaults").len(), 1);
+        assert_eq!(
+            job("[stock]\nblank = \"none\"\n").expect("roughed").len(),
+            1
+        );
+        // By default the bar stock is roughed first: rough, one rest tool, finish.
+        assert_eq!(job("").expect("defaults").len(), 3);
     }
 
     /// The same plan written as `[[operation]]` tables resolves to the same operations.
     #[test]
     fn operation_tables_resolve_to_the_same_operations() {
-        let listed = job("[strategy]\nscallop_height = 0.02\n\
+        let listed = job(
+            "[stock]\nblank = \"none\"\n[strategy]\nscallop_height = 0.02\n\
              [[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 1.0\n\
              [[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.3\n\
-             [[operation]]\nkind = \"finish\"\n")
+             [[operation]]\nkind = \"finish\"\n",
+        )
         .expect("job");
-        let legacy =
-            job("[strategy]\nsemi_finish_allowances = [1.0, 0.3]\nscallop_height = 0.02\n")
-                .expect("job");
+        let legacy = job("[stock]\nblank = \"none\"\n\
+                 [strategy]\nsemi_finish_allowances = [1.0, 0.3]\nscallop_height = 0.02\n")
+        .expect("job");
         assert_eq!(listed, legacy);
     }
 
@@ -178,7 +187,8 @@ mod tests {
 
     #[test]
     fn the_stock_after_an_operation_is_what_it_leaves() {
-        let ops = job("[strategy]\nsemi_finish_allowances = [0.4]\n").expect("job");
+        let ops = job("[stock]\nblank = \"none\"\n[strategy]\nsemi_finish_allowances = [0.4]\n")
+            .expect("job");
         let mut stock = InProcessStock::Blank;
         let mut seen = Vec::new();
         for op in &ops {

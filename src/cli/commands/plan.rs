@@ -33,6 +33,11 @@ pub struct PlanArgs {
     /// every move as the control interpolates it; overrides the job file.
     #[arg(long, value_parser = positive)]
     pub tolerance: Option<f64>,
+    /// The blank: `cylinder` (the part's bar stock, the default), `box:X0,Y0,Z0,X1,Y1,Z1`,
+    /// `cylinder:R,Z0,Z1`, `offset:M`, `mesh:FILE`, or `none` for a part already roughed (only
+    /// the ball operations, nothing simulated); overrides the job file's [stock] blank.
+    #[arg(long)]
+    pub blank: Option<String>,
     /// Worker threads, 1 to 256 (default: all cores). Outputs are identical for any count.
     #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
@@ -74,6 +79,10 @@ pub fn run(args: &PlanArgs) -> Result<()> {
     if let Some(t) = args.tolerance {
         job.strategy.tolerance = t;
         flags.push(("strategy.tolerance", "--tolerance"));
+    }
+    if let Some(blank) = &args.blank {
+        job.stock.blank = Some(blank.clone());
+        flags.push(("stock.blank", "--blank"));
     }
     if let Some(n) = args.max_drive_points {
         job.limits.max_drive_points = n;
