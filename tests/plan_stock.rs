@@ -135,7 +135,8 @@ fn a_finishing_program_run_on_a_raw_box_fails_with_its_collisions() {
 /// The job's default blank, the bar stock: two end mills rough it, and the ball finishes with
 /// its axes chosen clear of the material they leave, so the stock run (the independent check)
 /// finds no shank or holder in material, no gouge and no rapid through material; the points
-/// only that material blocks are reported, and so is the rest left on the part.
+/// only that material blocks are reported, and so is the rest left on the part; feed control
+/// slows the ball where it cuts into the rest.
 #[test]
 fn the_bar_stock_is_roughed_and_finished_without_touching_the_rest() {
     let mut job = coarse_job("cylinder");
@@ -166,6 +167,25 @@ fn the_bar_stock_is_roughed_and_finished_without_touching_the_rest() {
         finish.rest.max_mm > 0.0 && finish.rest.mean_mm < 1.0,
         "{:?}",
         finish.rest
+    );
+    // Feed control of the ball: where it meets the rest it is slowed to the target force, and
+    // no cutting move is sped up beyond its programmed feed (only air goes faster).
+    let [ball] = out.report.ball_feed_control.as_slice() else {
+        panic!("one ball operation: {:?}", out.report.ball_feed_control);
+    };
+    assert_eq!(ball.operation, "finish");
+    let control = &ball.feed_control;
+    assert!(control.moves_slower > 0);
+    assert_eq!(control.moves_faster, control.moves_in_air);
+    assert!(control.force_before.max > control.target_force_n);
+    assert!(control.force_after.max <= control.target_force_n * (1.0 + 1e-9));
+    let finish_moves = out.operations.last().unwrap().moves.clone();
+    let (cut_feed, max_feed) = (job.feeds.cut, job.cutting.max_feed);
+    assert!(
+        out.toolpath.moves[finish_moves]
+            .iter()
+            .filter(|m| m.kind == wavemill::geom::MoveKind::Cut)
+            .all(|m| m.feed <= cut_feed || m.feed == max_feed)
     );
     let changes: Vec<&str> = out
         .gcode

@@ -35,7 +35,7 @@ pub struct PlanArgs {
     pub tolerance: Option<f64>,
     /// The blank: `cylinder` (the part's bar stock, the default), `box:X0,Y0,Z0,X1,Y1,Z1`,
     /// `cylinder:R,Z0,Z1`, `offset:M`, `mesh:FILE`, or `none` for a part already roughed (only
-    /// the ball operations, nothing simulated); overrides the job file's [stock] blank.
+    /// the ball operations, nothing simulated); overrides the job file's `[stock]` blank.
     #[arg(long)]
     pub blank: Option<String>,
     /// Worker threads, 1 to 256 (default: all cores). Outputs are identical for any count.
