@@ -22,6 +22,7 @@ mod output;
 mod pipeline;
 mod plan_roughing;
 mod preview;
+mod rapids;
 mod render;
 mod report;
 mod rough;

@@ -25,6 +25,7 @@ use super::offsets::stock_shapes;
 use super::operation::InProcessStock;
 use super::plan_roughing::{BallTakeOff, RoughingContext, check_posted_roughing, plan_roughing};
 use super::preview::preview;
+use super::rapids::split_turning_rapids;
 use super::report::*;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
@@ -40,6 +41,11 @@ use crate::stock::clearance::MaterialClearance;
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
+
+/// Motion of each rotary axis in one step of a split rapid, degrees: the axis turns at most
+/// twice that, and at 300 mm from the rotary axes a step's chord keeps within 0.2 mm of the
+/// path the control takes (rapids run at the safe distance, 20 mm beyond the part's reach).
+const MAX_RAPID_TURN_DEG: f64 = 2.0;
 
 /// Everything a plan produces, in memory.
 pub struct PlanOutput {
@@ -390,6 +396,7 @@ pub fn plan(
     let mut rapids_fed: Option<usize> = None;
     let mut last_ball_move: Option<Move> = None;
     let mut ball_feed_control = Vec::new();
+    let has_blank = job.stock.blank_spec()?.is_some();
     for operation in &operations {
         if operation.kind.is_roughing() {
             let t = Instant::now();
@@ -453,6 +460,15 @@ pub fn plan(
             plan_operation(&setup, operation, target, &stock, material, &advance)?;
         if operation.kind == OperationKind::Finish {
             timings.finishing_passes += ms(t);
+        }
+        // With a blank, every move is also read as a straight sweep through the stock: rapids
+        // that turn the axis go there as the control moves them (super::rapids).
+        if has_blank {
+            split_turning_rapids(
+                &mut operation_planned.toolpath,
+                &setup.kinematics,
+                MAX_RAPID_TURN_DEG,
+            );
         }
         // After roughing, each ball operation comes off the planning stock before the next is
         // planned against it; rapids its links drive into the rest become feed moves.

@@ -143,13 +143,42 @@ pub(crate) fn summarise(r: &job::PlanReport, out: &Path) {
         r.clearance.min_holder_clearance,
         r.clearance.search_distance
     );
+    let reasons: Vec<String> = r
+        .unreachable
+        .by_reason
+        .iter()
+        .map(|(why, n)| format!("{why} {n}"))
+        .collect();
     say!(
-        "  unreachable      {} of {} drive points",
+        "  unreachable      {} of {} drive points{}",
         r.unreachable.count,
-        r.strategy.drive_points
+        r.strategy.drive_points,
+        if reasons.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", reasons.join(", "))
+        }
     );
-    say!(
-        "  outputs          {}/{{job.nc, cl.csv, report.json, paths.glb}}",
-        out.display()
-    );
+    let mut outputs = "job.nc, cl.csv, report.json, paths.glb".to_string();
+    if let Some(stock) = &r.stock {
+        say!(
+            "  stock            {} blank, {:.0} mm³ (dexels {:.3} mm apart)",
+            stock.blank,
+            stock.blank_volume_mm3,
+            stock.resolution_mm
+        );
+        for op in &stock.operations {
+            say!(
+                "    {:<22} removed {:.0} mm³, rest on the part mean {:.2} / max {:.2} mm",
+                op.name,
+                op.removed_volume_mm3,
+                op.rest.mean_mm,
+                op.rest.max_mm
+            );
+        }
+        if !stock.operations.is_empty() {
+            outputs.push_str(&format!(", stock-1..{}.glb", stock.operations.len()));
+        }
+    }
+    say!("  outputs          {}/{{{outputs}}}", out.display());
 }
