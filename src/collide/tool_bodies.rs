@@ -117,21 +117,6 @@ impl PartCollider {
         }
     }
 
-    /// Whether `geometry` (a body of the tool, grown as checked) at `pose` is clear of the
-    /// material; always without material.
-    fn clear_of_material(&self, geometry: &Revolved, pose: &ToolPose) -> bool {
-        self.material.as_ref().is_none_or(|m| {
-            m.frustum_is_clear(&Frustum {
-                base: pose.tip,
-                axis: pose.axis.into_inner(),
-                from: geometry.from,
-                to: geometry.to,
-                radius_from: geometry.radius_from,
-                radius_to: geometry.radius_to,
-            })
-        })
-    }
-
     /// Adds the table the part stands on: every tool check then also keeps the whole tool
     /// `table.margin` above it.
     pub fn with_table(mut self, table: Table) -> Self {
@@ -257,12 +242,20 @@ impl PartCollider {
         pose: &ToolPose,
         sweep: f64,
     ) -> Result<(), Collision> {
-        if self.material.is_none() {
+        let Some(material) = &self.material else {
             return Ok(());
-        }
+        };
         for body in tool.bodies.iter().filter(|b| b.role != BodyRole::Flutes) {
             let grown = body.geometry.grown(body.check_grow).swept(sweep);
-            if !self.clear_of_material(&grown, pose) {
+            let clear = material.frustum_is_clear(&Frustum {
+                base: pose.tip,
+                axis: pose.axis.into_inner(),
+                from: grown.from,
+                to: grown.to,
+                radius_from: grown.radius_from,
+                radius_to: grown.radius_to,
+            });
+            if !clear {
                 return Err(Collision::Material { role: body.role });
             }
         }

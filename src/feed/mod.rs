@@ -290,12 +290,9 @@ mod tests {
         assert!((model.force(50.0, 2000.0, 10.0, 8000.0) - 2.0 * nominal).abs() < 1e-9);
     }
 
-    /// Five 10 mm moves: a rapid, a nominal cut, a slot, a skim, air, and a ramp in a slot.
-    /// The slot halves its feed, the skim (a tenth of the area) goes to the machine's limit,
-    /// air to the limit, the ramp halves too but is never sped up; every cutting move that
-    /// is not at a limit then pulls exactly the target.
-    #[test]
-    fn feeds_hold_the_target_within_the_limits() {
+    /// A rapid, then five 10 mm moves: a nominal cut, a slot, a skim, air, and a ramp in a
+    /// slot, with the volume each removes.
+    fn five_moves() -> (Toolpath, [f64; 7]) {
         let p = path(&[
             (0.0, MoveKind::Rapid, 15000.0),
             (10.0, MoveKind::Rapid, 15000.0),
@@ -306,7 +303,16 @@ mod tests {
             (60.0, MoveKind::Cut, 800.0),
         ]);
         // Volumes over 10 mm: 25 mm², 50 mm², 2.5 mm², air, 50 mm².
-        let removed = [0.0, 0.0, 250.0, 500.0, 25.0, 0.0, 500.0];
+        (p, [0.0, 0.0, 250.0, 500.0, 25.0, 0.0, 500.0])
+    }
+
+    /// Five 10 mm moves: a rapid, a nominal cut, a slot, a skim, air, and a ramp in a slot.
+    /// The slot halves its feed, the skim (a tenth of the area) goes to the machine's limit,
+    /// air to the limit, the ramp halves too but is never sped up; every cutting move that
+    /// is not at a limit then pulls exactly the target.
+    #[test]
+    fn feeds_hold_the_target_within_the_limits() {
+        let (p, removed) = five_moves();
         let model = CuttingModel::default();
         let (feeds, r) = control_feeds(&p, &removed, &CUTTER, &model, 1e-6);
         assert_eq!(feeds[1], 15000.0);
@@ -330,16 +336,7 @@ mod tests {
     /// skim keeps its programmed feed (no faster for a light cut), air still goes at the limit.
     #[test]
     fn a_finishing_tool_is_only_slowed_where_it_cuts() {
-        let p = path(&[
-            (0.0, MoveKind::Rapid, 15000.0),
-            (10.0, MoveKind::Rapid, 15000.0),
-            (20.0, MoveKind::Cut, 2000.0),
-            (30.0, MoveKind::Cut, 2000.0),
-            (40.0, MoveKind::Cut, 2000.0),
-            (50.0, MoveKind::Cut, 2000.0),
-            (60.0, MoveKind::Cut, 800.0),
-        ]);
-        let removed = [0.0, 0.0, 250.0, 500.0, 25.0, 0.0, 500.0];
+        let (p, removed) = five_moves();
         let finishing = Cutter {
             speed_up: false,
             ..CUTTER

@@ -397,6 +397,23 @@ pub fn plan(
     let mut last_ball_move: Option<Move> = None;
     let mut ball_feed_control = Vec::new();
     let has_blank = job.stock.blank_spec()?.is_some();
+    // How every ball operation comes off the planning stock after roughing.
+    let ball_take_off = BallTakeOff {
+        ball: &setup.tool,
+        approach_feed: job.feeds.approach,
+        clearance: job.feeds.clearance,
+        tolerance: job.strategy.tolerance,
+        feed_control: job.cutting.model().map(|model| {
+            let cutter = crate::feed::Cutter {
+                diameter: job.tool.diameter,
+                spindle_rpm: f64::from(job.tool.spindle_rpm),
+                pass_feed: job.feeds.cut,
+                rapid_feed: job.machine.rapid_feed,
+                speed_up: false,
+            };
+            (model, cutter)
+        }),
+    };
     for operation in &operations {
         if operation.kind.is_roughing() {
             let t = Instant::now();
@@ -474,26 +491,10 @@ pub fn plan(
         // planned against it; rapids its links drive into the rest become feed moves.
         if let Some(context) = roughing_context.as_mut() {
             let t = Instant::now();
-            let how = BallTakeOff {
-                ball: &setup.tool,
-                approach_feed: job.feeds.approach,
-                clearance: job.feeds.clearance,
-                tolerance: job.strategy.tolerance,
-                feed_control: job.cutting.model().map(|model| {
-                    let cutter = crate::feed::Cutter {
-                        diameter: job.tool.diameter,
-                        spindle_rpm: f64::from(job.tool.spindle_rpm),
-                        pass_feed: job.feeds.cut,
-                        rapid_feed: job.machine.rapid_feed,
-                        speed_up: false,
-                    };
-                    (model, cutter)
-                }),
-            };
             let taken = context.take_off_ball_operation(
                 &mut operation_planned.toolpath,
                 last_ball_move.as_ref(),
-                &how,
+                &ball_take_off,
             );
             *rapids_fed.get_or_insert(0) += taken.rapids_fed;
             if let Some(feed_control) = taken.feed_control {
