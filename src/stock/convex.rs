@@ -108,13 +108,15 @@ impl HullOfTwo {
         let epsilon = 1e-10 * scale;
         let mut lambda = 0.0;
         let mut x = *origin;
-        // Support points kept (the simplex is x − p for each).
-        let mut points: Vec<Point3> = Vec::with_capacity(4);
+        // Support points kept (the simplex is x − p for each); on the stack, as this is the
+        // innermost loop of every removal.
+        let mut points = [Point3::origin(); 4];
+        let mut count = 0;
         let mut v = x - self.support(&Vector3::x());
         for _ in 0..100 {
             // Met when v is round-off against the simplex's size (van den Bergen's relative
             // test; 1e-8 of it leaves λ good to well under a µm at part sizes).
-            let size = points
+            let size = points[..count]
                 .iter()
                 .map(|p| (x - p).norm_squared())
                 .fold(0.0, f64::max);
@@ -134,15 +136,24 @@ impl HullOfTwo {
                 }
                 x = origin + lambda * direction;
             }
-            if !points
-                .iter()
-                .any(|p| (p - w).norm_squared() <= epsilon * epsilon)
+            if count < 4
+                && !points[..count]
+                    .iter()
+                    .any(|p| (p - w).norm_squared() <= epsilon * epsilon)
             {
-                points.push(w);
+                points[count] = w;
+                count += 1;
             }
-            let simplex: Vec<Vector3> = points.iter().map(|p| x - p).collect();
-            let (closest, keep) = closest_to_origin(&simplex);
-            points = keep.iter().map(|&i| points[i]).collect();
+            let mut simplex = [Vector3::zeros(); 4];
+            for (s, p) in simplex.iter_mut().zip(&points[..count]) {
+                *s = x - p;
+            }
+            let (closest, keep) = closest_to_origin(&simplex[..count]);
+            let kept = points;
+            for (slot, &i) in points.iter_mut().zip(keep.indices()) {
+                *slot = kept[i];
+            }
+            count = keep.len;
             v = closest;
         }
         // Not converged in 100 steps: the ray grazes the solid; it meets it if it is within
@@ -177,66 +188,88 @@ impl LineInterval for HullOfTwo {
     }
 }
 
+/// Indices of up to four simplex points.
+#[derive(Clone, Copy, Debug)]
+struct Keep {
+    index: [usize; 4],
+    len: usize,
+}
+
+impl Keep {
+    fn of(indices: &[usize]) -> Keep {
+        let mut index = [0; 4];
+        index[..indices.len()].copy_from_slice(indices);
+        Keep {
+            index,
+            len: indices.len(),
+        }
+    }
+
+    fn indices(&self) -> &[usize] {
+        &self.index[..self.len]
+    }
+}
+
 /// The point of the hull of `simplex` (1 to 4 points) nearest the origin, and the indices of
 /// the fewest points whose hull holds it.
-fn closest_to_origin(simplex: &[Vector3]) -> (Vector3, Vec<usize>) {
+fn closest_to_origin(simplex: &[Vector3]) -> (Vector3, Keep) {
     match simplex.len() {
-        1 => (simplex[0], vec![0]),
+        1 => (simplex[0], Keep::of(&[0])),
         2 => segment(simplex, 0, 1),
         3 => triangle(simplex, 0, 1, 2),
         _ => tetrahedron(simplex),
     }
 }
 
-fn segment(s: &[Vector3], i: usize, j: usize) -> (Vector3, Vec<usize>) {
+fn segment(s: &[Vector3], i: usize, j: usize) -> (Vector3, Keep) {
     let (a, b) = (s[i], s[j]);
     let ab = b - a;
     let denominator = ab.norm_squared();
     if denominator <= 0.0 {
-        return (a, vec![i]);
+        return (a, Keep::of(&[i]));
     }
     let t = -a.dot(&ab) / denominator;
     if t <= 0.0 {
-        (a, vec![i])
+        (a, Keep::of(&[i]))
     } else if t >= 1.0 {
-        (b, vec![j])
+        (b, Keep::of(&[j]))
     } else {
-        (a + t * ab, vec![i, j])
+        (a + t * ab, Keep::of(&[i, j]))
     }
 }
 
 /// Ericson's closest point on a triangle (Real-Time Collision Detection §5.1.5), to the origin.
-fn triangle(s: &[Vector3], i: usize, j: usize, k: usize) -> (Vector3, Vec<usize>) {
+fn triangle(s: &[Vector3], i: usize, j: usize, k: usize) -> (Vector3, Keep) {
     let (a, b, c) = (s[i], s[j], s[k]);
     let (ab, ac, ap) = (b - a, c - a, -a);
     let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
     if d1 <= 0.0 && d2 <= 0.0 {
-        return (a, vec![i]);
+        return (a, Keep::of(&[i]));
     }
     let bp = -b;
     let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
     if d3 >= 0.0 && d4 <= d3 {
-        return (b, vec![j]);
+        return (b, Keep::of(&[j]));
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
-        return (a + v * ab, vec![i, j]);
+        return (a + v * ab, Keep::of(&[i, j]));
     }
     let cp = -c;
     let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
     if d6 >= 0.0 && d5 <= d6 {
-        return (c, vec![k]);
+        return (c, Keep::of(&[k]));
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let w = d2 / (d2 - d6);
-        return (a + w * ac, vec![i, k]);
+        return (a + w * ac, Keep::of(&[i, k]));
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (b + w * (c - b), vec![j, k]);
+        return (b + w * (c - b), Keep::of(&[j, k]));
     }
     let denominator = va + vb + vc;
     if denominator.abs() <= 1e-300 {
@@ -244,18 +277,20 @@ fn triangle(s: &[Vector3], i: usize, j: usize, k: usize) -> (Vector3, Vec<usize>
         return [segment(s, i, j), segment(s, j, k), segment(s, i, k)]
             .into_iter()
             .min_by(|x, y| x.0.norm_squared().total_cmp(&y.0.norm_squared()))
-            .unwrap_or((a, vec![i]));
+            .unwrap_or((a, Keep::of(&[i])));
     }
     let (v, w) = (vb / denominator, vc / denominator);
-    (a + v * ab + w * ac, vec![i, j, k])
+    (a + v * ab + w * ac, Keep::of(&[i, j, k]))
 }
 
-fn tetrahedron(s: &[Vector3]) -> (Vector3, Vec<usize>) {
+fn tetrahedron(s: &[Vector3]) -> (Vector3, Keep) {
     let faces = [(0, 1, 2, 3), (0, 1, 3, 2), (0, 2, 3, 1), (1, 2, 3, 0)];
     let scale = s
         .iter()
-        .flat_map(|p| s.iter().map(move |q| (p - q).norm()))
-        .fold(0.0, f64::max);
+        .enumerate()
+        .flat_map(|(i, p)| s[i + 1..].iter().map(move |q| (p - q).norm_squared()))
+        .fold(0.0, f64::max)
+        .sqrt();
     let volume6 = (s[1] - s[0]).cross(&(s[2] - s[0])).dot(&(s[3] - s[0]));
     if volume6.abs() <= 1e-12 * scale * scale * scale {
         // Flat: the best of its faces.
@@ -263,9 +298,9 @@ fn tetrahedron(s: &[Vector3]) -> (Vector3, Vec<usize>) {
             .iter()
             .map(|&(i, j, k, _)| triangle(s, i, j, k))
             .min_by(|x, y| x.0.norm_squared().total_cmp(&y.0.norm_squared()))
-            .unwrap_or((s[0], vec![0]));
+            .unwrap_or((s[0], Keep::of(&[0])));
     }
-    let mut best: Option<(Vector3, Vec<usize>)> = None;
+    let mut best: Option<(Vector3, Keep)> = None;
     let mut inside = true;
     for (i, j, k, opposite) in faces {
         let normal = (s[j] - s[i]).cross(&(s[k] - s[i]));
@@ -284,9 +319,9 @@ fn tetrahedron(s: &[Vector3]) -> (Vector3, Vec<usize>) {
         }
     }
     if inside {
-        return (Vector3::zeros(), vec![0, 1, 2, 3]);
+        return (Vector3::zeros(), Keep::of(&[0, 1, 2, 3]));
     }
-    best.unwrap_or((s[0], vec![0]))
+    best.unwrap_or((s[0], Keep::of(&[0])))
 }
 
 #[cfg(test)]

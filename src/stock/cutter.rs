@@ -21,6 +21,7 @@
 //! [`Stock::remove`]: super::Stock::remove
 
 use super::convex::{HullOfTwo, RevolvedBody};
+use super::slide::Slide;
 use super::sweep::{Capsule, Clipped, LineInterval, SphereSweptHull};
 use crate::geom::{Aabb, Point3, ToolPose, angle_between, slerp};
 
@@ -281,6 +282,11 @@ impl RevolvedCutter {
             axis: nalgebra::Unit::new_normalize(slerp(&k0, &k1, t)),
         };
         let mut previous = self.at(from);
+        if steps == 1
+            && let Some(slide) = Slide::of(&previous, &self.at(to))
+        {
+            return vec![SweptSolid::Slide(slide)];
+        }
         (1..=steps)
             .map(|s| {
                 let next = self.at(&pose_at(s as f64 / steps as f64));
@@ -347,6 +353,9 @@ pub enum SweptSolid {
     Flutes(Clipped<SphereSweptHull>),
     /// Any cutter's body over a step: the hull of its two end positions.
     Hull(HullOfTwo),
+    /// A flat or bull-nose body moved square to its unturned axis: the same hull, with
+    /// closed forms on the lines along and across the axis.
+    Slide(Slide),
 }
 
 impl LineInterval for SweptSolid {
@@ -355,6 +364,7 @@ impl LineInterval for SweptSolid {
             SweptSolid::Ball(c) => c.bounds(),
             SweptSolid::Flutes(f) => f.bounds(),
             SweptSolid::Hull(h) => h.bounds(),
+            SweptSolid::Slide(s) => s.bounds(),
         }
     }
 
@@ -363,6 +373,7 @@ impl LineInterval for SweptSolid {
             SweptSolid::Ball(c) => c.line_interval(axis, p),
             SweptSolid::Flutes(f) => f.line_interval(axis, p),
             SweptSolid::Hull(h) => h.line_interval(axis, p),
+            SweptSolid::Slide(s) => s.line_interval(axis, p),
         }
     }
 
@@ -371,6 +382,7 @@ impl LineInterval for SweptSolid {
             SweptSolid::Ball(c) => c.row_range(axis, across, p),
             SweptSolid::Flutes(f) => f.row_range(axis, across, p),
             SweptSolid::Hull(h) => h.row_range(axis, across, p),
+            SweptSolid::Slide(s) => s.row_range(axis, across, p),
         }
     }
 
@@ -379,6 +391,7 @@ impl LineInterval for SweptSolid {
             SweptSolid::Ball(c) => c.range_over(axis, lo, hi),
             SweptSolid::Flutes(f) => f.range_over(axis, lo, hi),
             SweptSolid::Hull(h) => h.range_over(axis, lo, hi),
+            SweptSolid::Slide(s) => s.range_over(axis, lo, hi),
         }
     }
 }

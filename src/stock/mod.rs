@@ -27,6 +27,7 @@ pub mod cutter;
 pub mod replay;
 pub mod rest;
 pub mod simulate;
+pub mod slide;
 pub mod spans;
 pub mod surface;
 pub mod sweep;

@@ -220,7 +220,10 @@ impl<'a> Rows<'a> {
     }
 
     /// This stripe's rows with `j` in `range`: `(j, m)` pairs.
-    fn rows_in(&self, range: std::ops::Range<usize>) -> impl Iterator<Item = (usize, usize)> {
+    fn rows_in(
+        &self,
+        range: std::ops::Range<usize>,
+    ) -> impl Iterator<Item = (usize, usize)> + use<> {
         let first = range.start.saturating_sub(self.stripe).div_ceil(STRIPES);
         let (stripe, count) = (self.stripe, self.rows.len());
         (first..count)
@@ -257,8 +260,7 @@ impl<'a> Rows<'a> {
             return 0.0;
         }
         let mut length = 0.0;
-        let rows: Vec<(usize, usize)> = self.rows_in(js).collect();
-        for (j, m) in rows {
+        for (j, m) in self.rows_in(js) {
             // The tiles first, over the box's columns; the solid's outline on the row (a few
             // 2D capsules) only when one of them may hold something to remove.
             let mut columns: Option<std::ops::Range<usize>> = None;

@@ -47,32 +47,44 @@ pub fn subtract_recording(
         return 0.0;
     }
     let before: f64 = spans.iter().map(Span::length).sum();
-    let mut kept: Spans = SmallVec::new();
-    for s in spans.iter() {
+    // In place: a dexel's spans live inline or in a buffer kept from cut to cut, so removal
+    // allocates only when a cut splits a span and the buffer is full.
+    let mut i = 0;
+    while i < spans.len() {
+        let s = spans[i];
+        if s.start >= end {
+            break;
+        }
         // An overlap shorter than `min_length` is round-off of a cut made before (a tool
         // passing again where it already cut): the span stays as it is.
-        if s.end.min(end) - s.start.max(start) < min_length.max(0.0)
-            || s.end <= start
-            || s.start >= end
-        {
-            kept.push(*s);
+        if s.end <= start || s.end.min(end) - s.start.max(start) < min_length.max(0.0) {
+            i += 1;
             continue;
         }
         removed(s.start.max(start), s.end.min(end));
-        if s.start < start && start - s.start >= min_length {
-            kept.push(Span {
-                start: s.start,
-                end: start,
-            });
-        }
-        if s.end > end && s.end - end >= min_length {
-            kept.push(Span {
-                start: end,
-                end: s.end,
-            });
+        let left = (s.start < start && start - s.start >= min_length).then_some(Span {
+            start: s.start,
+            end: start,
+        });
+        let right = (s.end > end && s.end - end >= min_length).then_some(Span {
+            start: end,
+            end: s.end,
+        });
+        match (left, right) {
+            (Some(left), Some(right)) => {
+                spans[i] = left;
+                spans.insert(i + 1, right);
+                i += 2;
+            }
+            (Some(piece), None) | (None, Some(piece)) => {
+                spans[i] = piece;
+                i += 1;
+            }
+            (None, None) => {
+                spans.remove(i);
+            }
         }
     }
-    *spans = kept;
     before - spans.iter().map(Span::length).sum::<f64>()
 }
 
