@@ -283,9 +283,9 @@ impl RevolvedCutter {
         };
         let mut previous = self.at(from);
         if steps == 1
-            && let Some(slide) = Slide::of(&previous, &self.at(to))
+            && let Some(slides) = Slide::steps(&previous, &self.at(to), tolerance)
         {
-            return vec![SweptSolid::Slide(slide)];
+            return slides.into_iter().map(SweptSolid::Slide).collect();
         }
         (1..=steps)
             .map(|s| {
@@ -353,8 +353,8 @@ pub enum SweptSolid {
     Flutes(Clipped<SphereSweptHull>),
     /// Any cutter's body over a step: the hull of its two end positions.
     Hull(HullOfTwo),
-    /// A flat or bull-nose body moved square to its unturned axis: the same hull, with
-    /// closed forms on the lines along and across the axis.
+    /// A flat or bull-nose body moved without turning its axis: closed forms on the lines
+    /// along and across the axis (see [`Slide::steps`]).
     Slide(Slide),
 }
 
