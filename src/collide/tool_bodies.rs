@@ -15,7 +15,7 @@ use parry3d::shape::{Capsule, ConvexPolyhedron, Cylinder, RoundCylinder, Shape, 
 use crate::geom::ToolPose;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
-use crate::mesh::SurfaceDistance;
+use crate::mesh::{SegmentSearch, SurfaceDistance};
 use crate::stock::clearance::MaterialClearance;
 use crate::stock::sweep::Frustum;
 use crate::tool::{Body, BodyRole, Cutter, ToolAssembly};
@@ -227,43 +227,59 @@ impl PartCollider {
     pub fn check_bodies(&self, tool: &PreparedTool, pose: &ToolPose) -> Result<(), Collision> {
         self.check_table(tool, pose, 0.0)?;
         for body in &tool.bodies {
-            if !self.clear_by_capsules(&body.geometry.grown(body.check_grow), pose)
-                && self.intersects(body.check.as_ref(), &body.place(pose, self))
-            {
+            let meets = self
+                .capsule_verdict(&body.geometry.grown(body.check_grow), pose)
+                .unwrap_or_else(|| self.intersects(body.check.as_ref(), &body.place(pose, self)));
+            if meets {
                 return Err(Collision::Body { role: body.role });
             }
         }
         self.check_material(tool, pose, 0.0)
     }
 
-    /// Whether `body` at `pose` surely keeps off the part, by the exact f64 distance: it is
-    /// cut along its axis into pieces about its radius long, and each piece lies in the
-    /// capsule around its stretch of the axis with its larger radius; no triangle comes that
-    /// close to any of those stretches. Most tested poses are clear, and this answers them
-    /// without parry's f32 GJK over every triangle under a tilted body's loose box; a body it
-    /// cannot clear goes to parry as before. (Like parry's, it is a test against the surface:
-    /// a body wholly inside the part passes both.)
-    fn clear_by_capsules(&self, body: &Revolved, pose: &ToolPose) -> bool {
+    /// Whether `body` at `pose` meets the part, when the exact f64 distance decides it:
+    /// `Some(false)` when it surely keeps off, `Some(true)` when it surely meets it, `None`
+    /// when parry's test must decide.
+    ///
+    /// The body is cut along its axis into pieces about its radius long; each lies in the
+    /// capsule around its stretch of the axis with its larger radius. When no triangle comes
+    /// that close to any stretch, the body is clear. The points nearest the stretches of the
+    /// triangles that do come that close are tested: one inside the body, and they meet; none,
+    /// and parry decides. Most tested poses are decided here,
+    /// without parry's f32 GJK over every triangle under a tilted body's loose box. (Like
+    /// parry's, it is a test against the surface: a body wholly inside the part passes both.)
+    fn capsule_verdict(&self, body: &Revolved, pose: &ToolPose) -> Option<bool> {
         let k = pose.axis.into_inner();
         let length = body.to - body.from;
         let widest = body.radius_from.max(body.radius_to);
         if !(length > 0.0 && widest > 0.0) {
-            return false;
+            return None;
         }
         let radius_at = |h: f64| {
             body.radius_from + (body.radius_to - body.radius_from) * (h - body.from) / length
         };
+        let inside = |point: &Point3| {
+            let offset = point - pose.tip;
+            let h = offset.dot(&k);
+            h > body.from
+                && h < body.to
+                && (offset - h * k).norm() < radius_at(h) * (1.0 - 1e-12) - 1e-9
+        };
         let pieces = ((length / widest.max(0.5)).ceil() as usize).clamp(1, 64);
-        (0..pieces).all(|i| {
+        let mut near = false;
+        for i in 0..pieces {
             let h0 = body.from + length * i as f64 / pieces as f64;
             let h1 = body.from + length * (i + 1) as f64 / pieces as f64;
             // Touching is not clear: the radius is taken a hair larger.
             let radius = radius_at(h0).max(radius_at(h1)) * (1.0 + 1e-12) + 1e-9;
-            !self
-                .part
-                .surface
-                .segment_within(&(pose.tip + h0 * k), &(pose.tip + h1 * k), radius)
-        })
+            let (a, b) = (pose.tip + h0 * k, pose.tip + h1 * k);
+            match self.part.surface.segment_search(&a, &b, radius, inside) {
+                SegmentSearch::Accepted => return Some(true),
+                SegmentSearch::Near => near = true,
+                SegmentSearch::Clear => {}
+            }
+        }
+        (!near).then_some(false)
     }
 
     /// The bodies above the flutes, grown by their margins and extended `sweep` mm up the
@@ -306,9 +322,10 @@ impl PartCollider {
         self.check_table(tool, pose, sweep)?;
         for body in &tool.bodies {
             let grown = body.geometry.grown(body.check_grow).swept(sweep);
-            if !self.clear_by_capsules(&grown, pose)
-                && self.intersects(grown.shape(true).as_ref(), &grown.place(pose, self))
-            {
+            let meets = self.capsule_verdict(&grown, pose).unwrap_or_else(|| {
+                self.intersects(grown.shape(true).as_ref(), &grown.place(pose, self))
+            });
+            if meets {
                 return Err(Collision::Body { role: body.role });
             }
         }
@@ -986,6 +1003,87 @@ pub(crate) mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// The capsule verdict against a closed form: a truncated cone meets a sphere's surface
+    /// when its nearest point lies inside the sphere and its farthest outside. The nearest is
+    /// the 2D distance from the centre to the cone's trapezoid in the meridian half-plane, the
+    /// farthest lies on a rim. Poses within the mesh's sagitta of either answer are skipped;
+    /// every verdict given on the others must be right, and most must be given.
+    #[test]
+    fn capsule_verdicts_agree_with_a_sphere_in_closed_form() {
+        let big_r = 20.0;
+        let collider =
+            PartCollider::new(&crate::mesh::fixtures::uv_sphere(big_r, 60, 120)).unwrap();
+        let sagitta = 2.0 * big_r * (1.0 - (std::f64::consts::PI / 60.0).cos());
+        let body = Revolved {
+            from: 4.0,
+            to: 16.0,
+            radius_from: 3.0,
+            radius_to: 5.0,
+        };
+        let distance_to_trapezoid = |h: f64, rho: f64| -> f64 {
+            let corners = [
+                (body.from, 0.0),
+                (body.from, body.radius_from),
+                (body.to, body.radius_to),
+                (body.to, 0.0),
+            ];
+            let slant = |t: f64| body.radius_from + (body.radius_to - body.radius_from) * t;
+            let t = (h - body.from) / (body.to - body.from);
+            if (0.0..=1.0).contains(&t) && rho <= slant(t) {
+                return 0.0;
+            }
+            (0..4)
+                .map(|i| {
+                    let (a, b) = (corners[i], corners[(i + 1) % 4]);
+                    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+                    let s =
+                        (((h - a.0) * dx + (rho - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+                    (h - a.0 - s * dx).hypot(rho - a.1 - s * dy)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (mut decided, mut meets, mut clear, mut judged) = (0, 0, 0, 0);
+        for i in 0..40 {
+            for j in 0..40 {
+                let (u, v) = (i as f64 / 40.0, j as f64 / 40.0);
+                let tip = Point3::new(
+                    30.0 * u - 15.0,
+                    26.0 * v - 13.0,
+                    24.0 * (u * 7.3 + v * 3.1).fract() - 4.0,
+                );
+                let axis = Vector3::new((u * 11.0).sin(), (v * 13.0).cos(), 0.6 + (u + v) * 0.5)
+                    .normalize();
+                let pose = pose(tip.into(), axis.into());
+                let to_centre = Point3::origin() - pose.tip;
+                let h = to_centre.dot(&axis);
+                let across = (to_centre - h * axis).norm();
+                let nearest = distance_to_trapezoid(h, across);
+                let farthest = [(body.from, body.radius_from), (body.to, body.radius_to)]
+                    .into_iter()
+                    .map(|(height, radius)| (height - h).hypot(across + radius))
+                    .fold(0.0, f64::max);
+                let truth = if nearest < big_r - sagitta - 1e-6 && farthest > big_r + 1e-6 {
+                    true
+                } else if nearest > big_r + 1e-6 || farthest < big_r - sagitta - 1e-6 {
+                    false
+                } else {
+                    continue;
+                };
+                judged += 1;
+                if let Some(verdict) = collider.capsule_verdict(&body, &pose) {
+                    assert_eq!(verdict, truth, "tip {tip:?} axis {axis:?}");
+                    decided += 1;
+                    if verdict { meets += 1 } else { clear += 1 }
+                }
+            }
+        }
+        assert!(meets > 100 && clear > 100, "{meets} meet, {clear} clear");
+        assert!(
+            decided * 5 >= judged * 4,
+            "{decided} of {judged} decided, {meets} meet, {clear} clear"
+        );
     }
 
     /// A tapered holder (cone 20 → 40 mm over 30 mm) beside the vertical edge of a tall block,

@@ -13,7 +13,8 @@ pub use aabb::{Aabb, Aabb2};
 pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
 pub use triangle::{
     ClosestFeature, closest_point_on_segment, closest_point_on_triangle,
-    closest_points_of_segments, segment_triangle_distance_squared, triangle_area, triangle_normal,
+    closest_points_of_segment_and_triangle, closest_points_of_segments,
+    segment_triangle_distance_squared, triangle_area, triangle_normal,
 };
 
 /// A point in the XY plane, mm (planar outlines, 2.5D paths).

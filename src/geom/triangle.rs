@@ -125,6 +125,19 @@ pub fn segment_triangle_distance_squared(
     b: &Point3,
     c: &Point3,
 ) -> f64 {
+    let (x, y) = closest_points_of_segment_and_triangle(p, q, a, b, c);
+    (x - y).norm_squared()
+}
+
+/// The closest points `(on pq, on abc)` of a segment and a triangle (the crossing point twice
+/// where the segment crosses the triangle); see [`segment_triangle_distance_squared`].
+pub fn closest_points_of_segment_and_triangle(
+    p: &Point3,
+    q: &Point3,
+    a: &Point3,
+    b: &Point3,
+    c: &Point3,
+) -> (Point3, Point3) {
     // Crossing: Möller–Trumbore with the segment as a ray of parameter range [0, 1].
     let (e1, e2) = (b - a, c - a);
     let direction = q - p;
@@ -137,15 +150,20 @@ pub fn segment_triangle_distance_squared(
         let v = direction.dot(&k) / det;
         let t = e2.dot(&k) / det;
         if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&t) {
-            return 0.0;
+            let crossing = p + t * direction;
+            return (crossing, crossing);
         }
     }
-    let mut best = (closest_point_on_triangle(p, a, b, c).0 - p)
-        .norm_squared()
-        .min((closest_point_on_triangle(q, a, b, c).0 - q).norm_squared());
+    let mut best = (*p, closest_point_on_triangle(p, a, b, c).0);
+    let mut consider = |x: Point3, y: Point3| {
+        if (x - y).norm_squared() < (best.0 - best.1).norm_squared() {
+            best = (x, y);
+        }
+    };
+    consider(*q, closest_point_on_triangle(q, a, b, c).0);
     for (u, v) in [(a, b), (b, c), (c, a)] {
         let (x, y) = closest_points_of_segments(p, q, u, v);
-        best = best.min((x - y).norm_squared());
+        consider(x, y);
     }
     best
 }

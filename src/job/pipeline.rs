@@ -451,7 +451,8 @@ pub fn plan(
                 }
             }
             OperationKind::Finish => {
-                timings.semi_finishing = ms(t) - timings.roughing;
+                // Each roughing time is rounded on its own: clamp the rounding's -0.1 ms away.
+                timings.semi_finishing = (ms(t) - timings.roughing).max(0.0);
                 let stepover = path::stepover_for_scallop(
                     operation.tool.diameter / 2.0,
                     operation.scallop_height,

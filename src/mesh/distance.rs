@@ -7,7 +7,7 @@
 
 use crate::geom::{
     Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle,
-    segment_triangle_distance_squared,
+    closest_points_of_segment_and_triangle, segment_triangle_distance_squared,
 };
 use crate::mesh::Mesh;
 use crate::mesh::topology::edges;
@@ -86,6 +86,17 @@ pub struct SurfaceDistance {
     /// Per triangle, the pseudo-normal of each of its edges (edge k: corner k to k+1).
     edge_normals: Vec<[Vector3; 3]>,
     vertex_normals: Vec<Vector3>,
+}
+
+/// The answer of [`SurfaceDistance::segment_search`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SegmentSearch {
+    /// No triangle comes within the radius.
+    Clear,
+    /// Some do, none of their nearest points was accepted.
+    Near,
+    /// A triangle within the radius had its nearest point accepted.
+    Accepted,
 }
 
 impl SurfaceDistance {
@@ -288,17 +299,37 @@ impl SurfaceDistance {
     /// straight move of a ball centre, checked along its whole length (a chord can cut deepest
     /// anywhere, not only at its midpoint).
     pub fn segment_within(&self, a: &Point3, b: &Point3, radius: f64) -> bool {
+        self.segment_search(a, b, radius, |_| true) != SegmentSearch::Clear
+    }
+
+    /// Which triangles come closer than `radius` to the segment `ab`, and whether one of
+    /// them has its point nearest the segment accepted by `accept` (the search stops there).
+    pub fn segment_search(
+        &self,
+        a: &Point3,
+        b: &Point3,
+        radius: f64,
+        mut accept: impl FnMut(&Point3) -> bool,
+    ) -> SegmentSearch {
         if self.nodes.is_empty() || radius.is_nan() || radius <= 0.0 {
-            return false;
+            return SegmentSearch::Clear;
         }
         let r2 = radius * radius;
         let segment_box = Aabb::from_points([a, b]);
-        let mut found = false;
+        let mut found = SegmentSearch::Clear;
         self.visit_leaves(
             |b| b.distance_squared_to_box(&segment_box) < r2,
             |[p, q, r]| {
-                found = segment_triangle_distance_squared(a, b, &p, &q, &r) < r2;
-                found
+                // The plain distance first: most triangles under the box are farther.
+                if segment_triangle_distance_squared(a, b, &p, &q, &r) >= r2 {
+                    return false;
+                }
+                if accept(&closest_points_of_segment_and_triangle(a, b, &p, &q, &r).1) {
+                    found = SegmentSearch::Accepted;
+                    return true;
+                }
+                found = SegmentSearch::Near;
+                false
             },
         );
         found

@@ -23,7 +23,7 @@ pub mod section;
 pub mod topology;
 pub mod weld;
 
-pub use distance::{Closest, SurfaceDistance};
+pub use distance::{Closest, SegmentSearch, SurfaceDistance};
 pub use section::{DrivePoint, SectionCurve, plane_section};
 
 pub use pieces::{Piece, PieceSplit, StrayPieceRule, set_aside_warning, split_stray_pieces};
