@@ -362,7 +362,9 @@ pub fn rough_layers(
     });
 
     let axis = Direction::new_normalize(Vector3::z());
-    let safe_z = blank.top + options.clearance;
+    // A coarse shape may stand above a blank that is close to the part's top: the moves over
+    // the blank clear it too.
+    let safe_z = blank.top.max(shape.aabb().max.z) + options.clearance;
     let mut writer = Writer {
         moves: Vec::new(),
         axis,
@@ -376,7 +378,9 @@ pub fn rough_layers(
 
     let slope = options.ramp_angle_deg.to_radians().tan();
     let mut reports = Vec::with_capacity(planned.len());
-    let mut above: Option<RegionIndex> = None;
+    // Above the first layer, only what of the shape stands out of the blank's top.
+    let mut above: Option<RegionIndex> =
+        region::cells_above(&envelope, blank.top, 0.0).map(|s| RegionIndex::new(&s));
     let mut z_above = blank.top;
     for layer in planned {
         let z = layer.z;
@@ -749,6 +753,30 @@ mod tests {
         assert!((faced - 1600.0).abs() < 16.0, "{faced}");
         let walled = rough.layers[1].cleared_area_mm2;
         assert!(walled > 1600.0 - 21.0 * 21.0 && walled < 1200.0, "{walled}");
+    }
+
+    /// A shape standing out of the blank's top (a coarse offset over a blank close to the
+    /// part) splits the blank in two: the tool goes from one side to the other over the shape,
+    /// never through what of it stands above the blank.
+    #[test]
+    fn moves_between_regions_clear_a_shape_above_the_blank() {
+        let (block, _, tool, options) = block_job();
+        let blank = Blank::cuboid(Point3::new(-25.0, -10.0, 0.0), Point3::new(25.0, 10.0, 8.5));
+        let rough =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
+        assert!(
+            rough.safe_z >= 10.0 + options.clearance - 1e-9,
+            "{}",
+            rough.safe_z
+        );
+        let sides = |sign: f64| {
+            rough.toolpath.moves.iter().any(|m| {
+                m.kind == MoveKind::Cut && m.pose.tip.x * sign > 10.0 && m.pose.tip.z < 8.5
+            })
+        };
+        assert!(sides(1.0) && sides(-1.0), "both sides are roughed");
+        let check = check::overcuts(&block, &rough.toolpath, tool.radius, 1e-9);
+        assert!(check.overcuts.is_empty(), "{:?}", &check.overcuts[..1]);
     }
 
     /// Every descent into material is a ramp no steeper than the ramp angle; straight descents
