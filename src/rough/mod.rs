@@ -296,6 +296,14 @@ pub struct LayerReport {
     pub max_engagement_at: [f64; 2],
     pub max_link_engagement_mm: f64,
     pub cut_length_mm: f64,
+    /// Length of the passes left out because the tool would meet material still standing
+    /// above the layer above (rest the layers above could not take), mm.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub kept_from_material_above_mm: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// Layers the tool cannot reach.
@@ -427,107 +435,144 @@ pub fn rough_layers(
             max_engagement_at: [0.0, 0.0],
             max_link_engagement_mm: 0.0,
             cut_length_mm: 0.0,
+            kept_from_material_above_mm: 0.0,
         };
+        // What still stands above the height the tool moves at between passes (just above
+        // the layer above): rest the layers above could not take (a wall thinner than they
+        // take, a corner between passes). Rapids at that height go round it, and descend
+        // beside it at the entry feed.
+        let low = z_above + options.clearance;
+        // Where the layer lies deeper than the flutes are long, the shank passes beside what
+        // stands above them: the passes stop short of it.
+        let (standing, above_flutes) = match &material {
+            Material::Stock { stock, .. } => (
+                rest::material_on_lines(stock, &envelope, low, f64::INFINITY)
+                    .map(|region| RegionIndex::new(&region)),
+                rest::material_in_slab(stock, &envelope, z + tool.flute_length, f64::INFINITY, 0.0)
+                    .map(|region| RegionIndex::new(&region)),
+            ),
+            Material::Blank => (None, None),
+        };
+        let step = 0.25 * options.cell;
+        // Whether the tool ended the previous pass where that pass ends (a feed link from
+        // there is then a straight move at the layer).
+        let mut at_pass_end = false;
         for (i, pass) in path.passes().iter().enumerate() {
-            let points = moves::pass_points(pass, options.tolerance);
-            let entering = i == 0 || matches!(path.links()[i - 1], Link::Rapid { .. });
-            if entering {
-                let to = points[0];
-                writer.transit(
-                    to,
-                    z_above + options.clearance,
-                    safe_z,
-                    above.as_ref(),
-                    r,
-                    options.feeds.rapid,
-                );
-                let plunge_limit =
-                    options.max_plunge_share * std::f64::consts::PI * tool.radius * tool.radius;
-                let ramp = if map.material_within(to) > plunge_limit {
-                    moves::ramp_along(
-                        &points,
-                        z_above + 0.1 * options.clearance,
-                        z,
-                        slope,
-                        options.max_ramp_leg,
-                    )
-                } else {
-                    Vec::new()
-                };
-                if ramp.is_empty() {
-                    if map.material_within(to) > plunge_limit {
-                        report.plunges_into_material += 1;
+            let whole = moves::pass_points(pass, options.tolerance);
+            let runs = match &above_flutes {
+                Some(keep_out) => moves::clear_runs(&whole, keep_out, r, step),
+                None => vec![whole.clone()],
+            };
+            let kept: f64 = runs.iter().map(|run| moves::polyline_length(run)).sum();
+            report.kept_from_material_above_mm += moves::polyline_length(&whole) - kept;
+            let whole_start = whole[0];
+            let whole_end = whole[whole.len() - 1];
+            let linked = i > 0 && !matches!(path.links()[i - 1], Link::Rapid { .. });
+            let run_count = runs.len();
+            for (k, points) in runs.into_iter().enumerate() {
+                let entering = !(k == 0 && linked && at_pass_end && points[0] == whole_start);
+                at_pass_end = k + 1 == run_count && points[points.len() - 1] == whole_end;
+                if entering {
+                    let to = points[0];
+                    writer.transit(
+                        to,
+                        low,
+                        safe_z,
+                        [above.as_ref(), standing.as_ref()],
+                        r,
+                        (options.feeds.rapid, options.feeds.entry),
+                    );
+                    let plunge_limit =
+                        options.max_plunge_share * std::f64::consts::PI * tool.radius * tool.radius;
+                    let ramp = if map.material_within(to) > plunge_limit {
+                        moves::ramp_along(
+                            &points,
+                            z_above + 0.1 * options.clearance,
+                            z,
+                            slope,
+                            options.max_ramp_leg,
+                        )
                     } else {
-                        report.straight_entries += 1;
-                    }
-                    writer.push(
-                        Point3::new(to.x, to.y, z),
-                        MoveKind::Approach,
-                        options.feeds.entry,
-                    );
-                    map.plunge(to);
-                } else {
-                    report.ramped_entries += 1;
-                    writer.push(
-                        Point3::new(to.x, to.y, z_above + 0.1 * options.clearance),
-                        MoveKind::Approach,
-                        options.feeds.entry,
-                    );
-                    map.plunge(to);
-                    let mut window = Window::without_values(r);
-                    let mut from = to;
-                    for p in ramp {
-                        let q = Point2::new(p.x, p.y);
-                        map.cut(
-                            &Segment::Line {
-                                start: from,
-                                end: q,
-                            },
-                            &mut window,
+                        Vec::new()
+                    };
+                    if ramp.is_empty() {
+                        if map.material_within(to) > plunge_limit {
+                            report.plunges_into_material += 1;
+                        } else {
+                            report.straight_entries += 1;
+                        }
+                        writer.push(
+                            Point3::new(to.x, to.y, z),
+                            MoveKind::Approach,
+                            options.feeds.entry,
                         );
-                        writer.push(p, MoveKind::Cut, options.feeds.entry);
-                        from = q;
+                        map.plunge(to);
+                    } else {
+                        report.ramped_entries += 1;
+                        writer.push(
+                            Point3::new(to.x, to.y, z_above + 0.1 * options.clearance),
+                            MoveKind::Approach,
+                            options.feeds.entry,
+                        );
+                        map.plunge(to);
+                        let mut window = Window::without_values(r);
+                        let mut from = to;
+                        for p in ramp {
+                            let q = Point2::new(p.x, p.y);
+                            map.cut(
+                                &Segment::Line {
+                                    start: from,
+                                    end: q,
+                                },
+                                &mut window,
+                            );
+                            writer.push(p, MoveKind::Cut, options.feeds.entry);
+                            from = q;
+                        }
                     }
+                } else {
+                    let link = path.links()[i - 1];
+                    let mut window = Window::new(r);
+                    map.cut(
+                        &Segment::Line {
+                            start: link.from(),
+                            end: link.to(),
+                        },
+                        &mut window,
+                    );
+                    window.finish();
+                    report.max_link_engagement_mm = report.max_link_engagement_mm.max(window.max);
+                    let (kind, feed) = match link {
+                        Link::Traverse { .. } => (MoveKind::Approach, options.feeds.rapid),
+                        _ => (MoveKind::Cut, options.feeds.cut),
+                    };
+                    writer.push(Point3::new(points[0].x, points[0].y, z), kind, feed);
                 }
-            } else {
-                let link = path.links()[i - 1];
                 let mut window = Window::new(r);
-                map.cut(
-                    &Segment::Line {
-                        start: link.from(),
-                        end: link.to(),
-                    },
-                    &mut window,
-                );
+                for w in points.windows(2) {
+                    map.cut(
+                        &Segment::Line {
+                            start: w[0],
+                            end: w[1],
+                        },
+                        &mut window,
+                    );
+                    writer.push(
+                        Point3::new(w[1].x, w[1].y, z),
+                        MoveKind::Cut,
+                        options.feeds.cut,
+                    );
+                }
                 window.finish();
-                report.max_link_engagement_mm = report.max_link_engagement_mm.max(window.max);
-                let (kind, feed) = match link {
-                    Link::Traverse { .. } => (MoveKind::Approach, options.feeds.rapid),
-                    _ => (MoveKind::Cut, options.feeds.cut),
-                };
-                writer.push(Point3::new(points[0].x, points[0].y, z), kind, feed);
+                if window.max > report.max_engagement_mm {
+                    report.max_engagement_mm = window.max;
+                    report.max_engagement_at = [window.max_at.x, window.max_at.y];
+                }
+                report.cut_length_mm += moves::polyline_length(&points);
             }
-            let mut window = Window::new(r);
-            for w in points.windows(2) {
-                map.cut(
-                    &Segment::Line {
-                        start: w[0],
-                        end: w[1],
-                    },
-                    &mut window,
-                );
-                writer.push(
-                    Point3::new(w[1].x, w[1].y, z),
-                    MoveKind::Cut,
-                    options.feeds.cut,
-                );
+            if run_count == 0 {
+                at_pass_end = false;
             }
-            window.finish();
-            if window.max > report.max_engagement_mm {
-                report.max_engagement_mm = window.max;
-                report.max_engagement_at = [window.max_at.x, window.max_at.y];
-            }
-            report.cut_length_mm += moves::polyline_length(&points);
         }
         report.cleared_area_mm2 -= map.material_area();
         let rest = matches!(material, Material::Stock { .. });
@@ -634,38 +679,37 @@ impl Writer {
     }
 
     /// Goes from where the tool is to above `to` at `low` (just above the layer above): up to
-    /// `low`, then straight across when that way keeps the tool `r` clear of what stands above
-    /// the layer above (`above`; nothing when that layer was the blank's top or a facing
-    /// layer), else over the blank at `safe_z`.
+    /// `low`, then straight across when that way keeps the tool `r` clear of every region of
+    /// `keep_off` (what of the shape stands above the layer above, nothing when that layer
+    /// was the blank's top or a facing layer; the material still standing above `low`), else
+    /// over the blank at `safe_z`, coming down to `low` at the `entry` feed when `to` lies
+    /// within `r` of a region (the shape's coarse cells, or rest).
     fn transit(
         &mut self,
         to: Point2,
         low: f64,
         safe_z: f64,
-        above: Option<&RegionIndex>,
+        keep_off: [Option<&RegionIndex>; 2],
         r: f64,
-        rapid: f64,
+        (rapid, entry): (f64, f64),
     ) {
         let at = self.last();
         let from = Point2::new(at.x, at.y);
         if at.z < low {
             self.push(Point3::new(at.x, at.y, low), MoveKind::Retract, rapid);
         }
-        let clear = match above {
-            None => true,
-            Some(index) => {
-                let seg = Segment::Line {
-                    start: from,
-                    end: to,
-                };
-                !index.contains(from)
-                    && !index.contains(to)
-                    && index
-                        .boundary()
-                        .nearest(&seg)
-                        .is_none_or(|n| n.distance >= r + 1e-6)
-            }
+        let seg = Segment::Line {
+            start: from,
+            end: to,
         };
+        let clear = keep_off.into_iter().flatten().all(|index| {
+            !index.contains(from)
+                && !index.contains(to)
+                && index
+                    .boundary()
+                    .nearest(&seg)
+                    .is_none_or(|n| n.distance >= r + 1e-6)
+        });
         let height = self.last().z;
         if clear && height <= low + 1e-9 {
             self.push(Point3::new(to.x, to.y, low), MoveKind::Rapid, rapid);
@@ -674,7 +718,13 @@ impl Writer {
                 self.push(Point3::new(at.x, at.y, safe_z), MoveKind::Retract, rapid);
             }
             self.push(Point3::new(to.x, to.y, safe_z), MoveKind::Rapid, rapid);
-            self.push(Point3::new(to.x, to.y, low), MoveKind::Rapid, rapid);
+            let beside =
+                |index: &RegionIndex| index.contains(to) || index.boundary_distance(to) < r + 1e-6;
+            if keep_off.into_iter().flatten().any(beside) {
+                self.push(Point3::new(to.x, to.y, low), MoveKind::Approach, entry);
+            } else {
+                self.push(Point3::new(to.x, to.y, low), MoveKind::Rapid, rapid);
+            }
         }
     }
 }
@@ -777,6 +827,79 @@ mod tests {
         assert!(sides(1.0) && sides(-1.0), "both sides are roughed");
         let check = check::overcuts(&block, &rough.toolpath, tool.radius, 1e-9);
         assert!(check.overcuts.is_empty(), "{:?}", &check.overcuts[..1]);
+    }
+
+    /// Rest roughing beside material that stands above the flutes' reach of every layer (a
+    /// 2 × 2 pillar rising above the blank's top, out of every slab): the passes stop short
+    /// of it by the shank's radius, and the rest of each layer is still roughed.
+    #[test]
+    fn passes_keep_the_shank_off_material_above_the_flutes() {
+        let (block, blank, mut tool, options) = block_job();
+        tool.flute_length = 4.0;
+        let boxed = |size: [f64; 3], at: [f64; 3]| {
+            let mut m = cuboid(size[0], size[1], size[2]);
+            for p in &mut m.positions {
+                *p += Vector3::from(at);
+            }
+            m
+        };
+        let mut material = boxed([40.0, 40.0, 12.0], [-20.0, -20.0, 0.0]);
+        let pillar = boxed([2.0, 2.0, 8.0], [14.0, -1.0, 12.0]);
+        let offset = material.positions.len() as u32;
+        material.positions.extend(pillar.positions);
+        material
+            .triangles
+            .extend(pillar.triangles.iter().map(|t| t.map(|i| i + offset)));
+        let mut stock = Stock::from_mesh(&material, 0.25, 1 << 22).expect("stock");
+        let body = CuttingBody::of(&crate::tool::Cutter::Flat {
+            diameter: 6.0,
+            flute_length: 4.0,
+        });
+        let rough = rough_layers(
+            &block,
+            &blank,
+            &tool,
+            7,
+            Material::Stock {
+                stock: &mut stock,
+                body: &body,
+            },
+            &options,
+        )
+        .expect("roughing");
+        let from_pillar = |p: &Point3| {
+            let dx = (p.x - 15.0).abs() - 1.0;
+            let dy = p.y.abs() - 1.0;
+            dx.max(0.0).hypot(dy.max(0.0))
+        };
+        // Along every cutting move, sampled every 0.02 mm.
+        let moves = &rough.toolpath.moves;
+        let nearest = moves
+            .windows(2)
+            .filter(|w| w[1].kind == MoveKind::Cut)
+            .flat_map(|w| {
+                let (a, b) = (w[0].pose.tip, w[1].pose.tip);
+                let n = ((b - a).norm() / 0.02).ceil().max(1.0) as usize;
+                (0..=n).map(move |k| from_pillar(&(a + (b - a) * (k as f64 / n as f64))))
+            })
+            .fold(f64::INFINITY, f64::min);
+        let cuts: Vec<&Move> = moves.iter().filter(|m| m.kind == MoveKind::Cut).collect();
+        assert!(
+            nearest >= tool.radius,
+            "a pass comes {nearest} mm from the pillar"
+        );
+        assert!(
+            rough
+                .layers
+                .iter()
+                .all(|l| l.kept_from_material_above_mm > 0.0)
+        );
+        for layer in &rough.layers {
+            let beyond = cuts
+                .iter()
+                .any(|m| (m.pose.tip.z - layer.layer.z).abs() < 1e-9 && m.pose.tip.x > 17.0);
+            assert!(beyond, "layer {} roughs past the pillar", layer.layer.z);
+        }
     }
 
     /// Every descent into material is a ramp no steeper than the ramp angle; straight descents

@@ -2,6 +2,7 @@
 //! centre than the arc (the polygon circumscribed about it), and ramped entries along a pass.
 
 use crate::contour::geometry::{Point2, Segment};
+use crate::contour::region::RegionIndex;
 use crate::contour::toolpath::Pass;
 use crate::geom::Point3;
 
@@ -40,6 +41,58 @@ pub fn pass_points(pass: &Pass, tolerance: f64) -> Vec<Point2> {
     }
     points.dedup_by(|a, b| (*a - *b).norm() < 1e-9);
     points
+}
+
+/// The stretches of the polyline `points` along which a tool of radius `r` keeps off
+/// `keep_out` (outside it, and `r` or more from its boundary), in order. Each side is cut
+/// into pieces at most `step` long, and a piece is kept or dropped whole, so a run ends
+/// within `step` of where the tool would first touch.
+pub fn clear_runs(
+    points: &[Point2],
+    keep_out: &RegionIndex,
+    r: f64,
+    step: f64,
+) -> Vec<Vec<Point2>> {
+    let clear = |a: Point2, b: Point2| {
+        !keep_out.contains(a)
+            && !keep_out.contains(b)
+            && keep_out
+                .boundary()
+                .nearest(&Segment::Line { start: a, end: b })
+                .is_none_or(|n| n.distance >= r)
+    };
+    let mut runs: Vec<Vec<Point2>> = Vec::new();
+    let mut current: Vec<Point2> = Vec::new();
+    for w in points.windows(2) {
+        let pieces = (((w[1] - w[0]).norm() / step.max(1e-6)).ceil() as usize).max(1);
+        for k in 0..pieces {
+            let a = w[0] + (w[1] - w[0]) * (k as f64 / pieces as f64);
+            let b = if k + 1 == pieces {
+                w[1]
+            } else {
+                w[0] + (w[1] - w[0]) * ((k + 1) as f64 / pieces as f64)
+            };
+            if clear(a, b) {
+                if current.is_empty() {
+                    current.push(a);
+                }
+                // Inside a side, only where a run starts or stops needs a point.
+                if k + 1 == pieces {
+                    current.push(b);
+                }
+            } else if !current.is_empty() {
+                if current.last() != Some(&a) {
+                    current.push(a);
+                }
+                runs.push(std::mem::take(&mut current));
+            }
+        }
+    }
+    if current.len() > 1 {
+        runs.push(current);
+    }
+    runs.retain(|run| run.len() > 1);
+    runs
 }
 
 /// Length of a polyline.
@@ -156,6 +209,37 @@ mod tests {
                 assert!(r >= 5.0 - 1e-9 && r <= 5.0 + tol + 1e-9, "{r}");
             }
         }
+    }
+
+    /// A line passing a 2 × 2 square 2 mm to its side: a tool of radius 3 touches it where
+    /// |x| < 1 + √(3² − 2²); the runs stop within a step of that, and a line far off is one run.
+    #[test]
+    fn runs_stop_where_the_tool_would_reach_the_keep_out() {
+        use crate::contour::geometry::{Contour, Shape, Vertex};
+        let square = Shape {
+            contours: vec![Contour {
+                vertices: vec![
+                    Vertex::line(-1.0, 2.0),
+                    Vertex::line(1.0, 2.0),
+                    Vertex::line(1.0, 4.0),
+                    Vertex::line(-1.0, 4.0),
+                ],
+            }],
+        };
+        let keep_out = RegionIndex::new(&square);
+        let line = [Point2::new(-10.0, 0.0), Point2::new(10.0, 0.0)];
+        let step = 0.05;
+        let runs = clear_runs(&line, &keep_out, 3.0, step);
+        assert_eq!(runs.len(), 2, "{runs:?}");
+        let reach = 1.0 + 5f64.sqrt();
+        assert_eq!(runs[0][0], line[0]);
+        assert_eq!(*runs[1].last().expect("end"), line[1]);
+        let stop = runs[0].last().expect("stop").x;
+        let restart = runs[1][0].x;
+        assert!(stop <= -reach && stop > -reach - step, "{stop}");
+        assert!(restart >= reach && restart < reach + step, "{restart}");
+        let far = [Point2::new(-10.0, -2.0), Point2::new(10.0, -2.0)];
+        assert_eq!(clear_runs(&far, &keep_out, 3.0, step), vec![far.to_vec()]);
     }
 
     /// A ramp descends at the slope, turns at the leg's end, reaches the depth and comes back

@@ -24,6 +24,29 @@ pub fn material_in_slab(
     z_high: f64,
     min_thickness: f64,
 ) -> Option<Shape> {
+    material_cells(stock, envelope, z_low, z_high, min_thickness, true)
+}
+
+/// [`material_in_slab`] without the growth: the cells whose own vertical dexel, or a
+/// horizontal dexel crossing them, shows material. What stands between lines is missed by
+/// less than a cell; a tool kept off this region by a margin of a cell or more keeps off it.
+pub fn material_on_lines(
+    stock: &Stock,
+    envelope: &TopEnvelope,
+    z_low: f64,
+    z_high: f64,
+) -> Option<Shape> {
+    material_cells(stock, envelope, z_low, z_high, 0.0, false)
+}
+
+fn material_cells(
+    stock: &Stock,
+    envelope: &TopEnvelope,
+    z_low: f64,
+    z_high: f64,
+    min_thickness: f64,
+    grow: bool,
+) -> Option<Shape> {
     let vertical = stock.grid(2);
     let [w, h] = vertical.counts();
     let s = stock.spacing();
@@ -84,6 +107,9 @@ pub fn material_in_slab(
                 material[i + j * w] = false;
             }
         }
+    }
+    if !grow {
+        return trace_cells(material, w, h, origin, s);
     }
     let mut grown = material.clone();
     for j in 0..h {
