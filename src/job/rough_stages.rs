@@ -81,9 +81,8 @@ impl ToolLayers {
     }
 }
 
-/// Layers of one tool down to `shape`: from the whole blank (`from_blank`; its moves are then
-/// taken off `stock`), else only where `stock` still holds material (each layer taken off as
-/// it is planned). `stock` is the planning model the next tool starts from. With feed
+/// Layers of one tool down to `shape`: from the whole blank (`from_blank`), else only where
+/// `stock` still holds material; each layer is taken off `stock` as it is planned. `stock` is the planning model the next tool starts from. With feed
 /// control, each move's feed is set from the volume it takes off the stock as it stood.
 pub(super) fn rough_with_tool(
     shape: &crate::mesh::Mesh,
@@ -93,8 +92,6 @@ pub(super) fn rough_with_tool(
     stock: &mut Stock,
     from_blank: bool,
 ) -> std::result::Result<ToolLayers, crate::rough::RoughError> {
-    // What the moves remove is measured on the stock before they run.
-    let before = (!from_blank && how.feed_control.is_some()).then(|| stock.clone());
     let tool = RoughingTool::of(assembly, how.holder_margin);
     let mut options = RoughingOptions::for_radius(tool.radius);
     options.floor = Some(how.floor);
@@ -104,8 +101,13 @@ pub(super) fn rough_with_tool(
         options.layers.flat_area = f64::INFINITY;
     }
     let body = CuttingBody::of(&assembly.cutter);
+    // Either way each layer comes off the stock as it is planned, which measures what each
+    // move removes from the stock as it stood.
     let material = if from_blank {
-        Material::Blank
+        Material::BlankOnStock {
+            stock: &mut *stock,
+            body: &body,
+        }
     } else {
         Material::Stock {
             stock: &mut *stock,
@@ -113,11 +115,7 @@ pub(super) fn rough_with_tool(
         }
     };
     let mut layers = rough_layers(shape, blank, &tool, assembly.id, material, &options)?;
-    let removed = match before {
-        _ if from_blank => stock.remove_cutting(&layers.toolpath, &body, how.tolerance),
-        Some(mut before) => before.remove_cutting(&layers.toolpath, &body, how.tolerance),
-        None => Vec::new(),
-    };
+    let removed = std::mem::take(&mut layers.removed_mm3);
     let feed_control = how.feed_control.map(|(model, spindle_rpm)| {
         let cutter = FeedCutter {
             diameter: assembly.cutter.diameter(),

@@ -323,6 +323,9 @@ pub struct Roughing {
     pub layers: Vec<LayerReport>,
     pub safe_z: f64,
     pub not_reached: Option<NotReached>,
+    /// What each move took off the stock as it stood when planned (0 for the first move);
+    /// empty for [`Material::Blank`].
+    pub removed_mm3: Vec<f64>,
 }
 
 /// Plans layer roughing of `blank` down to `shape` with `tool` (its T number `tool_id`).
@@ -384,6 +387,8 @@ pub fn rough_layers(
         options.feeds.rapid,
     );
 
+    // What each move of `writer` took off the tracked stock, as far as it is taken off.
+    let mut removed = vec![0.0];
     let slope = options.ramp_angle_deg.to_radians().tan();
     let mut reports = Vec::with_capacity(planned.len());
     // Above the first layer, only what of the shape stands out of the blank's top.
@@ -399,9 +404,8 @@ pub fn rough_layers(
         };
         let err = |error| RoughError::Layer { z, error };
         let forbidden = region::cells_above(&envelope, z, 0.0);
-        let layer_start = writer.moves.len() - 1;
         let section = match &mut material {
-            Material::Blank => blank.outline.clone(),
+            Material::Blank | Material::BlankOnStock { .. } => blank.outline.clone(),
             Material::Stock { stock, .. } => {
                 match rest::material_in_slab(stock, &envelope, z, z_above, REST_MIN_THICKNESS) {
                     Some(region) => region,
@@ -445,7 +449,7 @@ pub fn rough_layers(
         // Where the layer lies deeper than the flutes are long, the shank passes beside what
         // stands above them: the passes stop short of it.
         let (standing, above_flutes) = match &material {
-            Material::Stock { stock, .. } => (
+            Material::Stock { stock, .. } | Material::BlankOnStock { stock, .. } => (
                 rest::material_on_lines(stock, &envelope, low, f64::INFINITY)
                     .map(|region| RegionIndex::new(&region)),
                 rest::material_in_slab(stock, &envelope, z + tool.flute_length, f64::INFINITY, 0.0)
@@ -576,13 +580,16 @@ pub fn rough_layers(
         }
         report.cleared_area_mm2 -= map.material_area();
         let rest = matches!(material, Material::Stock { .. });
-        if let Material::Stock { stock, body } = &mut material {
+        if let Some((stock, body)) = material.tracked() {
             // The next layer is planned from what this one leaves.
-            let moves = Toolpath {
+            take_off(
+                stock,
+                body,
+                &writer.moves,
+                &mut removed,
                 tool_id,
-                moves: writer.moves[layer_start..].to_vec(),
-            };
-            stock.remove_cutting(&moves, body, options.tolerance);
+                options.tolerance,
+            );
         }
         if report.passes > 0 || rest {
             above = forbidden.as_ref().map(RegionIndex::new);
@@ -598,6 +605,18 @@ pub fn rough_layers(
         MoveKind::Retract,
         options.feeds.rapid,
     );
+    if let Some((stock, body)) = material.tracked() {
+        take_off(
+            stock,
+            body,
+            &writer.moves,
+            &mut removed,
+            tool_id,
+            options.tolerance,
+        );
+    } else {
+        removed.clear();
+    }
     Ok(Roughing {
         toolpath: Toolpath {
             tool_id,
@@ -606,6 +625,7 @@ pub fn rough_layers(
         layers: reports,
         safe_z,
         not_reached,
+        removed_mm3: removed,
     })
 }
 
@@ -617,12 +637,56 @@ const REST_MIN_THICKNESS: f64 = 0.05;
 pub enum Material<'a> {
     /// The blank's section, whole: the first roughing of a blank.
     Blank,
+    /// The blank's section, whole, with the stock that models the blank: each layer's moves
+    /// are removed from it with `body` as they are planned, so that the layers below keep the
+    /// shank off what the layers above left, as in rest roughing.
+    BlankOnStock {
+        stock: &'a mut Stock,
+        body: &'a CuttingBody,
+    },
     /// What the stock still holds in the layer's slab (rest roughing). Each layer's moves are
     /// removed from the stock with `body` before the next layer is planned.
     Stock {
         stock: &'a mut Stock,
         body: &'a CuttingBody,
     },
+}
+
+impl Material<'_> {
+    /// The stock the layers are taken off as they are planned, if any.
+    fn tracked(&mut self) -> Option<(&mut Stock, &CuttingBody)> {
+        match self {
+            Material::Blank => None,
+            Material::BlankOnStock { stock, body } | Material::Stock { stock, body } => {
+                Some((&mut **stock, &**body))
+            }
+        }
+    }
+}
+
+/// Takes the moves not yet taken off `stock` off it (those after the last one `removed`
+/// holds), recording what each removes.
+fn take_off(
+    stock: &mut Stock,
+    body: &CuttingBody,
+    moves: &[Move],
+    removed: &mut Vec<f64>,
+    tool_id: u32,
+    tolerance: f64,
+) {
+    let from = removed.len() - 1;
+    if moves.len() > from + 1 {
+        let rest = Toolpath {
+            tool_id,
+            moves: moves[from..].to_vec(),
+        };
+        removed.extend(
+            stock
+                .remove_cutting(&rest, body, tolerance)
+                .into_iter()
+                .skip(1),
+        );
+    }
 }
 
 /// A point on the blank's outline, where the program starts above.
@@ -900,6 +964,52 @@ mod tests {
                 .any(|m| (m.pose.tip.z - layer.layer.z).abs() < 1e-9 && m.pose.tip.x > 17.0);
             assert!(beyond, "layer {} roughs past the pillar", layer.layer.z);
         }
+    }
+
+    /// Roughing the blank on its stock: what each move is recorded to remove is what it
+    /// removes when the whole program is run on the blank's stock afterwards, move by move;
+    /// the stock left is the same; the program is the blank roughing's where nothing is left
+    /// standing above the flutes.
+    #[test]
+    fn layers_taken_off_as_planned_record_what_each_move_removes() {
+        let (block, blank, tool, options) = block_job();
+        let bounds = crate::geom::Aabb::from_points(&[
+            Point3::new(-20.0, -20.0, 0.0),
+            Point3::new(20.0, 20.0, 12.0),
+        ]);
+        let fresh = Stock::block(&bounds, 0.5, 1 << 22).expect("stock");
+        let mut tracked = fresh.clone();
+        let body = CuttingBody::of(&crate::tool::Cutter::Flat {
+            diameter: 6.0,
+            flute_length: 20.0,
+        });
+        let rough = rough_layers(
+            &block,
+            &blank,
+            &tool,
+            7,
+            Material::BlankOnStock {
+                stock: &mut tracked,
+                body: &body,
+            },
+            &options,
+        )
+        .expect("roughing");
+        let plain =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
+        assert_eq!(plain.toolpath, rough.toolpath);
+        assert!(plain.removed_mm3.is_empty());
+        let mut replayed = fresh.clone();
+        let removed = replayed.remove_cutting(&rough.toolpath, &body, options.tolerance);
+        assert_eq!(rough.removed_mm3.len(), rough.toolpath.moves.len());
+        for (k, (a, b)) in rough.removed_mm3.iter().zip(&removed).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
+                "move {k}: {a} vs {b}"
+            );
+        }
+        assert!(removed.iter().sum::<f64>() > 0.5 * (1600.0 * 12.0 - 4000.0));
+        assert_eq!(tracked.to_bytes(), replayed.to_bytes());
     }
 
     /// Every descent into material is a ramp no steeper than the ramp angle; straight descents
