@@ -69,6 +69,21 @@ impl BallEndBody {
     /// sweep by less than `tolerance` (see the module docs). Antipodal axes, which no
     /// interpolation joins, are swept as the two end positions joined by their hull.
     pub fn sweep(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SweptSolid> {
+        self.sweep_parts(from, to, tolerance, true)
+    }
+
+    /// The ball alone swept from `from` to `to` (its centre's chords), within `tolerance`.
+    pub fn sweep_ball(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SweptSolid> {
+        self.sweep_parts(from, to, tolerance, false)
+    }
+
+    fn sweep_parts(
+        &self,
+        from: &ToolPose,
+        to: &ToolPose,
+        tolerance: f64,
+        with_flutes: bool,
+    ) -> Vec<SweptSolid> {
         let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
         let turn = angle_between(&k0, &k1);
         let tolerance = tolerance.max(1e-9);
@@ -98,7 +113,7 @@ impl BallEndBody {
             }));
             previous = next;
         }
-        if self.segment == 0.0 {
+        if self.segment == 0.0 || !with_flutes {
             return solids;
         }
         // The flutes above the ball's centre plane: hulls of the segment's end positions,
@@ -333,6 +348,41 @@ impl CuttingBody {
         }
     }
 
+    /// What a gouge test sweeps through the part: the points more than `depth` inside the
+    /// body, swept within `split`.
+    ///
+    /// A ball-end's flutes are swept as hulls cut by a plane lowered below the ball's centre
+    /// (see [`BallEndBody::sweep`]); the hulls stand up to `split` outside the eroded sweep,
+    /// below the centre plane too, where they reach past the eroded ball. A ball finishing
+    /// within `depth` of the surface would read as a gouge there. So the flutes are eroded
+    /// by `split` more, and the ball, whose chords are the accurate part, is swept within a
+    /// quarter of `depth`. Flutes that touch the part at all are refused before a program is
+    /// written, by the pose checks ([`crate::verify`]).
+    pub fn gouge_sweep(
+        &self,
+        from: &ToolPose,
+        to: &ToolPose,
+        depth: f64,
+        split: f64,
+    ) -> Vec<SweptSolid> {
+        match self {
+            CuttingBody::Ball(b) => {
+                let mut solids = b
+                    .eroded(depth)
+                    .sweep_ball(from, to, (0.25 * depth).max(1e-4));
+                let flutes = b.eroded((depth + split).min(0.5 * b.radius));
+                solids.extend(
+                    flutes
+                        .sweep(from, to, split)
+                        .into_iter()
+                        .filter(|solid| matches!(solid, SweptSolid::Flutes(_))),
+                );
+                solids
+            }
+            CuttingBody::Revolved(r) => r.eroded(depth).sweep(from, to, split),
+        }
+    }
+
     /// The largest depth the body can be eroded by and keep a volume: the ball radius, or
     /// the outer radius.
     pub fn radius(&self) -> f64 {
@@ -408,6 +458,84 @@ mod tests {
             tip: Point3::new(tip[0], tip[1], tip[2]),
             axis: nalgebra::Unit::new_normalize(axis),
         }
+    }
+
+    /// How deep `p` lies inside the ball-end `body` somewhere along the move (tip straight,
+    /// axis slerped), by a fine search over the move: radius less the distance to the ball's
+    /// centre or to the flutes' axis segment.
+    fn deepest_inside(body: &BallEndBody, from: &ToolPose, to: &ToolPose, p: &Point3) -> f64 {
+        let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
+        (0..=1500)
+            .map(|i| {
+                let t = f64::from(i) / 1500.0;
+                let k = slerp(&k0, &k1, t).normalize();
+                let centre = from.tip + t * (to.tip - from.tip) + body.centre_height * k;
+                let h = (p - centre).dot(&k).clamp(0.0, body.segment);
+                body.radius - (p - (centre + h * k)).norm()
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// A finishing move of the compressor impeller (stood up) that turns the axis 1.95°: the
+    /// stock run read it as a 0.0164 mm gouge, though the part came at most 0.0016 mm into
+    /// the tool. The flutes' hulls stand outside their sweep by their twist. Every point where
+    /// a line enters or leaves a solid of the gouge sweep lies at least 0.75 × the tolerance
+    /// inside the tool at some moment of the move (the ball's chords within a quarter of it);
+    /// the flutes eroded by the tolerance alone leave points outside the tool.
+    #[test]
+    fn the_gouge_sweep_holds_only_points_deeper_than_the_tolerance() {
+        let body = BallEndBody::new(4.0, 12.0);
+        let from = pose(
+            [112.76739151617413, -122.23227998089135, 42.42630039970335],
+            Vector3::new(
+                -0.06752591967607602,
+                -0.9208938268837408,
+                0.38392031696605905,
+            ),
+        );
+        let to = pose(
+            [112.72995272833522, -121.3486920685893, 42.009212493902126],
+            Vector3::new(
+                -0.048806525756625946,
+                -0.9105985074081493,
+                0.4104001478430756,
+            ),
+        );
+        let (tolerance, split) = (0.01, 0.0565);
+        let shallowest = |solids: &[SweptSolid]| {
+            let mut least = f64::INFINITY;
+            for solid in solids {
+                let b = solid.bounds();
+                for axis in 0..3 {
+                    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                    for i in 0..=40 {
+                        for j in 0..=40 {
+                            let mut p = b.min;
+                            p[u] += (b.max[u] - b.min[u]) * f64::from(i) / 40.0;
+                            p[v] += (b.max[v] - b.min[v]) * f64::from(j) / 40.0;
+                            if let Some((t0, t1)) = solid.line_interval(axis, &p) {
+                                for t in [t0, t1] {
+                                    let mut q = p;
+                                    q[axis] = t;
+                                    least = least.min(deepest_inside(&body, &from, &to, &q));
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            least
+        };
+        let whole = CuttingBody::Ball(body);
+        let gouge = whole.gouge_sweep(&from, &to, tolerance, split);
+        let deep = shallowest(&gouge);
+        assert!(
+            deep >= 0.75 * tolerance,
+            "a point only {deep} mm inside the tool"
+        );
+        let plain = body.eroded(tolerance).sweep(&from, &to, split);
+        let shallow = shallowest(&plain);
+        assert!(shallow < 0.0, "{shallow}");
     }
 
     fn block(spacing: f64) -> Stock {

@@ -158,7 +158,6 @@ pub fn simulate_with_progress(
     }
     let mut part_model = Stock::from_mesh(part, stock.spacing(), options.max_dexels)?;
     let surface = SurfaceDistance::new(part);
-    let eroded = body.eroded(tolerance);
     let split = tolerance.max(0.1 * stock.spacing()).max(1e-4);
     let mut moves = vec![MoveRecord::default(); toolpath.moves.len()];
     let (mut feed_length, mut air_length) = (0.0, 0.0);
@@ -178,7 +177,7 @@ pub fn simulate_with_progress(
                 let (from, to) = (&pair[0].pose, &pair[1].pose);
                 MoveWork {
                     cut: body.sweep(from, to, split),
-                    gouge: eroded.sweep(from, to, split),
+                    gouge: body.gouge_sweep(from, to, tolerance, split),
                     guards: options
                         .non_cutting
                         .iter()
