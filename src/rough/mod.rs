@@ -580,17 +580,8 @@ pub fn rough_layers(
         }
         report.cleared_area_mm2 -= map.material_area();
         let rest = matches!(material, Material::Stock { .. });
-        if let Some((stock, body)) = material.tracked() {
-            // The next layer is planned from what this one leaves.
-            take_off(
-                stock,
-                body,
-                &writer.moves,
-                &mut removed,
-                tool_id,
-                options.tolerance,
-            );
-        }
+        // The next layer is planned from what this one leaves.
+        material.take_off(&writer.moves, &mut removed, tool_id, options.tolerance);
         if report.passes > 0 || rest {
             above = forbidden.as_ref().map(RegionIndex::new);
             z_above = z;
@@ -605,16 +596,8 @@ pub fn rough_layers(
         MoveKind::Retract,
         options.feeds.rapid,
     );
-    if let Some((stock, body)) = material.tracked() {
-        take_off(
-            stock,
-            body,
-            &writer.moves,
-            &mut removed,
-            tool_id,
-            options.tolerance,
-        );
-    } else {
+    material.take_off(&writer.moves, &mut removed, tool_id, options.tolerance);
+    if matches!(material, Material::Blank) {
         removed.clear();
     }
     Ok(Roughing {
@@ -653,39 +636,26 @@ pub enum Material<'a> {
 }
 
 impl Material<'_> {
-    /// The stock the layers are taken off as they are planned, if any.
-    fn tracked(&mut self) -> Option<(&mut Stock, &CuttingBody)> {
-        match self {
-            Material::Blank => None,
-            Material::BlankOnStock { stock, body } | Material::Stock { stock, body } => {
-                Some((&mut **stock, &**body))
-            }
-        }
-    }
-}
-
-/// Takes the moves not yet taken off `stock` off it (those after the last one `removed`
-/// holds), recording what each removes.
-fn take_off(
-    stock: &mut Stock,
-    body: &CuttingBody,
-    moves: &[Move],
-    removed: &mut Vec<f64>,
-    tool_id: u32,
-    tolerance: f64,
-) {
-    let from = removed.len() - 1;
-    if moves.len() > from + 1 {
-        let rest = Toolpath {
-            tool_id,
-            moves: moves[from..].to_vec(),
+    /// Takes the moves not yet taken off the tracked stock off it (those after the last one
+    /// `removed` holds), recording what each removes; nothing without a stock.
+    fn take_off(&mut self, moves: &[Move], removed: &mut Vec<f64>, tool_id: u32, tolerance: f64) {
+        let (Material::BlankOnStock { stock, body } | Material::Stock { stock, body }) = self
+        else {
+            return;
         };
-        removed.extend(
-            stock
-                .remove_cutting(&rest, body, tolerance)
-                .into_iter()
-                .skip(1),
-        );
+        let from = removed.len() - 1;
+        if moves.len() > from + 1 {
+            let rest = Toolpath {
+                tool_id,
+                moves: moves[from..].to_vec(),
+            };
+            removed.extend(
+                stock
+                    .remove_cutting(&rest, body, tolerance)
+                    .into_iter()
+                    .skip(1),
+            );
+        }
     }
 }
 

@@ -69,12 +69,7 @@ impl BallEndBody {
     /// sweep by less than `tolerance` (see the module docs). Antipodal axes, which no
     /// interpolation joins, are swept as the two end positions joined by their hull.
     pub fn sweep(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SweptSolid> {
-        self.sweep_parts(from, to, tolerance, true)
-    }
-
-    /// The ball alone swept from `from` to `to` (its centre's chords), within `tolerance`.
-    pub fn sweep_ball(&self, from: &ToolPose, to: &ToolPose, tolerance: f64) -> Vec<SweptSolid> {
-        self.sweep_parts(from, to, tolerance, false)
+        self.sweep_parts(from, to, tolerance, Parts::Both)
     }
 
     fn sweep_parts(
@@ -82,7 +77,7 @@ impl BallEndBody {
         from: &ToolPose,
         to: &ToolPose,
         tolerance: f64,
-        with_flutes: bool,
+        parts: Parts,
     ) -> Vec<SweptSolid> {
         let (k0, k1) = (from.axis.into_inner(), to.axis.into_inner());
         let turn = angle_between(&k0, &k1);
@@ -102,18 +97,20 @@ impl BallEndBody {
         };
         let mut solids = Vec::new();
         // The ball: its centre's chords.
-        let ball_steps = steps_for_bulge(self.centre_height).clamp(1.0, 1e5) as usize;
-        let mut previous = self.segment_at(from).0;
-        for s in 1..=ball_steps {
-            let next = self.segment_at(&pose_at(s as f64 / ball_steps as f64)).0;
-            solids.push(SweptSolid::Ball(Capsule {
-                a: previous,
-                b: next,
-                radius: self.radius,
-            }));
-            previous = next;
+        if parts != Parts::Flutes {
+            let ball_steps = steps_for_bulge(self.centre_height).clamp(1.0, 1e5) as usize;
+            let mut previous = self.segment_at(from).0;
+            for s in 1..=ball_steps {
+                let next = self.segment_at(&pose_at(s as f64 / ball_steps as f64)).0;
+                solids.push(SweptSolid::Ball(Capsule {
+                    a: previous,
+                    b: next,
+                    radius: self.radius,
+                }));
+                previous = next;
+            }
         }
-        if self.segment == 0.0 || !with_flutes {
+        if self.segment == 0.0 || parts == Parts::Ball {
             return solids;
         }
         // The flutes above the ball's centre plane: hulls of the segment's end positions,
@@ -313,6 +310,14 @@ impl RevolvedCutter {
     }
 }
 
+/// Which parts of a ball-end [`BallEndBody::sweep_parts`] sweeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Parts {
+    Ball,
+    Flutes,
+    Both,
+}
+
 /// The cutting body a simulation sweeps: a ball-end's closed forms, or any cutter's hulls.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CuttingBody {
@@ -351,12 +356,12 @@ impl CuttingBody {
     /// What a gouge test sweeps through the part: the points more than `depth` inside the
     /// body, swept within `split`.
     ///
-    /// A ball-end's flutes are swept as hulls cut by a plane lowered below the ball's centre
-    /// (see [`BallEndBody::sweep`]); the hulls stand up to `split` outside the eroded sweep,
-    /// below the centre plane too, where they reach past the eroded ball. A ball finishing
-    /// within `depth` of the surface would read as a gouge there. So the flutes are eroded
-    /// by `split` more, and the ball, whose chords are the accurate part, is swept within a
-    /// quarter of `depth`. Flutes that touch the part at all are refused before a program is
+    /// A ball-end's flutes are swept as hulls of the axis segment's end positions (see
+    /// [`BallEndBody::sweep`]); where the axis turns, a hull stands up to `split` outside the
+    /// eroded sweep, by its twist. A ball finishing within `depth` of the surface, its flutes
+    /// beside a wall, would read as a gouge there. So the flutes are eroded by `split` more,
+    /// and the ball, whose chords are the accurate part, is swept within a quarter of
+    /// `depth`. Flutes that touch the part at all are refused before a program is
     /// written, by the pose checks ([`crate::verify`]).
     pub fn gouge_sweep(
         &self,
@@ -367,16 +372,10 @@ impl CuttingBody {
     ) -> Vec<SweptSolid> {
         match self {
             CuttingBody::Ball(b) => {
-                let mut solids = b
-                    .eroded(depth)
-                    .sweep_ball(from, to, (0.25 * depth).max(1e-4));
+                let ball = b.eroded(depth);
                 let flutes = b.eroded((depth + split).min(0.5 * b.radius));
-                solids.extend(
-                    flutes
-                        .sweep(from, to, split)
-                        .into_iter()
-                        .filter(|solid| matches!(solid, SweptSolid::Flutes(_))),
-                );
+                let mut solids = ball.sweep_parts(from, to, (0.25 * depth).max(1e-4), Parts::Ball);
+                solids.extend(flutes.sweep_parts(from, to, split, Parts::Flutes));
                 solids
             }
             CuttingBody::Revolved(r) => r.eroded(depth).sweep(from, to, split),
