@@ -7,7 +7,10 @@
 //! the segment ab seen from above. So a move is clear of the shape when every triangle, cut
 //! to the part above that height, is at least R from the segment in the plane: a conservative
 //! test (it ignores that a ramp is higher than its low end), computed in closed form per
-//! triangle. The flat end resting on a flat face at its own height is not an overcut.
+//! triangle. The flat end resting on a flat face at its own height is not an overcut, nor is
+//! one that stands less than the tolerance above it: the program is posted rounded, so a tip
+//! planned on a flat at 18.5000000000003 mm is written at 18.5, and the flat's sides must not
+//! then count as standing beside the tool.
 
 use rayon::prelude::*;
 
@@ -115,7 +118,7 @@ pub fn overcuts(shape: &Mesh, toolpath: &Toolpath, radius: f64, tolerance: f64) 
             if !upright(&a.axis) || !upright(&b.axis) {
                 return f64::NEG_INFINITY;
             }
-            move_clearance(shape, &buckets, &a.tip, &b.tip, radius)
+            move_clearance(shape, &buckets, &a.tip, &b.tip, radius, tolerance)
         })
         .collect();
     let overcuts = clearances
@@ -134,10 +137,17 @@ pub fn overcuts(shape: &Mesh, toolpath: &Toolpath, radius: f64, tolerance: f64) 
     }
 }
 
-/// Distance in the plane from the segment ab to the nearest part of a triangle above
-/// min(a.z, b.z), minus `radius` (`+∞` if nothing stands within reach).
-fn move_clearance(shape: &Mesh, buckets: &Buckets, a: &Point3, b: &Point3, radius: f64) -> f64 {
-    let floor = a.z.min(b.z);
+/// Distance in the plane from the segment ab to the nearest part of a triangle more than
+/// `tolerance` above min(a.z, b.z), minus `radius` (`+∞` if nothing stands within reach).
+fn move_clearance(
+    shape: &Mesh,
+    buckets: &Buckets,
+    a: &Point3,
+    b: &Point3,
+    radius: f64,
+    tolerance: f64,
+) -> f64 {
+    let floor = a.z.min(b.z) + tolerance.max(0.0);
     let lo = (a.x.min(b.x), a.y.min(b.y));
     let hi = (a.x.max(b.x), a.y.max(b.y));
     let (pa, pb) = (Point3::new(a.x, a.y, 0.0), Point3::new(b.x, b.y, 0.0));
@@ -264,6 +274,21 @@ mod tests {
             1e-9,
         );
         assert_eq!(report.overcuts.len(), 1);
+    }
+
+    /// A tip posted rounded onto a flat the shape has a hair higher (here 3e-13 mm) rests on
+    /// it; one the tolerance below it cuts into the flat, and its sides count.
+    #[test]
+    fn a_tip_rounded_onto_a_flat_rests_on_it() {
+        let mut cube = centred_cube();
+        for p in &mut cube.positions {
+            p.z += 3e-13;
+        }
+        let over_the_edge = |z: f64| path(&[[0.0, 0.0, z], [4.0, 0.0, z]]);
+        let report = overcuts(&cube, &over_the_edge(5.0), 3.0, 0.001);
+        assert!(report.overcuts.is_empty(), "{report:?}");
+        let report = overcuts(&cube, &over_the_edge(5.0 - 0.002), 3.0, 0.001);
+        assert_eq!(report.overcuts.len(), 1, "{report:?}");
     }
 
     /// A ramp's low end counts: a ramp from above the cube down beside it is judged at its
