@@ -181,3 +181,39 @@ fn a_library_without_end_mills_a_mesh_blank_and_a_zero_up_are_refused() {
         "{err}"
     );
 }
+
+/// The conventional baseline (`--conventional`): equal layers at the largest depth of cut, no
+/// plane at a flat; `--layer-depth` thins them, which leaves less material and takes longer —
+/// what lets a route be compared with the baseline at equal material left.
+#[test]
+fn the_conventional_baseline_cuts_equal_layers_at_the_depth_asked_for() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
+    let run = |max_depth: Option<f64>| {
+        let options = RoughOptions {
+            tool_id: Some(3),
+            rest_tools: 0,
+            resolution: Some(1.0),
+            uniform_layers: true,
+            feed_control: None,
+            max_depth,
+            ..Default::default()
+        };
+        let out = job::rough(&raw, "data/impeller.glb", "mm", &library(), &options).expect("rough");
+        assert_eq!(out.failure, None);
+        out.report
+    };
+    let (deep, thin) = (run(None), run(Some(2.5)));
+    for (report, depth) in [(&deep, 5.0), (&thin, 2.5)] {
+        let layers = &report.tools[0].layers;
+        assert!(layers.iter().all(|l| !l.layer.at_flat));
+        assert!(layers.iter().all(|l| l.layer.depth <= depth + 1e-9));
+        // Equal layers: every one as deep as the first (the blank's top to the floor, split
+        // evenly).
+        let first = layers[0].layer.depth;
+        assert!(layers.iter().all(|l| (l.layer.depth - first).abs() < 1e-9));
+    }
+    assert!(thin.tools[0].layers.len() > deep.tools[0].layers.len());
+    assert!(thin.volume_after_mm3 < deep.volume_after_mm3);
+    assert!(thin.estimated_time_s > deep.estimated_time_s);
+    assert_eq!(thin.max_depth_mm, Some(2.5));
+}

@@ -186,6 +186,7 @@ pub fn plan_roughing(
                 .model()
                 .map(|model| (model, f64::from(job.roughing.spindle_rpm))),
             uniform_layers: false,
+            max_depth: None,
         },
         &mut context.stock,
         from_blank,

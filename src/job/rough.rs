@@ -67,6 +67,8 @@ pub struct RoughOptions {
     /// Equal layers at the largest depth of cut, no extra plane at the flats: with one tool
     /// and no feed control, the conventional z-level roughing to compare against.
     pub uniform_layers: bool,
+    /// The largest depth of cut of every tool, mm; `None`: each tool's radius.
+    pub max_depth: Option<f64>,
 }
 
 impl Default for RoughOptions {
@@ -89,6 +91,7 @@ impl Default for RoughOptions {
             tolerance: 0.01,
             feed_control: Some(crate::feed::CuttingModel::default()),
             uniform_layers: false,
+            max_depth: None,
         }
     }
 }
@@ -148,6 +151,9 @@ pub struct RoughReport {
     pub allowance_mm: f64,
     /// Equal layers, no planes at the flats (the conventional baseline).
     pub uniform_layers: bool,
+    /// The largest depth of cut asked for, mm (`None`: each tool's radius).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_depth_mm: Option<f64>,
     pub shape_triangles: usize,
     pub resolution_mm: f64,
     pub blank_volume_mm3: f64,
@@ -242,6 +248,7 @@ pub fn rough(
                     .feed_control
                     .map(|model| (model, f64::from(options.spindle_rpm))),
                 uniform_layers: options.uniform_layers,
+                max_depth: options.max_depth,
             },
             &mut planning_stock,
             from_blank,
@@ -409,6 +416,7 @@ pub fn rough(
         blank: spec.describe(),
         allowance_mm: options.allowance,
         uniform_layers: options.uniform_layers,
+        max_depth_mm: options.max_depth,
         shape_triangles: shape.triangles.len(),
         resolution_mm: spacing,
         blank_volume_mm3: blank_volume,

@@ -50,6 +50,8 @@ pub(super) struct ToolRoughing<'a> {
     /// Equal layers at the largest depth of cut, without the extra planes at flats (the
     /// conventional z-level roughing the baseline is).
     pub uniform_layers: bool,
+    /// The largest depth of cut, mm; `None`: the tool's radius.
+    pub max_depth: Option<f64>,
 }
 
 /// One tool's layers, and what feed control made of their feeds.
@@ -99,6 +101,10 @@ pub(super) fn rough_with_tool(
     options.tolerance = how.tolerance;
     if how.uniform_layers {
         options.layers.flat_area = f64::INFINITY;
+    }
+    if let Some(depth) = how.max_depth {
+        options.layers.max_depth = depth;
+        options.layers.min_depth = options.layers.min_depth.min(depth);
     }
     let body = CuttingBody::of(&assembly.cutter);
     // Either way each layer comes off the stock as it is planned, which measures what each

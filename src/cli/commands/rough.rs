@@ -55,6 +55,11 @@ pub struct RoughArgs {
     /// the flats), the programmed feeds, and no rest tools unless --rest-tools says so.
     #[arg(long)]
     pub conventional: bool,
+    /// The largest depth of cut of every tool, mm [default: each tool's radius]: with
+    /// --conventional, the baseline's layer depth, to compare routes that leave the same
+    /// material.
+    #[arg(long, value_parser = positive)]
+    pub layer_depth: Option<f64>,
     /// The material's specific cutting force K_t, N/mm² (aluminium 7075: 800, Ti-6Al-4V:
     /// about 2000, Inconel 718: 3000); feed control holds K_t·A·f/(π·D·n) at the target.
     #[arg(long, default_value_t = 800.0, value_parser = positive)]
@@ -105,6 +110,7 @@ pub fn run(args: &RoughArgs) -> Result<()> {
         },
         resolution: args.resolution,
         uniform_layers: args.conventional,
+        max_depth: args.layer_depth,
         feed_control: (!args.no_feed_control && !args.conventional).then_some(
             crate::feed::CuttingModel {
                 specific_force: args.specific_force,
