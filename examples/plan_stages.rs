@@ -63,10 +63,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             }
             OperationKind::Finish => OperationTarget::DriveSurface(&drive),
-            // Roughing has its own stage (`job::plan_roughing`, from a `[stock]` blank) and a
-            // program with tool changes (`job::post_program_with_tool_changes`): `job::plan`
-            // wires it in.
-            OperationKind::Rough | OperationKind::RestRough => {
+            // Roughing has its own stage (`job::plan_roughing`, from a `[stock]` blank; channel
+            // roughing `job::channel_rough` on the stock it leaves) and a program with tool
+            // changes (`job::post_program_with_tool_changes`): `job::plan` wires it in.
+            OperationKind::Rough | OperationKind::RestRough | OperationKind::ChannelRough => {
                 return Err(format!(
                     "{}: this example runs the ball operations only; job::plan runs roughing",
                     operation.name

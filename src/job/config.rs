@@ -122,6 +122,16 @@ pub struct RoughingSection {
     pub cut_feed: f64,
     /// Feed down the ramps into material, mm/min.
     pub entry_feed: f64,
+    /// When the operations are not listed: after the end mills, rough the rest they leave
+    /// under overhangs and between blades with the job's ball, 5-axis, in offset layers
+    /// (`channel-rough`).
+    pub channel: bool,
+    /// Channel roughing: mm between its offset layers; leave out for the ball's radius.
+    pub channel_step: Option<f64>,
+    /// Channel roughing: offset layers at most (the deepest rest beyond them stays).
+    pub channel_max_layers: usize,
+    /// Channel roughing: scallop height of its passes on each layer, mm.
+    pub channel_scallop_height: f64,
 }
 
 impl Default for RoughingSection {
@@ -133,6 +143,10 @@ impl Default for RoughingSection {
             spindle_rpm: 8000,
             cut_feed: 2000.0,
             entry_feed: 800.0,
+            channel: false,
+            channel_step: None,
+            channel_max_layers: 8,
+            channel_scallop_height: 0.25,
         }
     }
 }
@@ -522,6 +536,19 @@ impl Job {
         positive("roughing.allowance", self.roughing.allowance)?;
         positive("roughing.cut_feed", self.roughing.cut_feed)?;
         positive("roughing.entry_feed", self.roughing.entry_feed)?;
+        if let Some(step) = self.roughing.channel_step {
+            positive("roughing.channel_step", step)?;
+        }
+        positive(
+            "roughing.channel_scallop_height",
+            self.roughing.channel_scallop_height,
+        )?;
+        if self.roughing.channel_max_layers == 0 {
+            return Err(invalid(
+                "roughing.channel_max_layers",
+                "must be at least 1".to_string(),
+            ));
+        }
         if let Some(model) = self.cutting.model() {
             model.validate().map_err(|e| invalid("cutting", e))?;
         }
@@ -716,6 +743,10 @@ pub enum OperationKind {
     /// Layers again with a smaller end mill, only where the stock the operations before it
     /// leave still holds material outside its offset shape.
     RestRough,
+    /// Offset layers of the job's ball, 5-axis, from the deepest rest the operations before
+    /// left down to `stock_to_leave` mm off the part, each cutting only where material stands:
+    /// the rest under overhangs and between blades that vertical end mills cannot reach.
+    ChannelRough,
     /// Ball-end passes over the stock-to-leave shape that holds the part at
     /// `stock_to_leave` mm (seed 004 ch. 5 step 3).
     SemiFinish,
@@ -729,6 +760,7 @@ impl OperationKind {
         match self {
             OperationKind::Rough => "rough",
             OperationKind::RestRough => "rest-rough",
+            OperationKind::ChannelRough => "channel-rough",
             OperationKind::SemiFinish => "semi-finish",
             OperationKind::Finish => "finish",
         }
@@ -759,6 +791,10 @@ pub struct OperationSection {
     /// Roughing: the library tool (its id); default the largest flat or bull-nose end mill
     /// that reaches the floor (`rough`), the next at most 3/4 of the one before (`rest-rough`).
     pub tool_id: Option<u32>,
+    /// Channel roughing: mm between offset layers; default `roughing.channel_step`.
+    pub step: Option<f64>,
+    /// Channel roughing: offset layers at most; default `roughing.channel_max_layers`.
+    pub max_layers: Option<usize>,
 }
 
 /// One operation, every option resolved.
@@ -775,6 +811,17 @@ pub struct Operation {
     pub stock_to_leave: f64,
     /// Scallop height target, mm.
     pub scallop_height: f64,
+    /// Channel roughing's offset layers; `None` for every other kind.
+    pub layers: Option<OffsetLayers>,
+}
+
+/// The offset layers of a `channel-rough` operation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OffsetLayers {
+    /// mm between layers (the most a layer cuts into material on a face).
+    pub step: f64,
+    /// Layers at most.
+    pub max_layers: usize,
 }
 
 impl Job {
@@ -790,6 +837,14 @@ impl Job {
             OperationKind::Finish => "finish".to_string(),
             kind => format!("{} to {stock} mm", kind.name()),
         };
+        let layers = |kind: OperationKind, step: Option<f64>, max_layers: Option<usize>| {
+            (kind == OperationKind::ChannelRough).then(|| OffsetLayers {
+                step: step
+                    .or(self.roughing.channel_step)
+                    .unwrap_or(0.5 * self.tool.diameter),
+                max_layers: max_layers.unwrap_or(self.roughing.channel_max_layers),
+            })
+        };
         let operation = |kind: OperationKind, stock: f64, scallop: f64| Operation {
             name: default_name(kind, stock),
             kind,
@@ -797,6 +852,7 @@ impl Job {
             library_tool: None,
             stock_to_leave: stock,
             scallop_height: scallop,
+            layers: layers(kind, None, None),
         };
         let operations: Vec<Operation> = if self.operations.is_empty() {
             // A near-net blank (the part grown, a casting's mesh) is taken as roughed.
@@ -821,6 +877,13 @@ impl Job {
                 };
                 operation(kind, self.roughing.allowance, self.strategy.scallop_height)
             });
+            let channel = (layered && self.roughing.channel).then(|| {
+                operation(
+                    OperationKind::ChannelRough,
+                    self.roughing.allowance,
+                    self.roughing.channel_scallop_height,
+                )
+            });
             let semi = self.strategy.semi_finish_allowances.iter().map(|&a| {
                 operation(
                     OperationKind::SemiFinish,
@@ -829,6 +892,7 @@ impl Job {
                 )
             });
             rough
+                .chain(channel)
                 .chain(semi)
                 .chain(std::iter::once(operation(
                     OperationKind::Finish,
@@ -847,7 +911,9 @@ impl Job {
             let mut listed = Vec::with_capacity(self.operations.len());
             for (i, s) in self.operations.iter().enumerate() {
                 let stock = s.stock_to_leave.unwrap_or(match s.kind {
-                    OperationKind::Rough | OperationKind::RestRough => self.roughing.allowance,
+                    OperationKind::Rough
+                    | OperationKind::RestRough
+                    | OperationKind::ChannelRough => self.roughing.allowance,
                     _ => 0.0,
                 });
                 let name = s
@@ -871,6 +937,19 @@ impl Job {
                          takes its tool from [tool]",
                     ));
                 }
+                if s.kind != OperationKind::ChannelRough
+                    && (s.step.is_some() || s.max_layers.is_some())
+                {
+                    return Err(fail(
+                        "step and max_layers set the offset layers of channel-rough alone",
+                    ));
+                }
+                if s.step.is_some_and(|step| !(step.is_finite() && step > 0.0)) {
+                    return Err(fail("step must be a positive number of mm"));
+                }
+                if s.max_layers == Some(0) {
+                    return Err(fail("max_layers must be at least 1"));
+                }
                 listed.push(Operation {
                     name,
                     kind: s.kind,
@@ -879,8 +958,10 @@ impl Job {
                     stock_to_leave: stock,
                     scallop_height: s.scallop_height.unwrap_or(match s.kind {
                         OperationKind::SemiFinish => self.strategy.semi_finish_scallop_height,
+                        OperationKind::ChannelRough => self.roughing.channel_scallop_height,
                         _ => self.strategy.scallop_height,
                     }),
+                    layers: layers(s.kind, s.step, s.max_layers),
                 });
             }
             listed
@@ -907,7 +988,10 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
         }
         let previous_kind = i.checked_sub(1).map(|j| operations[j].kind);
         match op.kind {
-            OperationKind::Rough | OperationKind::RestRough | OperationKind::SemiFinish => {
+            OperationKind::Rough
+            | OperationKind::RestRough
+            | OperationKind::ChannelRough
+            | OperationKind::SemiFinish => {
                 if !(op.stock_to_leave.is_finite() && op.stock_to_leave > 0.0) {
                     return Err(fail(format!(
                         "{} needs stock_to_leave > 0 mm, got {}",
@@ -915,9 +999,13 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
                         op.stock_to_leave
                     )));
                 }
-                // A rest-roughing tool may rough to the same shape as the one before it; every
-                // other operation must leave less than what is already there.
-                let same_allowed = op.kind == OperationKind::RestRough;
+                // A rest-roughing tool may rough to the same shape as the one before it, and
+                // channel roughing to the same allowance (it takes what they could not reach);
+                // every other operation must leave less than what is already there.
+                let same_allowed = matches!(
+                    op.kind,
+                    OperationKind::RestRough | OperationKind::ChannelRough
+                );
                 if op.stock_to_leave > previous_stock
                     || (op.stock_to_leave == previous_stock && !same_allowed)
                 {
@@ -955,6 +1043,19 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
             OperationKind::RestRough if !previous_kind.is_some_and(OperationKind::is_roughing) => {
                 return Err(fail(
                     "rest-roughing follows a roughing or rest-roughing operation".into(),
+                ));
+            }
+            // Its layers are cut only where material stands, which needs the stock model the
+            // roughing from a blank keeps.
+            OperationKind::ChannelRough
+                if !previous_kind.is_some_and(|kind| {
+                    kind.is_roughing() || kind == OperationKind::ChannelRough
+                }) =>
+            {
+                return Err(fail(
+                    "channel roughing follows the roughing of a blank (a rough or rest-rough \
+                     operation)"
+                        .into(),
                 ));
             }
             _ => {}

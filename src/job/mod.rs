@@ -11,6 +11,7 @@
 mod access;
 mod blank;
 mod budget;
+mod channel_rough;
 mod config;
 mod contour;
 mod contour_picture;
@@ -40,10 +41,13 @@ pub use access::{
 };
 pub use blank::BlankSpec;
 pub use budget::ToleranceBudget;
+pub use channel_rough::{
+    ChannelLayerSummary, ChannelPlan, ChannelSummary, channel_rough, layer_allowances,
+};
 pub use config::{
-    CuttingSection, FeedSection, Job, JobError, LimitsSection, MachineSection, NO_BLANK, Operation,
-    OperationKind, OperationSection, PartSection, RoughingSection, SafetySection, StockSection,
-    StrategySection, ToolSection, unit_direction,
+    CuttingSection, FeedSection, Job, JobError, LimitsSection, MachineSection, NO_BLANK,
+    OffsetLayers, Operation, OperationKind, OperationSection, PartSection, RoughingSection,
+    SafetySection, StockSection, StrategySection, ToolSection, unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,

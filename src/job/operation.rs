@@ -185,6 +185,95 @@ mod tests {
         assert_eq!(listed[1].library_tool, None);
     }
 
+    /// Channel roughing: after the end mills by `[roughing] channel`, or listed after a
+    /// roughing operation, with its layers' step and count; refused anywhere it would have no
+    /// stock model to find its material in, and its layer keys refused on other kinds.
+    #[test]
+    fn channel_roughing_follows_the_end_mills() {
+        let ops = job(
+            "[stock]\nblank = \"cylinder\"\n[roughing]\nchannel = true\n\
+             channel_max_layers = 5\n[tool]\ndiameter = 6.0\n",
+        )
+        .expect("job");
+        let kinds: Vec<OperationKind> = ops.iter().map(|o| o.kind).collect();
+        assert_eq!(
+            kinds,
+            vec![
+                OperationKind::Rough,
+                OperationKind::RestRough,
+                OperationKind::ChannelRough,
+                OperationKind::Finish,
+            ]
+        );
+        // The step defaults to the ball's radius.
+        assert_eq!(
+            ops[2].layers,
+            Some(crate::job::OffsetLayers {
+                step: 3.0,
+                max_layers: 5
+            })
+        );
+        assert_eq!(ops[2].stock_to_leave, 0.5);
+        assert!(
+            ops.iter()
+                .filter(|o| o.kind != OperationKind::ChannelRough)
+                .all(|o| o.layers.is_none())
+        );
+        // Without a blank to rough, `channel` adds nothing.
+        let none = job("[stock]\nblank = \"none\"\n[roughing]\nchannel = true\n").expect("job");
+        assert_eq!(none.len(), 1);
+        let listed = job("[[operation]]\nkind = \"rough\"\n\
+             [[operation]]\nkind = \"channel-rough\"\nstep = 1.5\nmax_layers = 3\n\
+             [[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.2\n\
+             [[operation]]\nkind = \"finish\"\n")
+        .expect("job");
+        assert_eq!(
+            listed[1].layers,
+            Some(crate::job::OffsetLayers {
+                step: 1.5,
+                max_layers: 3
+            })
+        );
+        for (text, says) in [
+            (
+                "[[operation]]\nkind = \"channel-rough\"\n[[operation]]\nkind = \"finish\"\n",
+                "follows the roughing of a blank",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\n[[operation]]\nkind = \"semi-finish\"\n\
+                 stock_to_leave = 0.3\n[[operation]]\nkind = \"channel-rough\"\n\
+                 stock_to_leave = 0.2\n[[operation]]\nkind = \"finish\"\n",
+                "follows the roughing of a blank",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\n[[operation]]\nkind = \"channel-rough\"\n\
+                 stock_to_leave = 0.8\n[[operation]]\nkind = \"finish\"\n",
+                "not below",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\n[[operation]]\nkind = \"channel-rough\"\n\
+                 step = 0\n[[operation]]\nkind = \"finish\"\n",
+                "positive",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\nstep = 1\n[[operation]]\nkind = \"finish\"\n",
+                "channel-rough alone",
+            ),
+            ("[roughing]\nchannel_step = -1\n", "roughing.channel_step"),
+            (
+                "[roughing]\nchannel_max_layers = 0\n",
+                "roughing.channel_max_layers",
+            ),
+        ] {
+            let err = Job::from_toml(text, "job.toml")
+                .and_then(|job| job.validate())
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {text}"))
+                .to_string();
+            assert!(err.contains(says), "{text}: {err}");
+        }
+    }
+
     #[test]
     fn the_stock_after_an_operation_is_what_it_leaves() {
         let ops = job("[stock]\nblank = \"none\"\n[strategy]\nsemi_finish_allowances = [0.4]\n")

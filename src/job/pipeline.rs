@@ -20,6 +20,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::budget::ToleranceBudget;
+use super::channel_rough::channel_rough;
 use super::config::{Job, Operation, OperationKind, SurfaceSection};
 use super::offsets::stock_shapes;
 use super::operation::InProcessStock;
@@ -45,7 +46,7 @@ pub use super::observer::{Observer, Quiet};
 /// Motion of each rotary axis in one step of a split rapid, degrees: the axis turns at most
 /// twice that, and at 300 mm from the rotary axes a step's chord keeps within 0.2 mm of the
 /// path the control takes (rapids run at the safe distance, 20 mm beyond the part's reach).
-const MAX_RAPID_TURN_DEG: f64 = 2.0;
+pub(super) const MAX_RAPID_TURN_DEG: f64 = 2.0;
 
 /// Everything a plan produces, in memory.
 pub struct PlanOutput {
@@ -199,6 +200,8 @@ pub enum OperationDetails {
     /// Layers with a library end mill ([`super::plan_roughing`]); the summary as planned,
     /// before the posted program is checked.
     Rough(Box<super::plan_roughing::RoughingSummary>),
+    /// Offset layers of the ball ([`super::channel_rough`]).
+    ChannelRough(Box<super::channel_rough::ChannelSummary>),
     SemiFinish(SemiFinishSummary),
     Finish {
         passes: Finishing,
@@ -440,6 +443,47 @@ pub fn plan(
             timings.roughing += ms(t);
             continue;
         }
+        if operation.kind == OperationKind::ChannelRough {
+            let t = Instant::now();
+            observer.stage(&format!("channel roughing: {}", operation.name), 0);
+            let context = roughing_context.as_mut().ok_or_else(|| {
+                Error::JobFile(JobError::Operations(format!(
+                    "operation '{}' roughs what a blank's roughing left: it needs a [stock] \
+                     blank roughed before it",
+                    operation.name
+                )))
+            })?;
+            let channel = channel_rough(
+                &setup,
+                part,
+                operation,
+                context,
+                &ball_take_off,
+                last_ball_move.as_ref(),
+                has_blank,
+                &advance,
+            )?;
+            *rapids_fed.get_or_insert(0) += channel.rapids_fed;
+            ball_feed_control.extend(channel.feed_control.into_iter().map(
+                |(operation, feed_control)| BallFeedControl {
+                    operation,
+                    feed_control,
+                },
+            ));
+            if let Some(m) = channel.toolpath.moves.last() {
+                last_ball_move = Some(*m);
+            }
+            planned.push(PlannedOperation {
+                operation: operation.clone(),
+                toolpath: channel.toolpath,
+                details: OperationDetails::ChannelRough(Box::new(channel.summary)),
+                failure: channel.failure,
+            });
+            tools.push(setup.tool.clone());
+            stock = stock.after(operation);
+            timings.channel_roughing += ms(t);
+            continue;
+        }
         let target = match operation.kind {
             OperationKind::SemiFinish => {
                 let (level, shape) = shapes_left.next().ok_or_else(|| {
@@ -452,7 +496,8 @@ pub fn plan(
             }
             OperationKind::Finish => {
                 // Each roughing time is rounded on its own: clamp the rounding's -0.1 ms away.
-                timings.semi_finishing = (ms(t) - timings.roughing).max(0.0);
+                timings.semi_finishing =
+                    (ms(t) - timings.roughing - timings.channel_roughing).max(0.0);
                 let stepover = path::stepover_for_scallop(
                     operation.tool.diameter / 2.0,
                     operation.scallop_height,
@@ -468,7 +513,7 @@ pub fn plan(
                 );
                 OperationTarget::DriveSurface(&drive)
             }
-            OperationKind::Rough | OperationKind::RestRough => {
+            OperationKind::Rough | OperationKind::RestRough | OperationKind::ChannelRough => {
                 return Err(Error::Internal("roughing is planned above".into()));
             }
         };
@@ -646,10 +691,12 @@ pub fn plan(
     observer.finish();
 
     let mut semi_summaries = Vec::new();
+    let mut channel_summaries = Vec::new();
     let mut finishing = None;
     for p in planned {
         match p.details {
             OperationDetails::Rough(_) => {}
+            OperationDetails::ChannelRough(summary) => channel_summaries.push(*summary),
             OperationDetails::SemiFinish(summary) => semi_summaries.push(summary),
             OperationDetails::Finish { passes, linking } => finishing = Some((passes, linking)),
         }
@@ -741,6 +788,7 @@ pub fn plan(
         },
         stock_to_leave: semi_summaries,
         roughing: roughing.into_iter().map(|r| r.summary).collect(),
+        channel_roughing: channel_summaries,
         rapids_fed_through_rest: rapids_fed,
         ball_feed_control,
         poses: pose_counts(&toolpath),

@@ -241,6 +241,25 @@ impl RoughingContext {
         Arc::new(MaterialClearance::new(&self.stock))
     }
 
+    /// The volume of the planning stock now, mm³.
+    pub fn stock_volume(&self) -> f64 {
+        self.stock.volume()
+    }
+
+    /// The deepest rest over `part` now, mm: the largest over its faces of how far the
+    /// material stands off them along their normals ([`crate::stock::rest`]).
+    pub fn deepest_rest(&self, part: &Mesh) -> Result<f64> {
+        let part_model = Stock::from_mesh(part, self.stock.spacing(), DEFAULT_MAX_DEXELS)
+            .map_err(|e| Error::Internal(format!("the part as dexels: {e}")))?;
+        let rest = crate::stock::rest::rest_over(
+            &self.stock,
+            part,
+            &part_model,
+            self.stock.bounds().diagonal(),
+        );
+        Ok(rest.max_mm)
+    }
+
     /// Takes a ball operation's moves `path` off the planning stock, from `last` (where the
     /// operation before left the tool), so the next operation is planned against what it
     /// leaves. On the way, from the volume each move removes:

@@ -25,6 +25,10 @@ pub struct PlanReport {
     /// check of each tool's posted moves against its offset shape and the part. Empty: none.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub roughing: Vec<super::plan_roughing::RoughingSummary>,
+    /// The channel roughing operations after them: the ball's offset layers, each with what
+    /// it cut and the stock it left. Empty: none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub channel_roughing: Vec<super::channel_rough::ChannelSummary>,
     /// After roughing: the ball operations' rapids that would have passed through the
     /// material roughing leaves, made feed moves at the approach feed.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -186,6 +190,8 @@ pub struct StageTimings {
     pub collision_structures: f64,
     /// Roughing and rest-roughing operations planned (offset shapes, layers, planning stock).
     pub roughing: f64,
+    /// Channel roughing's offset layers, planned and taken off the planning stock.
+    pub channel_roughing: f64,
     pub semi_finishing: f64,
     pub finishing_passes: f64,
     pub linking: f64,

@@ -243,6 +243,8 @@ impl PlanSetup {
             tool: &self.prepared_tool,
             chooser: &self.chooser,
             reachable,
+            allowance: 0.0,
+            offset_layer: None,
         }
     }
 }

@@ -128,6 +128,9 @@ pub struct Finishing {
     pub smoothing: SmoothingStats,
     /// Poses dropped because they stepped back along the pass (or by less than 0.1 µm).
     pub backward_poses_dropped: usize,
+    /// Drive points of an offset layer left out because their ball (placed) cuts nothing
+    /// there ([`OffsetLayer`]).
+    pub points_in_air: usize,
 }
 
 /// Everything the per-point work needs, borrowed.
@@ -137,6 +140,24 @@ pub struct FinishingContext<'a> {
     pub tool: &'a PreparedTool,
     pub chooser: &'a AxisChooser,
     pub reachable: &'a (dyn Fn(&Vector3) -> bool + Sync),
+    /// Material kept on the part, mm: every ball centre (and every chord between two) is held
+    /// `ball_radius + allowance` from the part, so the ball stays `allowance` off it. 0 when
+    /// finishing; an offset layer of roughing ([`OffsetLayer`]) keeps more.
+    pub allowance: f64,
+    /// An offset layer's test of where there is anything to cut (see [`OffsetLayer`]); `None`
+    /// machines every drive point.
+    pub offset_layer: Option<&'a OffsetLayer<'a>>,
+}
+
+/// Where an offset layer of roughing has something to cut: `touches(centre, radius)` says
+/// whether a ball of `radius` about `centre` may meet material (it must never answer `false`
+/// for a ball that does). Drive points whose ball meets none are left out, except within
+/// `lead` mm of one that does, along the drive curve: a gap in the air shorter than twice the
+/// lead is cut through at feed rather than left and entered again, and each run of cuts starts
+/// and ends in the air.
+pub struct OffsetLayer<'a> {
+    pub touches: &'a (dyn Fn(&Point3, f64) -> bool + Sync),
+    pub lead: f64,
 }
 
 /// Plans ball-end finishing passes over the whole part along parallel plane sections.
@@ -175,7 +196,7 @@ pub fn finishing_passes(
                 // follows inserts poses where the chord still strays.
                 let mut points = curve
                     .simplified(
-                        ctx.tool.ball_radius,
+                        ctx.tool.ball_radius + ctx.allowance,
                         0.25 * options.tolerance,
                         options.max_step,
                     )
@@ -199,6 +220,7 @@ pub fn finishing_passes(
         out.splits_at_unreachable += p.splits_at_unreachable;
         out.splits_at_refinement += p.splits_at_refinement;
         out.backward_poses_dropped += p.backward_poses_dropped;
+        out.points_in_air += p.points_in_air;
         out.smoothing.merge(&p.smoothing);
     }
     out
@@ -230,17 +252,41 @@ fn drive_curve(
     out: &mut Finishing,
 ) {
     let r = ctx.tool.ball_radius;
-    // 1. Place every drive point; unreachable ones split the curve into runs.
+    // 0. An offset layer first places every ball and keeps the points near material.
+    let (centres, keep) = match ctx.offset_layer {
+        Some(layer) => {
+            let (centres, keep) = points_near_material(points, ctx, layer);
+            (Some(centres), keep)
+        }
+        None => (None, vec![true; points.len()]),
+    };
+    // 1. Place every drive point; unreachable ones (and an offset layer's points in the air)
+    //    split the curve into runs.
     let mut runs: Vec<Vec<(Placed, Vector3)>> = Vec::new();
     let mut run: Vec<(Placed, Vector3)> = Vec::new();
     for i in 0..points.len() {
         out.drive_points += 1;
         let drive = points[i];
+        if !keep[i] {
+            // An offset layer's ball that does not fit there is unreachable, not in the air:
+            // whether there is anything to cut cannot be told without a place for it.
+            match centres.as_ref().map(|c| c[i]) {
+                Some(None) => out
+                    .unreachable
+                    .push((drive.point, Unreachable::BallDoesNotFit)),
+                _ => out.points_in_air += 1,
+            }
+            if !run.is_empty() {
+                runs.push(std::mem::take(&mut run));
+            }
+            continue;
+        }
         let feed = feed_direction(points, i);
         let previous = run
             .last()
             .map(|(l, _): &(Placed, Vector3)| l.axis.into_inner());
-        match place(ctx, &drive, &feed, previous.as_ref(), None) {
+        let centre = centres.as_ref().map(|c| c[i]);
+        match place(ctx, &drive, &feed, previous.as_ref(), None, centre) {
             Ok(p) => run.push((p, feed)),
             Err(why) => {
                 out.unreachable.push((drive.point, why));
@@ -298,6 +344,53 @@ fn drive_curve(
         }
         push_forward_runs(ctx, options, current, out);
     }
+}
+
+/// An offset layer's ball centres for `points` (`None` where the ball does not fit), and which
+/// points to machine: those whose ball may touch material, and those within the layer's lead
+/// of one, measured along the curve.
+fn points_near_material(
+    points: &[DrivePoint],
+    ctx: &FinishingContext,
+    layer: &OffsetLayer,
+) -> (Vec<Option<Point3>>, Vec<bool>) {
+    let r = ctx.tool.ball_radius;
+    let centres: Vec<Option<Point3>> = points
+        .iter()
+        .map(|p| place_ball(ctx.part.surface(), p, r + ctx.allowance))
+        .collect();
+    let cuts: Vec<bool> = centres
+        .iter()
+        .map(|c| c.is_some_and(|c| (layer.touches)(&c, r)))
+        .collect();
+    // Arc length along the curve; a point is kept when a cutting one lies within the lead
+    // behind or ahead of it (two sweeps, each carrying the distance to the last cutting one).
+    let mut along = Vec::with_capacity(points.len());
+    let mut s = 0.0;
+    for (i, p) in points.iter().enumerate() {
+        if i > 0 {
+            s += (p.point - points[i - 1].point).norm();
+        }
+        along.push(s);
+    }
+    let mut keep = cuts.clone();
+    let mut last = None;
+    for i in 0..points.len() {
+        if cuts[i] {
+            last = Some(along[i]);
+        } else if last.is_some_and(|l| along[i] - l <= layer.lead) {
+            keep[i] = true;
+        }
+    }
+    last = None;
+    for i in (0..points.len()).rev() {
+        if cuts[i] {
+            last = Some(along[i]);
+        } else if last.is_some_and(|l| l - along[i] <= layer.lead) {
+            keep[i] = true;
+        }
+    }
+    (centres, keep)
 }
 
 /// Steps shorter than this (mm) carry no direction and are dropped.
@@ -373,7 +466,7 @@ fn push_forward_runs(
             let chord_ok = !ctx.part.surface().segment_within(
                 &centre(last),
                 &centre(&pose),
-                r - options.tolerance,
+                r + ctx.allowance - options.tolerance,
             );
             let turn_ok =
                 angle_between(&last.axis, &pose.axis).to_degrees() <= options.max_axis_turn_deg;
@@ -395,18 +488,27 @@ fn pose_of(p: &Placed, r: f64) -> ToolPose {
     }
 }
 
-/// Places the ball for a drive point and chooses its axis: `try_first` when that axis is valid
-/// (used between two placed poses, so the axis turns smoothly where both ends are fine),
-/// otherwise the chooser's pick near `previous`.
+/// Places the ball for a drive point (or takes the centre `placed` already found for it) and
+/// chooses its axis: `try_first` when that axis is valid (used between two placed poses, so
+/// the axis turns smoothly where both ends are fine), otherwise the chooser's pick near
+/// `previous`.
 fn place(
     ctx: &FinishingContext,
     drive: &DrivePoint,
     feed: &Vector3,
     previous: Option<&Vector3>,
     try_first: Option<&Vector3>,
+    placed: Option<Option<Point3>>,
 ) -> Result<Placed, Unreachable> {
-    let r = ctx.tool.ball_radius;
-    let centre = place_ball(ctx.part.surface(), drive, r).ok_or(Unreachable::BallDoesNotFit)?;
+    let centre = placed
+        .unwrap_or_else(|| {
+            place_ball(
+                ctx.part.surface(),
+                drive,
+                ctx.tool.ball_radius + ctx.allowance,
+            )
+        })
+        .ok_or(Unreachable::BallDoesNotFit)?;
     if let Some(axis) = try_first
         && axis_is_valid(ctx.part, ctx.rays, ctx.tool, &centre, axis, ctx.reachable).is_ok()
     {
@@ -444,12 +546,12 @@ fn refine(
     feed: &Vector3,
     depth: u32,
 ) -> Option<Vec<Placed>> {
-    let r = ctx.tool.ball_radius;
+    let held = ctx.tool.ball_radius + ctx.allowance;
     // The whole chord, exactly: it can cut deepest anywhere along its length.
-    let chord_ok = !ctx
-        .part
-        .surface()
-        .segment_within(&a.centre, &b.centre, r - options.tolerance);
+    let chord_ok =
+        !ctx.part
+            .surface()
+            .segment_within(&a.centre, &b.centre, held - options.tolerance);
     let turn_ok = angle_between(&a.axis, &b.axis).to_degrees() <= options.max_axis_turn_deg;
     if chord_ok && turn_ok {
         return Some(Vec::new());
@@ -470,6 +572,7 @@ fn refine(
         feed,
         Some(&a.axis.into_inner()),
         Some(&slerp(&a.axis, &b.axis, 0.5)),
+        None,
     )
     .ok()?;
     let mut left = refine(ctx, options, a, &m, feed, depth + 1)?;
@@ -508,5 +611,119 @@ mod tests {
         assert_eq!(stepover_for_scallop(3.0, 0.0), 0.0);
         // A cusp as high as the radius: passes one diameter apart.
         assert!((stepover_for_scallop(3.0, 3.0) - 6.0).abs() < 1e-12);
+    }
+
+    /// Distance from `p` to the box [0,40]×[0,30]×[0,10] (closed form, outside it).
+    fn box_distance(p: &Point3) -> f64 {
+        let gap = |v: f64, hi: f64| (-v).max(v - hi).max(0.0);
+        Vector3::new(gap(p.x, 40.0), gap(p.y, 30.0), gap(p.z, 10.0)).norm()
+    }
+
+    /// An offset layer over a block: the ball is held r + a off it (measured here in closed
+    /// form, not by the planner's distance queries), and only where the "material" — a slab
+    /// over the block's left end, x < 12 — is within the ball shrunk by a quarter of a mm,
+    /// plus the lead: no pose's ball centre lies beyond x = 12 + r + lead.
+    #[test]
+    fn an_offset_layer_holds_its_allowance_and_cuts_only_near_material() {
+        use crate::collide::Margins;
+        let part = crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0);
+        let collider = PartCollider::new(&part).unwrap();
+        let rays = RayScene::new(&part);
+        let tool = PreparedTool::new(
+            &crate::collide::tool_bodies::tests::tool(),
+            &Margins {
+                shank: 0.5,
+                holder: 2.0,
+            },
+        );
+        let r = tool.ball_radius;
+        let chooser = AxisChooser::new(crate::orient::AxisOptions::default());
+        let anywhere = |_: &Vector3| true;
+        let (allowance, lead, least_cut) = (1.5, 2.0, 0.25);
+        // The material: x < 12, up to 5 mm over the top face. A ball meets it when its
+        // distance to that slab is below the radius.
+        let slab = |c: &Point3| {
+            let gap = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
+            Vector3::new(
+                gap(c.x, -5.0, 12.0),
+                gap(c.y, -5.0, 35.0),
+                gap(c.z, 10.0, 15.0),
+            )
+            .norm()
+        };
+        let touches = |c: &Point3, radius: f64| slab(c) < radius - least_cut;
+        let layer = OffsetLayer {
+            touches: &touches,
+            lead,
+        };
+        let ctx = FinishingContext {
+            part: &collider,
+            rays: &rays,
+            tool: &tool,
+            chooser: &chooser,
+            reachable: &anywhere,
+            allowance,
+            offset_layer: Some(&layer),
+        };
+        let options = FinishingOptions {
+            scallop_height: 0.2,
+            tolerance: 0.02,
+            drive_normal: Vector3::y(),
+            ..FinishingOptions::default()
+        };
+        let passes = finishing_passes(&part, &ctx, &options, &|| {});
+        assert!(passes.points_in_air > 0, "the block's right end is air");
+        let poses: Vec<&ToolPose> = passes.segments.iter().flat_map(|s| &s.poses).collect();
+        assert!(poses.len() > 50, "{} poses", poses.len());
+        let centres: Vec<Point3> = poses
+            .iter()
+            .map(|p| p.tip + p.axis.into_inner() * r)
+            .collect();
+        for c in &centres {
+            let d = box_distance(c);
+            assert!(
+                d >= r + allowance - 1e-6,
+                "centre {c:?} is {d} from the block"
+            );
+            assert!(
+                c.x <= 12.0 + r + lead + 1e-6,
+                "centre {c:?} is beyond the material"
+            );
+        }
+        // Every chord too, sampled: within the chord tolerance of the allowance.
+        for s in &passes.segments {
+            for w in s.poses.windows(2) {
+                let (a, b) = (
+                    w[0].tip + w[0].axis.into_inner() * r,
+                    w[1].tip + w[1].axis.into_inner() * r,
+                );
+                for k in 1..16 {
+                    let d = box_distance(&(a + (b - a) * (k as f64 / 16.0)));
+                    assert!(d >= r + allowance - options.tolerance - 1e-6);
+                }
+            }
+        }
+        // The top face is cut where the slab is: some ball sits on it, over x < 12.
+        assert!(
+            centres
+                .iter()
+                .any(|c| c.x < 10.0 && (c.z - (10.0 + r + allowance)).abs() < 1e-6)
+        );
+        // Without the layer's test the whole block is driven.
+        let all = finishing_passes(
+            &part,
+            &FinishingContext {
+                offset_layer: None,
+                ..ctx
+            },
+            &options,
+            &|| {},
+        );
+        assert_eq!(all.points_in_air, 0);
+        assert!(
+            all.segments
+                .iter()
+                .any(|s| s.poses.iter().any(|p| p.tip.x > 12.0 + r + lead + 1.0))
+        );
     }
 }

@@ -61,6 +61,19 @@ impl MaterialClearance {
         self.field.bound(p)
     }
 
+    /// Whether the ball of `radius` about `centre` is clear of the material (the stock run's
+    /// test, as [`Self::frustum_is_clear`]); a radius ≤ 0 is clear.
+    pub fn ball_is_clear(&self, centre: &Point3, radius: f64) -> bool {
+        if radius.is_nan() || radius <= 0.0 || self.field.bound(centre) > radius {
+            return true;
+        }
+        self.stock.is_clear(&super::sweep::Capsule {
+            a: *centre,
+            b: *centre,
+            radius,
+        })
+    }
+
     /// Whether `frustum` is clear of the material: no dexel line's material overlaps the
     /// frustum's interval on it by more than 1 nm (the stock run's test).
     pub fn frustum_is_clear(&self, frustum: &Frustum) -> bool {

@@ -38,6 +38,10 @@ pub struct PlanArgs {
     /// the ball operations, nothing simulated); overrides the job file's `[stock]` blank.
     #[arg(long)]
     pub blank: Option<String>,
+    /// After the end mills, rough the rest they leave under overhangs and between blades with
+    /// the ball, 5-axis, in offset layers (`channel-rough`; `[roughing] channel = true`).
+    #[arg(long)]
+    pub channel: bool,
     /// Worker threads, 1 to 256 (default: all cores). Outputs are identical for any count.
     #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
@@ -83,6 +87,9 @@ pub fn run(args: &PlanArgs) -> Result<()> {
     if let Some(blank) = &args.blank {
         job.stock.blank = Some(blank.clone());
         flags.push(("stock.blank", "--blank"));
+    }
+    if args.channel {
+        job.roughing.channel = true;
     }
     if let Some(n) = args.max_drive_points {
         job.limits.max_drive_points = n;
