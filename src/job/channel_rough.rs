@@ -7,8 +7,14 @@
 //! leave), the outermost first. A layer is planned like finishing — plane sections, the ball
 //! placed by exact f64 distance, an axis chosen inside the machine's reach with the shank and
 //! holder clear of the part and of the material still standing, chords refined, linked — with
-//! two differences:
+//! three differences:
 //!
+//! * **waterlines, from the top down**: the drive planes are horizontal and cut in order of
+//!   falling height, so within a layer each pass finds the material above it already taken
+//!   wherever the passes above reached. Where a channel is narrower than the layer's ball the
+//!   layer does not fit, and the channel's middle waits for a smaller layer; the waterlines
+//!   bound how much of it that layer's ball meets at once (the plane spacing, from the scallop
+//!   height, rather than the channel's whole depth);
 //! * **the ball is held `r + a_k` from the part** ([`crate::path::FinishingContext::allowance`]),
 //!   so it leaves `a_k`; each layer after the first cuts at most `step` into what the one before
 //!   left, wherever that one reached;
@@ -161,9 +167,11 @@ pub fn channel_rough(
         let tolerance = (0.1 * allowance)
             .min(LAYER_TOLERANCE_MM)
             .max(setup.finishing.tolerance);
+        // Waterlines from the top down (the planes run along the drive normal).
         let options = FinishingOptions {
             scallop_height: operation.scallop_height,
             tolerance,
+            drive_normal: -Vector3::z(),
             ..setup.finishing.clone()
         };
         let passes = path::finishing_passes(part, &ctx, &options, advance);

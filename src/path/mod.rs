@@ -726,4 +726,50 @@ mod tests {
                 .any(|s| s.poses.iter().any(|p| p.tip.x > 12.0 + r + lead + 1.0))
         );
     }
+
+    /// Drive planes against −Z are waterlines cut from the top down (what channel roughing
+    /// relies on to bound its depth of cut): the passes' heights never rise.
+    #[test]
+    fn waterlines_against_minus_z_run_from_the_top_down() {
+        use crate::collide::Margins;
+        let part = crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0);
+        let collider = PartCollider::new(&part).unwrap();
+        let rays = RayScene::new(&part);
+        let tool = PreparedTool::new(
+            &crate::collide::tool_bodies::tests::tool(),
+            &Margins {
+                shank: 0.5,
+                holder: 2.0,
+            },
+        );
+        let chooser = AxisChooser::new(crate::orient::AxisOptions::default());
+        let anywhere = |_: &Vector3| true;
+        let ctx = FinishingContext {
+            part: &collider,
+            rays: &rays,
+            tool: &tool,
+            chooser: &chooser,
+            reachable: &anywhere,
+            allowance: 1.0,
+            offset_layer: None,
+        };
+        let options = FinishingOptions {
+            scallop_height: 0.3,
+            tolerance: 0.02,
+            drive_normal: -Vector3::z(),
+            ..FinishingOptions::default()
+        };
+        let passes = finishing_passes(&part, &ctx, &options, &|| {});
+        let heights: Vec<f64> = passes
+            .segments
+            .iter()
+            .map(|s| s.poses[0].tip.z + s.poses[0].axis.z * tool.ball_radius)
+            .collect();
+        assert!(heights.len() >= 4, "{heights:?}");
+        assert!(
+            heights.windows(2).all(|w| w[1] <= w[0] + 1e-9),
+            "{heights:?}"
+        );
+        assert!(heights[0] - heights[heights.len() - 1] > 5.0, "{heights:?}");
+    }
 }
