@@ -148,3 +148,72 @@ fn body_tests_agree_with_brute_force_on_random_poses_near_the_sample_impeller() 
         "{clear} clear, {colliding} colliding"
     );
 }
+
+/// A pose of the sample's finish (planned after channel roughing) whose flutes come 0.87 µm
+/// into the part at 0.5 mm above the ball's centre: less than the slack they are measured
+/// shrunk by. The planning's f64 test calls it clear; parry's f32 intersection test alone
+/// called it "inside by the slack", and the verification refused the plan. The clearance is
+/// touching (0), and the f64 distances along the axis say why.
+#[test]
+fn flutes_within_the_slack_of_the_part_touch_rather_than_cut() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").unwrap();
+    let (part, _) = prepare(&raw.mesh, &PrepareOptions::default()).unwrap();
+    let collider = PartCollider::new(&part).unwrap();
+    let tool = job::Job::default().tool.assembly();
+    let prepared = PreparedTool::new(
+        &tool,
+        &Margins {
+            shank: 0.5,
+            holder: 2.0,
+        },
+    );
+    let pose = ToolPose {
+        tip: Point3::new(-32.074080256439856, 6.788277984886894, 3.687972781970296),
+        axis: Unit::new_normalize(Vector3::new(
+            -0.22076228612808418,
+            -0.09148091448736916,
+            0.9710279374498226,
+        )),
+    };
+    let r = prepared.ball_radius;
+    // The independent figures: the part's least distance from the flutes' axis, sampled.
+    let axis_clearance = (0..=200)
+        .map(|k| pose.tip + pose.axis.into_inner() * (r + 8.0 * k as f64 / 200.0))
+        .map(|p| collider.surface().signed_distance(&p).unwrap().0)
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        axis_clearance < r && axis_clearance > r - F32_SLACK,
+        "{axis_clearance}"
+    );
+    assert!(collider.check_bodies(&prepared, &pose).is_ok());
+    let c = collider.clearances(
+        &prepared,
+        &pose,
+        &wavemill::collide::BodyClearance {
+            flutes: 7.0,
+            shank: 7.0,
+            holder: 7.0,
+        },
+    );
+    assert_eq!(c.flutes, 0.0, "{c:?}");
+    // Moved 2 µm further in along the part's normal there, they cut beyond the slack.
+    let (_, closest) = collider
+        .surface()
+        .signed_distance(&(pose.tip + pose.axis.into_inner() * 2.5))
+        .unwrap();
+    let towards = (closest.point - (pose.tip + pose.axis.into_inner() * 2.5)).normalize();
+    let deeper = ToolPose {
+        tip: pose.tip + towards * (F32_SLACK + 0.002),
+        ..pose
+    };
+    let c = collider.clearances(
+        &prepared,
+        &deeper,
+        &wavemill::collide::BodyClearance {
+            flutes: 7.0,
+            shank: 7.0,
+            holder: 7.0,
+        },
+    );
+    assert!(c.flutes < 0.0, "{c:?}");
+}

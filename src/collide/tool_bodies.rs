@@ -394,9 +394,22 @@ impl PartCollider {
                 Ok(ClosestPoints::WithinMargin(a, b)) => (a.distance(b) as f64 + shrink).min(limit),
                 Ok(ClosestPoints::Disjoint) => limit,
                 Ok(ClosestPoints::Intersecting) | Err(_) => {
-                    if self.intersects(body.exact.as_ref(), &at) {
-                        // Flutes: inside by at least the slack; other bodies: touching.
-                        if shrink > 0.0 { -shrink } else { 0.0 }
+                    if !self.intersects(body.exact.as_ref(), &at) {
+                        0.0
+                    } else if shrink > 0.0 {
+                        // Flutes: inside by at least the slack, unless the f64 distance from
+                        // their axis says otherwise. Within its f32 tolerance parry calls
+                        // intersecting a part 0.9 µm inside the flutes (the sample's finish
+                        // after channel roughing), which the planning's f64 test rightly
+                        // calls clear of the flutes shrunk by the slack.
+                        let g = &body.geometry;
+                        let k = pose.axis.into_inner();
+                        let inside = self.part.surface.segment_within(
+                            &(pose.tip + k * g.from),
+                            &(pose.tip + k * g.to),
+                            g.radius_from.max(g.radius_to) - shrink,
+                        );
+                        if inside { -shrink } else { 0.0 }
                     } else {
                         0.0
                     }
