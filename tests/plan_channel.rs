@@ -10,7 +10,7 @@ mod common;
 
 use nalgebra::{Point3, Vector3};
 use wavemill::geom::MoveKind;
-use wavemill::job::{self, Job, Quiet};
+use wavemill::job::{self, Job, Layering, Quiet};
 use wavemill::mesh::Mesh;
 use wavemill::mesh::io::RawMesh;
 
@@ -84,18 +84,20 @@ fn beam_distance(p: &Point3<f64>) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-fn job(channel: bool) -> Job {
+fn job(channel: Option<Layering>) -> Job {
     let mut job = Job::default();
     job.strategy.scallop_height = 0.3;
     job.strategy.max_step = 2.0;
     job.stock.blank = Some("box:-3,-3,0,43,33,20".into());
     job.stock.resolution = Some(0.4);
-    job.roughing.channel = channel;
+    if let Some(layering) = channel {
+        job.roughing.channel = true;
+        job.roughing.channel_layering = layering;
+    }
     job
 }
 
-#[test]
-fn channel_roughing_takes_the_rest_under_an_overhang_in_offset_layers() {
+fn raw_beam() -> RawMesh {
     let part = i_beam();
     let volume: f64 = part
         .triangles
@@ -106,14 +108,23 @@ fn channel_roughing_takes_the_rest_under_an_overhang_in_offset_layers() {
         })
         .sum();
     assert!((volume - LENGTH * (2.0 * 40.0 * 3.0 + 10.0 * 12.0)).abs() < 1e-6);
-    let raw = RawMesh {
+    RawMesh {
         mesh: part,
         warnings: Vec::new(),
-    };
-    let with = job::plan(&raw, "i-beam", "mm", &job(true), &Quiet).expect("plan");
-    let without = job::plan(&raw, "i-beam", "mm", &job(false), &Quiet).expect("plan");
+    }
+}
+
+fn blocked(r: &job::PlanReport) -> usize {
+    r.unreachable
+        .by_reason
+        .get("material")
+        .copied()
+        .unwrap_or(0)
+}
+
+/// What either layering must do on the beam, against the plan without channel roughing.
+fn check_channel(with: &job::PlanOutput, without: &job::PlanOutput) {
     assert_eq!(with.verification_failure, None);
-    assert_eq!(without.verification_failure, None);
     let r = &with.report;
 
     // One tool change to the ball, which channel-roughs and then finishes.
@@ -124,24 +135,15 @@ fn channel_roughing_takes_the_rest_under_an_overhang_in_offset_layers() {
         .collect();
     assert_eq!(changes, vec!["T2 M6", "T7 M6", "T1 M6"]);
 
-    // The layers, outermost first, a step apart, down to the roughing's allowance; each kept
-    // its own allowance on the part by the plan's independent verification.
+    // Each layer kept its allowance on the part by the plan's independent verification; most
+    // of each is air, left out; together they take a good part of the pockets.
     let channel = &r.channel_roughing[0];
-    let allowances: Vec<f64> = channel.layers.iter().map(|l| l.allowance_mm).collect();
-    assert!(allowances.len() >= 3, "{allowances:?}");
-    assert_eq!(*allowances.last().unwrap(), job(true).roughing.allowance);
-    assert!(
-        allowances
-            .windows(2)
-            .all(|w| (w[0] - w[1] - channel.step_mm).abs() < 1e-9)
-    );
     for layer in &channel.layers {
         assert!(
             layer.min_stock_left_minus_allowance_mm >= -layer.chord_tolerance_mm,
             "{layer:?}"
         );
     }
-    // Most of each layer is air, and left out.
     assert!(channel.layers.iter().all(|l| l.points_in_air > 0));
     let removed: f64 = channel.layers.iter().map(|l| l.removed_mm3).sum();
     assert!(removed > 1000.0, "{removed} mm³");
@@ -149,7 +151,7 @@ fn channel_roughing_takes_the_rest_under_an_overhang_in_offset_layers() {
     // Every ball centre of the operation, measured here, is at least the last layer's
     // allowance (less its chord tolerance) off the part beyond the radius.
     let span = &with.operations[2];
-    let radius = job(true).tool.diameter / 2.0;
+    let radius = Job::default().tool.diameter / 2.0;
     let least = with.toolpath.moves[span.moves.clone()]
         .iter()
         .filter(|m| m.kind != MoveKind::Rapid)
@@ -196,13 +198,6 @@ fn channel_roughing_takes_the_rest_under_an_overhang_in_offset_layers() {
     let (rest, channel_run) = (&stock.operations[1], &stock.operations[2]);
     assert!(channel_run.removed_volume_mm3 > 1000.0);
     assert!(channel_run.rest.mean_mm < rest.rest.mean_mm);
-    let blocked = |r: &job::PlanReport| {
-        r.unreachable
-            .by_reason
-            .get("material")
-            .copied()
-            .unwrap_or(0)
-    };
     assert!(
         blocked(r) < blocked(&without.report),
         "{} against {}",
@@ -216,4 +211,67 @@ fn channel_roughing_takes_the_rest_under_an_overhang_in_offset_layers() {
     // The program, as posted, within the tolerance of the part.
     let posted = r.posted.as_ref().expect("posted check");
     assert!(posted.problems.is_empty(), "{:?}", posted.problems);
+}
+
+/// Layers from the shroud (the stock's top) down to the hub (the bottom flange's top under
+/// the pockets): evenly spaced between hub and top, from the top down to the hub itself, each
+/// within a step of the one above over the part, all at the roughing's allowance.
+#[test]
+fn shroud_to_hub_layers_take_the_rest_under_an_overhang() {
+    let raw = raw_beam();
+    let with = job::plan(
+        &raw,
+        "i-beam",
+        "mm",
+        &job(Some(Layering::ShroudToHub)),
+        &Quiet,
+    )
+    .expect("plan");
+    let without = job::plan(&raw, "i-beam", "mm", &job(None), &Quiet).expect("plan");
+    assert_eq!(without.verification_failure, None);
+    check_channel(&with, &without);
+    let channel = &with.report.channel_roughing[0];
+    assert_eq!(channel.layering, Layering::ShroudToHub);
+    let heights: Vec<f64> = channel.layers.iter().map(|l| l.height.unwrap()).collect();
+    assert_eq!(*heights.last().unwrap(), 0.0);
+    let count = (1.0 / heights[heights.len() - 2]).round();
+    assert!(
+        heights
+            .windows(2)
+            .all(|w| (w[0] - w[1] - 1.0 / count).abs() < 1e-12),
+        "{heights:?}"
+    );
+    // The hub under the pockets is the bottom flange's top (3 mm) and the material's top after
+    // the end mills the top flange's offset (18.5 mm): eight layers, 1.94 mm apart there,
+    // within the channel's step of 2 mm (the ball's radius).
+    assert_eq!(count, 8.0);
+    assert!((18.5 - 3.0) / count <= channel.step_mm, "{count}");
+    assert!(
+        channel
+            .layers
+            .iter()
+            .all(|l| l.allowance_mm == Job::default().roughing.allowance)
+    );
+}
+
+/// Offsets of the part, outermost first, a step apart, down to the roughing's allowance.
+#[test]
+fn offset_layers_take_the_rest_under_an_overhang() {
+    let raw = raw_beam();
+    let with = job::plan(&raw, "i-beam", "mm", &job(Some(Layering::Offset)), &Quiet).expect("plan");
+    let without = job::plan(&raw, "i-beam", "mm", &job(None), &Quiet).expect("plan");
+    check_channel(&with, &without);
+    let channel = &with.report.channel_roughing[0];
+    assert_eq!(channel.layering, Layering::Offset);
+    let allowances: Vec<f64> = channel.layers.iter().map(|l| l.allowance_mm).collect();
+    assert!(allowances.len() >= 3, "{allowances:?}");
+    assert_eq!(
+        *allowances.last().unwrap(),
+        Job::default().roughing.allowance
+    );
+    assert!(
+        allowances
+            .windows(2)
+            .all(|w| (w[0] - w[1] - channel.step_mm).abs() < 1e-9)
+    );
 }

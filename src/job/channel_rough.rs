@@ -1,43 +1,48 @@
 //! Channel roughing (issue 20 point 2): the rest that vertical end mills leave under
 //! overhangs and between an impeller's blades, taken down with the job's ball, 5-axis, in
-//! offset layers of the part.
+//! layers, each planned like finishing — plane sections, the ball placed by exact f64
+//! distance, an axis chosen inside the machine's reach with the shank and holder clear of the
+//! part and of the material still standing, chords refined, linked — but only where there is
+//! material, and taken off the planning stock before the next layer is planned.
 //!
-//! The layers are the offsets the commercial impeller modules call "offset from the hub and
-//! blades": layer k holds the ball `a + k·step` mm off the part (a = the operation's stock to
-//! leave), the outermost first. A layer is planned like finishing — plane sections, the ball
-//! placed by exact f64 distance, an axis chosen inside the machine's reach with the shank and
-//! holder clear of the part and of the material still standing, chords refined, linked — with
-//! three differences:
+//! Two layerings, as the commercial impeller modules offer them:
 //!
-//! * **waterlines, from the top down**: the drive planes are horizontal and cut in order of
-//!   falling height, so within a layer each pass finds the material above it already taken
-//!   wherever the passes above reached. Where a channel is narrower than the layer's ball the
-//!   layer does not fit, and the channel's middle waits for a smaller layer; the waterlines
-//!   bound how much of it that layer's ball meets at once (the plane spacing, from the scallop
-//!   height, rather than the channel's whole depth);
-//! * **the ball is held `r + a_k` from the part** ([`crate::path::FinishingContext::allowance`]),
-//!   so it leaves `a_k`; each layer after the first cuts at most `step` into what the one before
-//!   left, wherever that one reached;
-//! * **only where there is material** ([`crate::path::OffsetLayer`]): a drive point is kept
-//!   when its ball, shrunk by a quarter step, still meets the planning stock (the exact dexel
-//!   test, after a distance-field bound), and within a lead of such a point along the pass.
-//!   Most of a layer is air — the end mills roughed it — and is never given an axis.
+//! * **shroud to hub** ([`Layering::ShroudToHub`], the default): surfaces interpolated from
+//!   the shroud (the top of the material standing) down to the hub, `z = hub + t·(top − hub)`
+//!   over every vertical dexel line of the part, the hub being the top of the part's lowest
+//!   solid on the line ([`HubField`]); t falls evenly from the top to 0, with as many layers as
+//!   keep each within a step of the one above over the part. The ball's bottom follows the
+//!   layer (it starts tangent to it, [`crate::path::FinishingContext::lift`] = 0) and is pushed
+//!   off the part to r + a where the part is nearer (a = the operation's stock to leave). So
+//!   every layer meets at most a step of material from above, whatever the channel's width, and
+//!   the last one follows the hub at the allowance. Across a cliff of the hub (a blade's side)
+//!   the layer has a hole rather than a wall;
+//! * **offsets** ([`Layering::Offset`]) — "offset from the hub and blades": layer k holds the
+//!   ball `a + k·step` mm off the part ([`crate::path::FinishingContext::allowance`]), the
+//!   outermost first, each cut as waterlines from the top down. Where a channel is narrower
+//!   than a layer's ball the layer does not fit, and the channel's middle waits for a smaller
+//!   layer.
+//!
+//! **Only where there is material** ([`crate::path::OffsetLayer`]): a drive point is kept when
+//! its ball, shrunk by a quarter step, still meets the planning stock (the exact dexel test,
+//! after a distance-field bound), and within a lead of such a point along the pass. Most of a
+//! layer is air — the end mills roughed it — and is never given an axis.
 //!
 //! Each layer is taken off the planning stock before the next is planned, so the next layer's
 //! shank and holder see what this one left, its air is what this one cut, and its feed control
-//! measures the material each move removes. The deepest layer's offset comes from the rest the
-//! operations before left (measured over the part's faces); layers beyond `max_layers` are not
-//! planned and what they would have cut stays for the finish, which reports it.
+//! measures the material each move removes. Layers beyond `max_layers` are not planned (the
+//! offsets' outermost, the interpolation's uppermost) and counted; what they would have cut
+//! stays for the finish, which reports it.
 //!
 //! Every layer is verified on the part (an implementation that shares nothing with the
-//! placement: [`crate::verify`]): its ball, at every pose and chord midpoint, is at least
-//! `a_k` less the layer's chord tolerance from the part.
+//! placement: [`crate::verify`]): its ball, at every pose and chord midpoint, is at least its
+//! allowance less the layer's chord tolerance from the part.
 
 use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use super::config::{OffsetLayers, Operation};
+use super::config::{Layering, OffsetLayers, Operation};
 use super::plan_roughing::{BallTakeOff, RoughingContext};
 use super::rapids::split_turning_rapids;
 use super::setup::PlanSetup;
@@ -46,6 +51,7 @@ use crate::feed::FeedReport;
 use crate::geom::{Move, MoveKind, Point3, Toolpath, Vector3};
 use crate::mesh::Mesh;
 use crate::path::{self, FinishingOptions, OffsetLayer, unreachable_by_reason};
+use crate::stock::Stock;
 use crate::verify::verify;
 
 /// The loosest chord tolerance of a layer, mm: a layer leaves `a_k` for the next one to take,
@@ -57,6 +63,9 @@ const LAYER_TOLERANCE_MM: f64 = 0.05;
 pub struct ChannelLayerSummary {
     /// The ball is held this far off the part, mm.
     pub allowance_mm: f64,
+    /// Shroud-to-hub layers: where the layer lies between the hub (0) and the shroud (1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
     pub drive_points: usize,
     /// Drive points left out: nothing to cut within the ball there.
     pub points_in_air: usize,
@@ -76,6 +85,7 @@ pub struct ChannelLayerSummary {
 #[derive(Clone, Debug, Serialize)]
 pub struct ChannelSummary {
     pub operation: String,
+    pub layering: Layering,
     /// The deepest rest over the part before it, mm (area-weighted max over the faces).
     pub rest_before_mm: f64,
     pub step_mm: f64,
@@ -117,6 +127,17 @@ pub fn layer_allowances(
     (allowances, needed - planned)
 }
 
+/// One layer to plan: the surface its passes are driven on, how far the ball stays off the
+/// part, and where it starts off the drive surface (see [`crate::path::FinishingContext`]).
+struct LayerDrive<'a> {
+    drive: std::borrow::Cow<'a, Mesh>,
+    allowance: f64,
+    lift: f64,
+    /// Shroud-to-hub layers: where between the hub (0) and the shroud (1).
+    height: Option<f64>,
+    drive_normal: Vector3,
+}
+
 /// Plans `operation` (a `channel-rough`) on `part`, layer by layer, each taken off `context`'s
 /// planning stock before the next is planned. `last` is where the operation before left the
 /// tool.
@@ -134,10 +155,45 @@ pub fn channel_rough(
     let layers = operation.layers.unwrap_or(OffsetLayers {
         step: setup.prepared_tool.ball_radius,
         max_layers: 1,
+        layering: Layering::default(),
     });
-    let rest_before = context.deepest_rest(part)?;
-    let (allowances, layers_left_out) =
-        layer_allowances(operation.stock_to_leave, rest_before, &layers);
+    let part_model = context.part_model(part)?;
+    let rest_before = context.deepest_rest(part, &part_model);
+    let a = operation.stock_to_leave;
+    // Offsets: waterlines from the top down (the planes run along the drive normal).
+    // Shroud to hub: passes across each layer along the job's drive planes.
+    let (drives, layers_left_out): (Vec<LayerDrive>, usize) = match layers.layering {
+        Layering::Offset => {
+            let (allowances, left_out) = layer_allowances(a, rest_before, &layers);
+            let drives = allowances
+                .into_iter()
+                .map(|allowance| LayerDrive {
+                    drive: std::borrow::Cow::Borrowed(part),
+                    allowance,
+                    lift: allowance,
+                    height: None,
+                    drive_normal: -Vector3::z(),
+                })
+                .collect();
+            (drives, left_out)
+        }
+        Layering::ShroudToHub => {
+            let hub = HubField::of(&part_model, context.floor());
+            let top = context.material_top();
+            let (heights, left_out) = hub.layer_heights(top, &layers);
+            let drives = heights
+                .into_iter()
+                .map(|t| LayerDrive {
+                    drive: std::borrow::Cow::Owned(hub.layer(top, t)),
+                    allowance: a,
+                    lift: 0.0,
+                    height: Some(t),
+                    drive_normal: setup.finishing.drive_normal,
+                })
+                .collect();
+            (drives, left_out)
+        }
+    };
     let r = setup.prepared_tool.ball_radius;
     // A ball that would cut less than this into the material is in the air: the skin an
     // end mill's shape leaves over the allowance is not worth a pass of its own.
@@ -147,12 +203,13 @@ pub fn channel_rough(
         tool_id: setup.tool.id,
         moves: Vec::new(),
     };
-    let mut summaries = Vec::with_capacity(allowances.len());
+    let mut summaries = Vec::with_capacity(drives.len());
     let mut feed_control = Vec::new();
     let mut rapids_fed = 0;
     let mut failure = None;
     let mut last = last.copied();
-    for &allowance in &allowances {
+    for layer_drive in &drives {
+        let allowance = layer_drive.allowance;
         let material = context.material();
         let collider = setup.collider.with_material(material.clone());
         let touches =
@@ -163,18 +220,18 @@ pub fn channel_rough(
         };
         let mut ctx = setup.finishing_context(&collider, &setup.rays, &reachable);
         ctx.allowance = allowance;
+        ctx.lift = layer_drive.lift;
         ctx.offset_layer = Some(&layer);
         let tolerance = (0.1 * allowance)
             .min(LAYER_TOLERANCE_MM)
             .max(setup.finishing.tolerance);
-        // Waterlines from the top down (the planes run along the drive normal).
         let options = FinishingOptions {
             scallop_height: operation.scallop_height,
             tolerance,
-            drive_normal: -Vector3::z(),
+            drive_normal: layer_drive.drive_normal,
             ..setup.finishing.clone()
         };
-        let passes = path::finishing_passes(part, &ctx, &options, advance);
+        let passes = path::finishing_passes(&layer_drive.drive, &ctx, &options, advance);
         let (mut layer_path, _) = path::link(
             &passes.segments,
             &collider,
@@ -199,9 +256,13 @@ pub fn channel_rough(
             .min_cutter_clearance
             .min(on_part.min_chord_clearance)
             - allowance;
+        let name = match layer_drive.height {
+            Some(t) => format!("layer at {:.3} of the way from hub to shroud", t),
+            None => format!("layer at {allowance} mm"),
+        };
         if stock_left < -tolerance {
             failure.get_or_insert(format!(
-                "channel roughing's layer at {allowance} mm leaves only {:.4} mm on the part",
+                "channel roughing's {name} leaves only {:.4} mm on the part",
                 stock_left + allowance
             ));
         }
@@ -209,15 +270,15 @@ pub fn channel_rough(
         let taken = context.take_off_ball_operation(&mut layer_path, last.as_ref(), take_off);
         rapids_fed += taken.rapids_fed;
         if let Some(report) = taken.feed_control {
-            feed_control.push((format!("{} (layer {allowance} mm)", operation.name), report));
+            feed_control.push((format!("{} ({name})", operation.name), report));
         }
-        let unreachable_by_reason = unreachable_by_reason(&passes.unreachable);
         summaries.push(ChannelLayerSummary {
             allowance_mm: allowance,
+            height: layer_drive.height,
             drive_points: passes.drive_points,
             points_in_air: passes.points_in_air,
             unreachable: passes.unreachable.len(),
-            unreachable_by_reason,
+            unreachable_by_reason: unreachable_by_reason(&passes.unreachable),
             segments: passes.segments.len(),
             cutting_length_mm: cutting_length(&layer_path),
             removed_mm3: volume_before - context.stock_volume(),
@@ -233,6 +294,7 @@ pub fn channel_rough(
         toolpath,
         summary: ChannelSummary {
             operation: operation.name.clone(),
+            layering: layers.layering,
             rest_before_mm: rest_before,
             step_mm: layers.step,
             scallop_height_mm: operation.scallop_height,
@@ -243,6 +305,110 @@ pub fn channel_rough(
         rapids_fed,
         failure,
     })
+}
+
+/// The hub under each vertical dexel line of the part's model: the top of the part's lowest
+/// solid on the line, or the floor where the line misses the part (a bore, around the part).
+struct HubField {
+    /// Line (i, j)'s point at z = 0, and its hub height.
+    points: Vec<Point3>,
+    hub: Vec<f64>,
+    counts: [usize; 2],
+    spacing: f64,
+    /// The lowest hub over the part (lines that meet it).
+    lowest_on_part: f64,
+}
+
+impl HubField {
+    fn of(part_model: &Stock, floor: f64) -> HubField {
+        let grid = part_model.grid(2);
+        let counts = grid.counts();
+        let mut points = Vec::with_capacity(counts[0] * counts[1]);
+        let mut hub = Vec::with_capacity(counts[0] * counts[1]);
+        let mut lowest_on_part = f64::INFINITY;
+        for j in 0..counts[1] {
+            for i in 0..counts[0] {
+                points.push(grid.line_point(i, j));
+                let h = match grid.spans(i, j).first() {
+                    Some(span) => {
+                        let h = span.end.max(floor);
+                        lowest_on_part = lowest_on_part.min(h);
+                        h
+                    }
+                    None => floor,
+                };
+                hub.push(h);
+            }
+        }
+        HubField {
+            points,
+            hub,
+            counts,
+            spacing: part_model.spacing(),
+            lowest_on_part,
+        }
+    }
+
+    /// The layers' heights between hub (0) and `top` (1), from the top down: evenly spaced so
+    /// that no layer lies more than the step below the one above over the part, at most
+    /// `max_layers` (the lowest kept: the material left near the top is what the end mills
+    /// reach); and how many more the step would need.
+    fn layer_heights(&self, top: f64, layers: &OffsetLayers) -> (Vec<f64>, usize) {
+        let range = top - self.lowest_on_part;
+        if range.is_nan() || range <= 0.0 {
+            return (Vec::new(), 0);
+        }
+        let count = (range / layers.step).ceil().max(1.0) as usize;
+        let planned = count.min(layers.max_layers);
+        // Layer k lies k/count of the way up; the top one (k = count) is the shroud itself.
+        let heights = (0..planned)
+            .rev()
+            .map(|k| k as f64 / count as f64)
+            .collect();
+        (heights, count - planned)
+    }
+
+    /// The layer `t` of the way from the hub up to `top`, as a mesh facing up: one vertex per
+    /// line, two triangles per cell of four lines, except across a cliff (corners whose hubs
+    /// differ by more than three spacings, a slope over 71°: a blade's side, the bore's edge),
+    /// where the layer would stand on a wall rather than follow the hub.
+    fn layer(&self, top: f64, t: f64) -> Mesh {
+        let positions = self
+            .points
+            .iter()
+            .zip(&self.hub)
+            .map(|(p, &h)| Point3::new(p.x, p.y, h + t * (top - h).max(0.0)))
+            .collect();
+        let [nx, ny] = self.counts;
+        let cliff = 3.0 * self.spacing;
+        let mut triangles = Vec::new();
+        for j in 0..ny.saturating_sub(1) {
+            for i in 0..nx.saturating_sub(1) {
+                let corners = [
+                    i + nx * j,
+                    i + 1 + nx * j,
+                    i + 1 + nx * (j + 1),
+                    i + nx * (j + 1),
+                ];
+                let (lo, hi) = corners
+                    .iter()
+                    .map(|&c| self.hub[c])
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), h| {
+                        (lo.min(h), hi.max(h))
+                    });
+                if hi - lo > cliff {
+                    continue;
+                }
+                let [a, b, c, d] = corners.map(|c| c as u32);
+                triangles.push([a, b, c]);
+                triangles.push([a, c, d]);
+            }
+        }
+        Mesh {
+            positions,
+            triangles,
+        }
+    }
 }
 
 fn cutting_length(path: &Toolpath) -> f64 {
@@ -262,6 +428,7 @@ mod tests {
         let layers = OffsetLayers {
             step: 2.0,
             max_layers: 8,
+            layering: Layering::Offset,
         };
         // Rest 7 mm over a 0.5 mm allowance: a layer at 4.5 would cut 2.5 mm, more than a
         // step, so the outermost is at 6.5.
@@ -281,5 +448,59 @@ mod tests {
         assert_eq!(a.len(), 8);
         assert_eq!(a[0], 14.5);
         assert_eq!(left, 20 - 8);
+    }
+
+    /// Two blocks side by side, 2 and 8 mm tall: the hub is each block's top, and a layer
+    /// half way to a top at 10 stands at 6 over the low block and 9 over the high one, with no
+    /// triangle across the 6 mm cliff between them. The heights run from the top down to the
+    /// hub, as many as the deepest channel (10 − 2 over the low block) needs at the step.
+    #[test]
+    fn shroud_to_hub_layers_follow_the_hub_and_skip_its_cliffs() {
+        let low = crate::mesh::fixtures::cuboid(10.0, 10.0, 2.0);
+        let mut high = crate::mesh::fixtures::cuboid(10.0, 10.0, 8.0);
+        for p in &mut high.positions {
+            p.x += 10.0;
+        }
+        let mut both = low.clone();
+        let base = both.positions.len() as u32;
+        both.positions.extend(high.positions.iter().copied());
+        both.triangles
+            .extend(high.triangles.iter().map(|t| t.map(|i| i + base)));
+        let model = Stock::from_mesh(&both, 0.5, crate::stock::DEFAULT_MAX_DEXELS).unwrap();
+        let hub = HubField::of(&model, 0.0);
+        assert_eq!(hub.lowest_on_part, 2.0);
+        let layer = hub.layer(10.0, 0.5);
+        for p in &layer.positions {
+            let want = if p.x < 10.0 { 6.0 } else { 9.0 };
+            assert!((p.z - want).abs() < 1e-9, "{p:?}");
+        }
+        assert!(!layer.triangles.is_empty());
+        for t in &layer.triangles {
+            let zs = t.map(|i| layer.positions[i as usize].z);
+            assert!(
+                zs.iter().all(|&z| z == zs[0]),
+                "a triangle across the cliff: {zs:?}"
+            );
+            // Facing up.
+            let [a, b, c] = t.map(|i| layer.positions[i as usize]);
+            assert!((b - a).cross(&(c - a)).z > 0.0);
+        }
+        let layers = OffsetLayers {
+            step: 3.0,
+            max_layers: 16,
+            layering: Layering::ShroudToHub,
+        };
+        let (heights, left) = hub.layer_heights(10.0, &layers);
+        assert_eq!(heights, vec![2.0 / 3.0, 1.0 / 3.0, 0.0]);
+        assert_eq!(left, 0);
+        let (heights, left) = hub.layer_heights(
+            10.0,
+            &OffsetLayers {
+                max_layers: 2,
+                ..layers
+            },
+        );
+        assert_eq!(heights, vec![1.0 / 3.0, 0.0]);
+        assert_eq!(left, 1);
     }
 }

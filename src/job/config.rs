@@ -132,6 +132,8 @@ pub struct RoughingSection {
     pub channel_max_layers: usize,
     /// Channel roughing: scallop height of its passes on each layer, mm.
     pub channel_scallop_height: f64,
+    /// Channel roughing: `shroud-to-hub` or `offset` layers.
+    pub channel_layering: Layering,
 }
 
 impl Default for RoughingSection {
@@ -145,8 +147,9 @@ impl Default for RoughingSection {
             entry_feed: 800.0,
             channel: false,
             channel_step: None,
-            channel_max_layers: 8,
+            channel_max_layers: 16,
             channel_scallop_height: 0.25,
+            channel_layering: Layering::default(),
         }
     }
 }
@@ -795,6 +798,8 @@ pub struct OperationSection {
     pub step: Option<f64>,
     /// Channel roughing: offset layers at most; default `roughing.channel_max_layers`.
     pub max_layers: Option<usize>,
+    /// Channel roughing: `shroud-to-hub` or `offset`; default `roughing.channel_layering`.
+    pub layering: Option<Layering>,
 }
 
 /// One operation, every option resolved.
@@ -815,13 +820,28 @@ pub struct Operation {
     pub layers: Option<OffsetLayers>,
 }
 
-/// The offset layers of a `channel-rough` operation.
+/// The layers of a `channel-rough` operation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OffsetLayers {
     /// mm between layers (the most a layer cuts into material on a face).
     pub step: f64,
     /// Layers at most.
     pub max_layers: usize,
+    pub layering: Layering,
+}
+
+/// How channel roughing lays its layers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Layering {
+    /// Surfaces interpolated from the shroud (the stock's top) down to the hub (the part's
+    /// lowest upward face under each point), the ball's bottom on each: every layer cuts at
+    /// most a step from above, whatever the channel's width.
+    #[default]
+    ShroudToHub,
+    /// Offsets of the whole part, the ball held a + k·step off it, outermost first, each cut
+    /// as waterlines from the top down.
+    Offset,
 }
 
 impl Job {
@@ -837,12 +857,16 @@ impl Job {
             OperationKind::Finish => "finish".to_string(),
             kind => format!("{} to {stock} mm", kind.name()),
         };
-        let layers = |kind: OperationKind, step: Option<f64>, max_layers: Option<usize>| {
+        let layers = |kind: OperationKind,
+                      step: Option<f64>,
+                      max_layers: Option<usize>,
+                      layering: Option<Layering>| {
             (kind == OperationKind::ChannelRough).then(|| OffsetLayers {
                 step: step
                     .or(self.roughing.channel_step)
                     .unwrap_or(0.5 * self.tool.diameter),
                 max_layers: max_layers.unwrap_or(self.roughing.channel_max_layers),
+                layering: layering.unwrap_or(self.roughing.channel_layering),
             })
         };
         let operation = |kind: OperationKind, stock: f64, scallop: f64| Operation {
@@ -852,7 +876,7 @@ impl Job {
             library_tool: None,
             stock_to_leave: stock,
             scallop_height: scallop,
-            layers: layers(kind, None, None),
+            layers: layers(kind, None, None, None),
         };
         let operations: Vec<Operation> = if self.operations.is_empty() {
             // A near-net blank (the part grown, a casting's mesh) is taken as roughed.
@@ -938,10 +962,10 @@ impl Job {
                     ));
                 }
                 if s.kind != OperationKind::ChannelRough
-                    && (s.step.is_some() || s.max_layers.is_some())
+                    && (s.step.is_some() || s.max_layers.is_some() || s.layering.is_some())
                 {
                     return Err(fail(
-                        "step and max_layers set the offset layers of channel-rough alone",
+                        "step, max_layers and layering set the layers of channel-rough alone",
                     ));
                 }
                 if s.step.is_some_and(|step| !(step.is_finite() && step > 0.0)) {
@@ -961,7 +985,7 @@ impl Job {
                         OperationKind::ChannelRough => self.roughing.channel_scallop_height,
                         _ => self.strategy.scallop_height,
                     }),
-                    layers: layers(s.kind, s.step, s.max_layers),
+                    layers: layers(s.kind, s.step, s.max_layers, s.layering),
                 });
             }
             listed

@@ -45,7 +45,7 @@ pub use channel_rough::{
     ChannelLayerSummary, ChannelPlan, ChannelSummary, channel_rough, layer_allowances,
 };
 pub use config::{
-    CuttingSection, FeedSection, Job, JobError, LimitsSection, MachineSection, NO_BLANK,
+    CuttingSection, FeedSection, Job, JobError, Layering, LimitsSection, MachineSection, NO_BLANK,
     OffsetLayers, Operation, OperationKind, OperationSection, PartSection, RoughingSection,
     SafetySection, StockSection, StrategySection, ToolSection, unit_direction,
 };

@@ -210,7 +210,8 @@ mod tests {
             ops[2].layers,
             Some(crate::job::OffsetLayers {
                 step: 3.0,
-                max_layers: 5
+                max_layers: 5,
+                layering: crate::job::Layering::ShroudToHub,
             })
         );
         assert_eq!(ops[2].stock_to_leave, 0.5);
@@ -224,6 +225,7 @@ mod tests {
         assert_eq!(none.len(), 1);
         let listed = job("[[operation]]\nkind = \"rough\"\n\
              [[operation]]\nkind = \"channel-rough\"\nstep = 1.5\nmax_layers = 3\n\
+             layering = \"offset\"\n\
              [[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.2\n\
              [[operation]]\nkind = \"finish\"\n")
         .expect("job");
@@ -231,7 +233,8 @@ mod tests {
             listed[1].layers,
             Some(crate::job::OffsetLayers {
                 step: 1.5,
-                max_layers: 3
+                max_layers: 3,
+                layering: crate::job::Layering::Offset,
             })
         );
         for (text, says) in [

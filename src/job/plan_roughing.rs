@@ -246,18 +246,33 @@ impl RoughingContext {
         self.stock.volume()
     }
 
+    /// `part` as dexels at the planning stock's spacing (what the rest is measured against).
+    pub fn part_model(&self, part: &Mesh) -> Result<Stock> {
+        Stock::from_mesh(part, self.stock.spacing(), DEFAULT_MAX_DEXELS)
+            .map_err(|e| Error::Internal(format!("the part as dexels: {e}")))
+    }
+
     /// The deepest rest over `part` now, mm: the largest over its faces of how far the
-    /// material stands off them along their normals ([`crate::stock::rest`]).
-    pub fn deepest_rest(&self, part: &Mesh) -> Result<f64> {
-        let part_model = Stock::from_mesh(part, self.stock.spacing(), DEFAULT_MAX_DEXELS)
-            .map_err(|e| Error::Internal(format!("the part as dexels: {e}")))?;
-        let rest = crate::stock::rest::rest_over(
+    /// material stands off them along their normals ([`crate::stock::rest`]); `part_model` is
+    /// [`Self::part_model`].
+    pub fn deepest_rest(&self, part: &Mesh, part_model: &Stock) -> f64 {
+        crate::stock::rest::rest_over(
             &self.stock,
             part,
-            &part_model,
+            part_model,
             self.stock.bounds().diagonal(),
-        );
-        Ok(rest.max_mm)
+        )
+        .max_mm
+    }
+
+    /// The lowest the tool tip goes, mm (the table's top plus its margin).
+    pub fn floor(&self) -> f64 {
+        self.floor
+    }
+
+    /// The top of the material standing now, mm.
+    pub fn material_top(&self) -> f64 {
+        self.stock.material_bounds().max.z
     }
 
     /// Takes a ball operation's moves `path` off the planning stock, from `last` (where the

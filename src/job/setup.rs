@@ -244,6 +244,7 @@ impl PlanSetup {
             chooser: &self.chooser,
             reachable,
             allowance: 0.0,
+            lift: 0.0,
             offset_layer: None,
         }
     }

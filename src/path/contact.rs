@@ -15,7 +15,19 @@ const PLACEMENT_SLACK: f64 = 1e-9;
 /// converges to where the ball touches two or more faces. Returns `None` when it does not
 /// converge (a slot narrower than the ball): such points cannot be machined with this ball.
 pub fn place_ball(surface: &SurfaceDistance, drive: &DrivePoint, radius: f64) -> Option<Point3> {
-    let mut centre = drive.point + drive.normal * radius;
+    place_ball_from(surface, drive, radius, radius)
+}
+
+/// [`place_ball`] starting `lift` along the drive point's normal instead of `radius`: for a
+/// drive surface that is not the part (a roughing layer the ball's bottom follows), the ball
+/// starts tangent to it and is pushed out only where the part is nearer than `radius`.
+pub fn place_ball_from(
+    surface: &SurfaceDistance,
+    drive: &DrivePoint,
+    lift: f64,
+    radius: f64,
+) -> Option<Point3> {
+    let mut centre = drive.point + drive.normal * lift;
     for _ in 0..64 {
         let (d, closest) = surface.signed_distance(&centre)?;
         if d >= radius {

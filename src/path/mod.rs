@@ -16,7 +16,7 @@
 mod contact;
 mod link;
 
-pub use contact::place_ball;
+pub use contact::{place_ball, place_ball_from};
 pub use link::{LinkOptions, LinkReport, link};
 
 use rayon::prelude::*;
@@ -144,6 +144,11 @@ pub struct FinishingContext<'a> {
     /// `ball_radius + allowance` from the part, so the ball stays `allowance` off it. 0 when
     /// finishing; an offset layer of roughing ([`OffsetLayer`]) keeps more.
     pub allowance: f64,
+    /// Where the ball starts off a drive point before it is pushed out of the part, beyond its
+    /// radius along the drive normal, mm: the allowance when the drive surface is the part (the
+    /// ball starts where it keeps the allowance), 0 when it is a surface the ball's bottom
+    /// follows (a roughing layer between shroud and hub).
+    pub lift: f64,
     /// An offset layer's test of where there is anything to cut (see [`OffsetLayer`]); `None`
     /// machines every drive point.
     pub offset_layer: Option<&'a OffsetLayer<'a>>,
@@ -196,7 +201,7 @@ pub fn finishing_passes(
                 // follows inserts poses where the chord still strays.
                 let mut points = curve
                     .simplified(
-                        ctx.tool.ball_radius + ctx.allowance,
+                        ctx.tool.ball_radius + ctx.lift,
                         0.25 * options.tolerance,
                         options.max_step,
                     )
@@ -357,7 +362,7 @@ fn points_near_material(
     let r = ctx.tool.ball_radius;
     let centres: Vec<Option<Point3>> = points
         .iter()
-        .map(|p| place_ball(ctx.part.surface(), p, r + ctx.allowance))
+        .map(|p| place_ball_from(ctx.part.surface(), p, r + ctx.lift, r + ctx.allowance))
         .collect();
     let cuts: Vec<bool> = centres
         .iter()
@@ -502,9 +507,10 @@ fn place(
 ) -> Result<Placed, Unreachable> {
     let centre = placed
         .unwrap_or_else(|| {
-            place_ball(
+            place_ball_from(
                 ctx.part.surface(),
                 drive,
+                ctx.tool.ball_radius + ctx.lift,
                 ctx.tool.ball_radius + ctx.allowance,
             )
         })
@@ -663,6 +669,7 @@ mod tests {
             chooser: &chooser,
             reachable: &anywhere,
             allowance,
+            lift: allowance,
             offset_layer: Some(&layer),
         };
         let options = FinishingOptions {
@@ -751,6 +758,7 @@ mod tests {
             chooser: &chooser,
             reachable: &anywhere,
             allowance: 1.0,
+            lift: 1.0,
             offset_layer: None,
         };
         let options = FinishingOptions {
