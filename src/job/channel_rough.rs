@@ -242,6 +242,7 @@ pub fn channel_rough(
         if split_rapids {
             split_turning_rapids(
                 &mut layer_path,
+                last.as_ref(),
                 &setup.kinematics,
                 super::pipeline::MAX_RAPID_TURN_DEG,
             );

@@ -453,13 +453,19 @@ pub fn plan(
                     operation.name
                 )))
             })?;
+            // From where the operation before left the tool (a roughing tool's last move, on the
+            // safe plane, when this is the first ball operation).
+            let before = planned
+                .last()
+                .and_then(|p: &PlannedOperation| p.toolpath.moves.last().copied())
+                .or(last_ball_move);
             let channel = channel_rough(
                 &setup,
                 part,
                 operation,
                 context,
                 &ball_take_off,
-                last_ball_move.as_ref(),
+                before.as_ref(),
                 has_blank,
                 &advance,
             )?;
@@ -526,9 +532,14 @@ pub fn plan(
         }
         // With a blank, every move is also read as a straight sweep through the stock: rapids
         // that turn the axis go there as the control moves them (super::rapids).
+        // The first is the rapid from where the operation before left the tool.
         if has_blank {
+            let before = planned
+                .last()
+                .and_then(|p: &PlannedOperation| p.toolpath.moves.last().copied());
             split_turning_rapids(
                 &mut operation_planned.toolpath,
+                before.as_ref(),
                 &setup.kinematics,
                 MAX_RAPID_TURN_DEG,
             );

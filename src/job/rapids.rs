@@ -17,16 +17,25 @@ use crate::post::{Joints, MachineKinematics};
 
 /// Splits every rapid of `path` that turns the axis into steps of at most `max_turn_deg` of
 /// rotary motion along the joint path, with the joints chosen as the post chooses them (the
-/// nearest branch to the move before); returns how many rapids were split. A pose the
-/// kinematics cannot reach is left as it is (the post refuses it with its own error).
+/// nearest branch to the move before); returns how many rapids were split. `from` is the move
+/// the tool makes before the path's first (where the operation or layer before left it), so
+/// the rapid from there is split too: the first move of an operation is a rapid on the safe
+/// plane from the last one's axis to its own. A pose the kinematics cannot reach is left as it
+/// is (the post refuses it with its own error).
 pub fn split_turning_rapids(
     path: &mut Toolpath,
+    from: Option<&Move>,
     kinematics: &dyn MachineKinematics,
     max_turn_deg: f64,
 ) -> usize {
     let step = max_turn_deg.max(1e-3);
     let mut out = Vec::with_capacity(path.moves.len());
-    let mut previous: Option<(Move, Joints)> = None;
+    let mut previous: Option<(Move, Joints)> = from.and_then(|m| {
+        kinematics
+            .inverse(&m.pose, None)
+            .ok()
+            .map(|joints| (*m, joints))
+    });
     let mut split = 0;
     for m in &path.moves {
         let joints = kinematics
@@ -98,7 +107,8 @@ mod tests {
             })
             .to_vec(),
         };
-        assert_eq!(split_turning_rapids(&mut path, &machine, 5.0), 1);
+        let whole = path.clone();
+        assert_eq!(split_turning_rapids(&mut path, None, &machine, 5.0), 1);
         let moves = &path.moves;
         assert!(moves.len() >= 2 + 90 / 5, "{}", moves.len());
         assert_eq!(moves.first().map(|m| m.pose), Some(start));
@@ -115,5 +125,22 @@ mod tests {
             assert!((middle - pivot).norm() >= 100.0 - sagitta - 1e-9);
             assert_eq!(w[1].kind, MoveKind::Rapid);
         }
+        // The same rapid as the first move of a path that starts where another left the tool
+        // (an operation or a layer after the one before): split the same way from `from`.
+        let mut rest = Toolpath {
+            tool_id: 1,
+            moves: whole.moves[1..].to_vec(),
+        };
+        assert_eq!(
+            split_turning_rapids(&mut rest, Some(&whole.moves[0]), &machine, 5.0),
+            1
+        );
+        assert_eq!(rest.moves, path.moves[1..].to_vec());
+        // Without it the first move is left as its chord.
+        let mut alone = Toolpath {
+            tool_id: 1,
+            moves: whole.moves[1..].to_vec(),
+        };
+        assert_eq!(split_turning_rapids(&mut alone, None, &machine, 5.0), 0);
     }
 }
