@@ -147,7 +147,7 @@ impl Default for RoughingSection {
             entry_feed: 800.0,
             channel: false,
             channel_step: None,
-            channel_max_layers: 16,
+            channel_max_layers: 40,
             channel_scallop_height: 0.25,
             channel_layering: Layering::default(),
         }
