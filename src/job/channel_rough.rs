@@ -23,7 +23,7 @@
 //!   than a layer's ball the layer does not fit, and the channel's middle waits for a smaller
 //!   layer.
 //!
-//! **Only where there is material** ([`crate::path::OffsetLayer`]): a drive point is kept when
+//! **Only where there is material** ([`crate::path::MaterialFilter`]): a drive point is kept when
 //! its ball, shrunk by a quarter step, still meets the planning stock (the exact dexel test,
 //! after a distance-field bound), and within a lead of such a point along the pass. Most of a
 //! layer is air — the end mills roughed it — and is never given an axis.
@@ -42,7 +42,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use super::config::{Layering, OffsetLayers, Operation};
+use super::config::{ChannelLayers, Layering, Operation};
 use super::plan_roughing::{BallTakeOff, RoughingContext};
 use super::rapids::split_turning_rapids;
 use super::setup::PlanSetup;
@@ -50,7 +50,7 @@ use crate::error::Result;
 use crate::feed::FeedReport;
 use crate::geom::{Move, MoveKind, Point3, Toolpath, Vector3};
 use crate::mesh::Mesh;
-use crate::path::{self, FinishingOptions, OffsetLayer, unreachable_by_reason};
+use crate::path::{self, FinishingOptions, MaterialFilter, unreachable_by_reason};
 use crate::stock::Stock;
 use crate::verify::verify;
 
@@ -58,7 +58,7 @@ use crate::verify::verify;
 /// so its chords need not be as tight as the finish's, only safely inside that.
 const LAYER_TOLERANCE_MM: f64 = 0.05;
 
-/// One offset layer of a channel roughing operation, for `report.json`.
+/// One layer of a channel roughing operation, for `report.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct ChannelLayerSummary {
     /// The ball is held this far off the part, mm.
@@ -112,7 +112,7 @@ pub struct ChannelPlan {
 pub fn layer_allowances(
     stock_to_leave: f64,
     rest: f64,
-    layers: &OffsetLayers,
+    layers: &ChannelLayers,
 ) -> (Vec<f64>, usize) {
     // The outermost layer's ball bottoms out at a_K: it cuts rest − a_K, at most one step.
     let needed = ((rest - layers.step - stock_to_leave) / layers.step)
@@ -152,7 +152,7 @@ pub fn channel_rough(
     split_rapids: bool,
     advance: &(dyn Fn() + Sync),
 ) -> Result<ChannelPlan> {
-    let layers = operation.layers.unwrap_or(OffsetLayers {
+    let layers = operation.layers.unwrap_or(ChannelLayers {
         step: setup.prepared_tool.ball_radius,
         max_layers: 1,
         layering: Layering::default(),
@@ -214,14 +214,14 @@ pub fn channel_rough(
         let collider = setup.collider.with_material(material.clone());
         let touches =
             |centre: &Point3, radius: f64| !material.ball_is_clear(centre, radius - least_cut);
-        let layer = OffsetLayer {
+        let layer = MaterialFilter {
             touches: &touches,
             lead: 2.0 * r,
         };
         let mut ctx = setup.finishing_context(&collider, &setup.rays, &reachable);
         ctx.allowance = allowance;
         ctx.lift = layer_drive.lift;
-        ctx.offset_layer = Some(&layer);
+        ctx.material_filter = Some(&layer);
         let tolerance = (0.1 * allowance)
             .min(LAYER_TOLERANCE_MM)
             .max(setup.finishing.tolerance);
@@ -244,7 +244,7 @@ pub fn channel_rough(
                 &mut layer_path,
                 last.as_ref(),
                 &setup.kinematics,
-                super::pipeline::MAX_RAPID_TURN_DEG,
+                super::rapids::MAX_RAPID_TURN_DEG,
             );
         }
         let on_part = verify(
@@ -354,7 +354,7 @@ impl HubField {
     /// that no layer lies more than the step below the one above over the part, at most
     /// `max_layers` (the lowest kept: the material left near the top is what the end mills
     /// reach); and how many more the step would need.
-    fn layer_heights(&self, top: f64, layers: &OffsetLayers) -> (Vec<f64>, usize) {
+    fn layer_heights(&self, top: f64, layers: &ChannelLayers) -> (Vec<f64>, usize) {
         let range = top - self.lowest_on_part;
         if range.is_nan() || range <= 0.0 {
             return (Vec::new(), 0);
@@ -426,7 +426,7 @@ mod tests {
 
     #[test]
     fn layers_reach_the_rest_a_step_at_a_time() {
-        let layers = OffsetLayers {
+        let layers = ChannelLayers {
             step: 2.0,
             max_layers: 8,
             layering: Layering::Offset,
@@ -486,7 +486,7 @@ mod tests {
             let [a, b, c] = t.map(|i| layer.positions[i as usize]);
             assert!((b - a).cross(&(c - a)).z > 0.0);
         }
-        let layers = OffsetLayers {
+        let layers = ChannelLayers {
             step: 3.0,
             max_layers: 16,
             layering: Layering::ShroudToHub,
@@ -496,7 +496,7 @@ mod tests {
         assert_eq!(left, 0);
         let (heights, left) = hub.layer_heights(
             10.0,
-            &OffsetLayers {
+            &ChannelLayers {
                 max_layers: 2,
                 ..layers
             },

@@ -817,12 +817,12 @@ pub struct Operation {
     /// Scallop height target, mm.
     pub scallop_height: f64,
     /// Channel roughing's offset layers; `None` for every other kind.
-    pub layers: Option<OffsetLayers>,
+    pub layers: Option<ChannelLayers>,
 }
 
 /// The layers of a `channel-rough` operation.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OffsetLayers {
+pub struct ChannelLayers {
     /// mm between layers (the most a layer cuts into material on a face).
     pub step: f64,
     /// Layers at most.
@@ -861,7 +861,7 @@ impl Job {
                       step: Option<f64>,
                       max_layers: Option<usize>,
                       layering: Option<Layering>| {
-            (kind == OperationKind::ChannelRough).then(|| OffsetLayers {
+            (kind == OperationKind::ChannelRough).then(|| ChannelLayers {
                 step: step
                     .or(self.roughing.channel_step)
                     .unwrap_or(0.5 * self.tool.diameter),

@@ -208,7 +208,7 @@ mod tests {
         // The step defaults to the ball's radius.
         assert_eq!(
             ops[2].layers,
-            Some(crate::job::OffsetLayers {
+            Some(crate::job::ChannelLayers {
                 step: 3.0,
                 max_layers: 5,
                 layering: crate::job::Layering::ShroudToHub,
@@ -231,7 +231,7 @@ mod tests {
         .expect("job");
         assert_eq!(
             listed[1].layers,
-            Some(crate::job::OffsetLayers {
+            Some(crate::job::ChannelLayers {
                 step: 1.5,
                 max_layers: 3,
                 layering: crate::job::Layering::Offset,

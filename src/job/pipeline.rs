@@ -26,7 +26,7 @@ use super::offsets::stock_shapes;
 use super::operation::InProcessStock;
 use super::plan_roughing::{BallTakeOff, RoughingContext, check_posted_roughing, plan_roughing};
 use super::preview::preview;
-use super::rapids::split_turning_rapids;
+use super::rapids::{MAX_RAPID_TURN_DEG, split_turning_rapids};
 use super::report::*;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
@@ -42,11 +42,6 @@ use crate::stock::clearance::MaterialClearance;
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
-
-/// Motion of each rotary axis in one step of a split rapid, degrees: the axis turns at most
-/// twice that, and at 300 mm from the rotary axes a step's chord keeps within 0.2 mm of the
-/// path the control takes (rapids run at the safe distance, 20 mm beyond the part's reach).
-pub(super) const MAX_RAPID_TURN_DEG: f64 = 2.0;
 
 /// Everything a plan produces, in memory.
 pub struct PlanOutput {

@@ -15,6 +15,12 @@
 use crate::geom::{Move, MoveKind, Toolpath, angle_between};
 use crate::post::{Joints, MachineKinematics};
 
+/// Motion of each rotary axis in one step of a split rapid in a plan, degrees: the axis turns
+/// at most twice that, and at 300 mm from the rotary axes a step's chord keeps within 0.2 mm
+/// of the path the control takes (rapids run at the safe distance, 20 mm beyond the part's
+/// reach).
+pub const MAX_RAPID_TURN_DEG: f64 = 2.0;
+
 /// Splits every rapid of `path` that turns the axis into steps of at most `max_turn_deg` of
 /// rotary motion along the joint path, with the joints chosen as the post chooses them (the
 /// nearest branch to the move before); returns how many rapids were split. `from` is the move

@@ -245,7 +245,7 @@ impl PlanSetup {
             reachable,
             allowance: 0.0,
             lift: 0.0,
-            offset_layer: None,
+            material_filter: None,
         }
     }
 }

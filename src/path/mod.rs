@@ -128,8 +128,8 @@ pub struct Finishing {
     pub smoothing: SmoothingStats,
     /// Poses dropped because they stepped back along the pass (or by less than 0.1 µm).
     pub backward_poses_dropped: usize,
-    /// Drive points of an offset layer left out because their ball (placed) cuts nothing
-    /// there ([`OffsetLayer`]).
+    /// Drive points a roughing layer leaves out because their ball (placed) cuts nothing
+    /// there ([`MaterialFilter`]).
     pub points_in_air: usize,
 }
 
@@ -142,25 +142,25 @@ pub struct FinishingContext<'a> {
     pub reachable: &'a (dyn Fn(&Vector3) -> bool + Sync),
     /// Material kept on the part, mm: every ball centre (and every chord between two) is held
     /// `ball_radius + allowance` from the part, so the ball stays `allowance` off it. 0 when
-    /// finishing; an offset layer of roughing ([`OffsetLayer`]) keeps more.
+    /// finishing; a roughing layer keeps more.
     pub allowance: f64,
     /// Where the ball starts off a drive point before it is pushed out of the part, beyond its
     /// radius along the drive normal, mm: the allowance when the drive surface is the part (the
     /// ball starts where it keeps the allowance), 0 when it is a surface the ball's bottom
     /// follows (a roughing layer between shroud and hub).
     pub lift: f64,
-    /// An offset layer's test of where there is anything to cut (see [`OffsetLayer`]); `None`
-    /// machines every drive point.
-    pub offset_layer: Option<&'a OffsetLayer<'a>>,
+    /// A roughing layer's test of where there is anything to cut; `None` machines every drive
+    /// point.
+    pub material_filter: Option<&'a MaterialFilter<'a>>,
 }
 
-/// Where an offset layer of roughing has something to cut: `touches(centre, radius)` says
+/// Where a roughing layer has something to cut: `touches(centre, radius)` says
 /// whether a ball of `radius` about `centre` may meet material (it must never answer `false`
 /// for a ball that does). Drive points whose ball meets none are left out, except within
 /// `lead` mm of one that does, along the drive curve: a gap in the air shorter than twice the
 /// lead is cut through at feed rather than left and entered again, and each run of cuts starts
 /// and ends in the air.
-pub struct OffsetLayer<'a> {
+pub struct MaterialFilter<'a> {
     pub touches: &'a (dyn Fn(&Point3, f64) -> bool + Sync),
     pub lead: f64,
 }
@@ -257,15 +257,15 @@ fn drive_curve(
     out: &mut Finishing,
 ) {
     let r = ctx.tool.ball_radius;
-    // 0. An offset layer first places every ball and keeps the points near material.
-    let (centres, keep) = match ctx.offset_layer {
+    // 0. A roughing layer first places every ball and keeps the points near material.
+    let (centres, keep) = match ctx.material_filter {
         Some(layer) => {
             let (centres, keep) = points_near_material(points, ctx, layer);
             (Some(centres), keep)
         }
         None => (None, vec![true; points.len()]),
     };
-    // 1. Place every drive point; unreachable ones (and an offset layer's points in the air)
+    // 1. Place every drive point; unreachable ones (and a roughing layer's points in the air)
     //    split the curve into runs.
     let mut runs: Vec<Vec<(Placed, Vector3)>> = Vec::new();
     let mut run: Vec<(Placed, Vector3)> = Vec::new();
@@ -273,7 +273,7 @@ fn drive_curve(
         out.drive_points += 1;
         let drive = points[i];
         if !keep[i] {
-            // An offset layer's ball that does not fit there is unreachable, not in the air:
+            // A roughing layer's ball that does not fit there is unreachable, not in the air:
             // whether there is anything to cut cannot be told without a place for it.
             match centres.as_ref().map(|c| c[i]) {
                 Some(None) => out
@@ -351,13 +351,13 @@ fn drive_curve(
     }
 }
 
-/// An offset layer's ball centres for `points` (`None` where the ball does not fit), and which
+/// A roughing layer's ball centres for `points` (`None` where the ball does not fit), and which
 /// points to machine: those whose ball may touch material, and those within the layer's lead
 /// of one, measured along the curve.
 fn points_near_material(
     points: &[DrivePoint],
     ctx: &FinishingContext,
-    layer: &OffsetLayer,
+    layer: &MaterialFilter,
 ) -> (Vec<Option<Point3>>, Vec<bool>) {
     let r = ctx.tool.ball_radius;
     let centres: Vec<Option<Point3>> = points
@@ -658,7 +658,7 @@ mod tests {
             .norm()
         };
         let touches = |c: &Point3, radius: f64| slab(c) < radius - least_cut;
-        let layer = OffsetLayer {
+        let layer = MaterialFilter {
             touches: &touches,
             lead,
         };
@@ -670,7 +670,7 @@ mod tests {
             reachable: &anywhere,
             allowance,
             lift: allowance,
-            offset_layer: Some(&layer),
+            material_filter: Some(&layer),
         };
         let options = FinishingOptions {
             scallop_height: 0.2,
@@ -720,7 +720,7 @@ mod tests {
         let all = finishing_passes(
             &part,
             &FinishingContext {
-                offset_layer: None,
+                material_filter: None,
                 ..ctx
             },
             &options,
@@ -759,7 +759,7 @@ mod tests {
             reachable: &anywhere,
             allowance: 1.0,
             lift: 1.0,
-            offset_layer: None,
+            material_filter: None,
         };
         let options = FinishingOptions {
             scallop_height: 0.3,
