@@ -186,17 +186,20 @@ fn flutes_within_the_slack_of_the_part_touch_rather_than_cut() {
         "{axis_clearance}"
     );
     assert!(collider.check_bodies(&prepared, &pose).is_ok());
-    let c = collider.clearances(
-        &prepared,
-        &pose,
-        &wavemill::collide::BodyClearance {
-            flutes: 7.0,
-            shank: 7.0,
-            holder: 7.0,
-        },
-    );
+    let clearances = |pose: &ToolPose| {
+        collider.clearances(
+            &prepared,
+            pose,
+            &wavemill::collide::BodyClearance {
+                flutes: 7.0,
+                shank: 7.0,
+                holder: 7.0,
+            },
+        )
+    };
+    let c = clearances(&pose);
     assert_eq!(c.flutes, 0.0, "{c:?}");
-    // Moved 2 µm further in along the part's normal there, they cut beyond the slack.
+    // Moved 3 µm further in toward the part there, they cut beyond the slack.
     let (_, closest) = collider
         .surface()
         .signed_distance(&(pose.tip + pose.axis.into_inner() * 2.5))
@@ -206,14 +209,6 @@ fn flutes_within_the_slack_of_the_part_touch_rather_than_cut() {
         tip: pose.tip + towards * (F32_SLACK + 0.002),
         ..pose
     };
-    let c = collider.clearances(
-        &prepared,
-        &deeper,
-        &wavemill::collide::BodyClearance {
-            flutes: 7.0,
-            shank: 7.0,
-            holder: 7.0,
-        },
-    );
+    let c = clearances(&deeper);
     assert!(c.flutes < 0.0, "{c:?}");
 }

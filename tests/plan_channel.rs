@@ -128,12 +128,10 @@ fn check_channel(with: &job::PlanOutput, without: &job::PlanOutput) {
     let r = &with.report;
 
     // One tool change to the ball, which channel-roughs and then finishes.
-    let changes: Vec<&str> = with
-        .gcode
-        .lines()
-        .filter(|l| l.starts_with('T') && l.ends_with(" M6"))
-        .collect();
-    assert_eq!(changes, vec!["T2 M6", "T7 M6", "T1 M6"]);
+    assert_eq!(
+        common::plan_checks::tool_changes(&with.gcode),
+        ["T2 M6", "T7 M6", "T1 M6"]
+    );
 
     // Each layer kept its allowance on the part by the plan's independent verification; most
     // of each is air, left out; together they take a good part of the pockets.

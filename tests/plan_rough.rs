@@ -99,12 +99,10 @@ fn a_frustum_is_roughed_rest_roughed_and_finished_from_a_box_in_one_program() {
     // The bundled library: the bull-nose D12 roughs, the flat D6 rest-roughs, then the ball.
     let tools: Vec<u32> = r.roughing.iter().map(|t| t.tool_id).collect();
     assert_eq!(tools, vec![2, 7]);
-    let changes: Vec<&str> = out
-        .gcode
-        .lines()
-        .filter(|l| l.starts_with('T') && l.ends_with(" M6"))
-        .collect();
-    assert_eq!(changes, vec!["T2 M6", "T7 M6", "T1 M6"]);
+    assert_eq!(
+        common::plan_checks::tool_changes(&out.gcode),
+        ["T2 M6", "T7 M6", "T1 M6"]
+    );
 
     // Each roughing tool's posted moves, by the plan's exact check, stay outside its offset
     // shape; and every planned roughing pose, by the closed-form check here, keeps the tool's

@@ -187,10 +187,8 @@ fn the_bar_stock_is_roughed_and_finished_without_touching_the_rest() {
             .filter(|m| m.kind == wavemill::geom::MoveKind::Cut)
             .all(|m| m.feed <= cut_feed || m.feed == max_feed)
     );
-    let changes: Vec<&str> = out
-        .gcode
-        .lines()
-        .filter(|l| l.starts_with('T') && l.ends_with(" M6"))
-        .collect();
-    assert_eq!(changes, ["T2 M6", "T7 M6", "T1 M6"]);
+    assert_eq!(
+        common::plan_checks::tool_changes(&out.gcode),
+        ["T2 M6", "T7 M6", "T1 M6"]
+    );
 }

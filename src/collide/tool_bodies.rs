@@ -742,7 +742,8 @@ pub(crate) mod tests {
         holder: 2.0,
     };
 
-    fn prepared() -> PreparedTool {
+    /// [`tool`] with a 0.5 mm shank and 2 mm holder margin.
+    pub(crate) fn prepared() -> PreparedTool {
         PreparedTool::new(&tool(), &M)
     }
 

@@ -318,6 +318,13 @@ pub fn stock_to_leave_shapes(
     stock_shapes(part, &remesh, &allowances)
 }
 
+/// Where the operations planned so far leave the tool: their last move.
+fn last_move(planned: &[PlannedOperation]) -> Option<Move> {
+    planned
+        .last()
+        .and_then(|p| p.toolpath.moves.last().copied())
+}
+
 /// The operations' moves as one program, in order, and where each operation's moves are.
 /// Each operation starts and ends on the safe plane, as its segments do.
 pub fn join_operations(planned: &[PlannedOperation]) -> (Toolpath, Vec<OperationSpan>) {
@@ -450,10 +457,7 @@ pub fn plan(
             })?;
             // From where the operation before left the tool (a roughing tool's last move, on the
             // safe plane, when this is the first ball operation).
-            let before = planned
-                .last()
-                .and_then(|p: &PlannedOperation| p.toolpath.moves.last().copied())
-                .or(last_ball_move);
+            let before = last_move(&planned).or(last_ball_move);
             let channel = channel_rough(
                 &setup,
                 part,
@@ -529,9 +533,7 @@ pub fn plan(
         // that turn the axis go there as the control moves them (super::rapids).
         // The first is the rapid from where the operation before left the tool.
         if has_blank {
-            let before = planned
-                .last()
-                .and_then(|p: &PlannedOperation| p.toolpath.moves.last().copied());
+            let before = last_move(&planned);
             split_turning_rapids(
                 &mut operation_planned.toolpath,
                 before.as_ref(),

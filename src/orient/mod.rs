@@ -344,17 +344,10 @@ mod tests {
     /// turns that much further, and can then turn back part of the way and still be valid.
     #[test]
     fn a_clearance_angle_keeps_the_axis_off_the_border_of_the_valid_set() {
-        use crate::collide::Margins;
         let part = crate::mesh::fixtures::plate_and_wall(10.0, 60.0);
         let collider = PartCollider::new(&part).unwrap();
         let rays = RayScene::new(&part);
-        let tool = PreparedTool::new(
-            &crate::collide::tool_bodies::tests::tool(),
-            &Margins {
-                shank: 0.5,
-                holder: 2.0,
-            },
-        );
+        let tool = crate::collide::tool_bodies::tests::prepared();
         let centre = Point3::new(50.0, 50.0, 13.0);
         let (normal, feed) = (Vector3::z(), Vector3::x());
         let anywhere = |_: &Vector3| true;

@@ -619,6 +619,27 @@ mod tests {
         assert!((stepover_for_scallop(3.0, 3.0) - 6.0).abs() < 1e-12);
     }
 
+    /// The box [0,40]×[0,30]×[0,10] with what finishing passes over it need: the ball D6 of
+    /// the collision tests and the default axis choice.
+    struct Block {
+        part: Mesh,
+        collider: PartCollider,
+        rays: RayScene,
+        tool: PreparedTool,
+        chooser: AxisChooser,
+    }
+
+    fn block() -> Block {
+        let part = crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0);
+        Block {
+            collider: PartCollider::new(&part).unwrap(),
+            rays: RayScene::new(&part),
+            tool: crate::collide::tool_bodies::tests::prepared(),
+            chooser: AxisChooser::new(crate::orient::AxisOptions::default()),
+            part,
+        }
+    }
+
     /// Distance from `p` to the box [0,40]×[0,30]×[0,10] (closed form, outside it).
     fn box_distance(p: &Point3) -> f64 {
         let gap = |v: f64, hi: f64| (-v).max(v - hi).max(0.0);
@@ -631,19 +652,14 @@ mod tests {
     /// plus the lead: no pose's ball centre lies beyond x = 12 + r + lead.
     #[test]
     fn an_offset_layer_holds_its_allowance_and_cuts_only_near_material() {
-        use crate::collide::Margins;
-        let part = crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0);
-        let collider = PartCollider::new(&part).unwrap();
-        let rays = RayScene::new(&part);
-        let tool = PreparedTool::new(
-            &crate::collide::tool_bodies::tests::tool(),
-            &Margins {
-                shank: 0.5,
-                holder: 2.0,
-            },
-        );
+        let Block {
+            part,
+            collider,
+            rays,
+            tool,
+            chooser,
+        } = block();
         let r = tool.ball_radius;
-        let chooser = AxisChooser::new(crate::orient::AxisOptions::default());
         let anywhere = |_: &Vector3| true;
         let (allowance, lead, least_cut) = (1.5, 2.0, 0.25);
         // The material: x < 12, up to 5 mm over the top face. A ball meets it when its
@@ -738,18 +754,13 @@ mod tests {
     /// relies on to bound its depth of cut): the passes' heights never rise.
     #[test]
     fn waterlines_against_minus_z_run_from_the_top_down() {
-        use crate::collide::Margins;
-        let part = crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0);
-        let collider = PartCollider::new(&part).unwrap();
-        let rays = RayScene::new(&part);
-        let tool = PreparedTool::new(
-            &crate::collide::tool_bodies::tests::tool(),
-            &Margins {
-                shank: 0.5,
-                holder: 2.0,
-            },
-        );
-        let chooser = AxisChooser::new(crate::orient::AxisOptions::default());
+        let Block {
+            part,
+            collider,
+            rays,
+            tool,
+            chooser,
+        } = block();
         let anywhere = |_: &Vector3| true;
         let ctx = FinishingContext {
             part: &collider,

@@ -203,6 +203,14 @@ pub fn rs274_motions(gcode: &str, tool_table: Option<&str>) -> Option<Vec<(bool,
 }
 
 /// `name` on the PATH.
+/// The program's tool changes (`T… M6` lines), in order.
+pub fn tool_changes(gcode: &str) -> Vec<&str> {
+    gcode
+        .lines()
+        .filter(|l| l.starts_with('T') && l.ends_with(" M6"))
+        .collect()
+}
+
 pub fn which(name: &str) -> Result<std::path::PathBuf, ()> {
     std::env::var_os("PATH")
         .and_then(|paths| {
