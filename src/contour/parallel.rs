@@ -37,8 +37,10 @@
 //! the tool is never trapped, and the last pass at ℓ = r is the finishing contour); inside a
 //! pocket the same rule goes centre-out, ending on the pocket wall. Among the passes allowed
 //! next, the one with the nearest entry point is taken (greedy nearest neighbour; a closed pass
-//! is entered at its point nearest to the tool). Passes keep the offset orientation — the part
-//! on their left — which with a clockwise (M3) spindle is climb milling. With
+//! is entered at its point nearest to the tool). Passes run against the offset orientation,
+//! the part on their right: the material a pass cuts lies between it and the part, so it is on
+//! the cutter's right, where a clockwise (M3) cutter's teeth move against the feed — climb
+//! milling (the cutter left of the wall, as G41). With
 //! [`CutDirection::Mixed`] (the default) an open roughing pass — an offset loop cut off by the
 //! stock — is entered at its nearer end instead: neighbouring fragments then join by a short
 //! link at depth rather than by a retract, rapid and plunge each (zig-zag: half of them
@@ -313,12 +315,23 @@ fn run_to_pass(segs: &[Segment], run: &[(usize, f64, f64)], offset: f64) -> Resu
 /// Orders pieces far-side first (a piece waits for every piece of a farther level within s of
 /// it), nearest entry next; closed passes are re-started at their point nearest to the tool,
 /// and with [`CutDirection::Mixed`] open roughing pieces (level > 0) are entered at their
-/// nearer end.
+/// nearer end. The pieces come as offsets, the part on their left; they leave climb, the part
+/// on their right.
 pub(crate) fn order_pieces(pieces: Vec<Piece>, s: f64, direction: CutDirection) -> Vec<Pass> {
     let n = pieces.len();
     if n == 0 {
         return Vec::new();
     }
+    // Far side first, the material a pass cuts lies between it and the part: the part on the
+    // right of the travel puts the material on the cutter's right, where a clockwise (M3)
+    // cutter's teeth move against the feed — climb milling.
+    let pieces: Vec<Piece> = pieces
+        .into_iter()
+        .map(|p| Piece {
+            level: p.level,
+            pass: p.pass.reversed(),
+        })
+        .collect();
     let max_level = pieces.iter().map(|p| p.level).max().unwrap_or(0);
     // One BVH per level over that level's pass segments, remembering the owning piece.
     let mut level_owner: Vec<Vec<usize>> = vec![Vec::new(); max_level + 1];
@@ -657,7 +670,7 @@ pub(crate) mod tests {
     }
 
     /// Zig-zag roughing: the same passes as climb-only, some cut backwards, far side still
-    /// first, the finishing circle still climb (part on its left), and the corner fragments
+    /// first, the finishing circle still climb (part on its right), and the corner fragments
     /// joined at depth where climb-only retracts between them.
     #[test]
     fn mixed_direction_reverses_only_open_roughing_passes() {
@@ -686,12 +699,12 @@ pub(crate) mod tests {
         let mut reversed = 0;
         for p in mixed.passes() {
             if p.is_closed() {
-                // Re-started wherever the tool is, but still counter-clockwise round the part.
+                // Re-started wherever the tool is, but still clockwise round the part.
                 let area = Contour {
                     vertices: p.vertices().to_vec(),
                 }
                 .signed_area();
-                assert!(area > 0.0, "closed pass reversed: {p:?}");
+                assert!(area < 0.0, "closed pass reversed: {p:?}");
                 continue;
             }
             let matches = |a: &Pass| {
@@ -709,14 +722,14 @@ pub(crate) mod tests {
             reversed += 1;
         }
         assert!(reversed > 0);
-        // Climb means the part on the left: r along the left normal of the finishing circle
-        // lands on the part.
+        // Climb means the part on the right: the finishing circle runs clockwise about the
+        // disc's centre.
         for p in mixed.passes().iter().filter(|p| p.offset() == 3.0) {
             for seg in p.segments() {
                 let Segment::Arc { center, sweep, .. } = seg else {
                     panic!("line in a circle offset")
                 };
-                assert!(center.coords.norm() < 1e-9 && sweep > 0.0, "{seg:?}");
+                assert!(center.coords.norm() < 1e-9 && sweep < 0.0, "{seg:?}");
             }
         }
     }

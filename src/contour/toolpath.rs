@@ -155,11 +155,12 @@ fn check_finite(vertices: &[Vertex]) -> Result<()> {
     }
 }
 
-/// Which way the passes run. With a clockwise (M3) spindle a pass that keeps the part on its
-/// left — the orientation of every offset loop — is climb milling.
+/// Which way the passes run. With a clockwise (M3) spindle a pass that keeps the part, and so
+/// the material it cuts, on its right is climb milling (the teeth meet the feed; the cutter is
+/// left of the wall, as G41): the opposite of the offset loops' orientation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum CutDirection {
-    /// Every pass keeps the part on its left: climb milling everywhere.
+    /// Every pass keeps the part on its right: climb milling everywhere.
     Climb,
     /// Open roughing passes (offset loops cut off by the stock or the hull) are entered at
     /// whichever end is nearer the tool, so neighbouring fragments join by a short link at

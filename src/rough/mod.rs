@@ -670,7 +670,8 @@ fn blank_anchor(outline: &Shape) -> Point2 {
 
 /// Clears a whole section with no part in it: loops of the section's inward offsets, the first
 /// one stepover in from where the tool's edge meets the outline, outermost first, each
-/// entered afresh.
+/// entered afresh. The loops run clockwise: the material still standing is inside them, on
+/// the cutter's right, which with a clockwise (M3) spindle is climb milling.
 fn facing(outline: &Shape, r: f64, s: f64) -> Result<CenterPath, ContourError> {
     let mut passes = Vec::new();
     let mut depth = s - r;
@@ -683,7 +684,7 @@ fn facing(outline: &Shape, r: f64, s: f64) -> Result<CenterPath, ContourError> {
             .into_iter()
             .filter(|c: &Contour| c.signed_area() > 0.0)
         {
-            passes.push(Pass::closed(c.vertices, depth)?);
+            passes.push(Pass::closed(c.vertices, depth)?.reversed());
         }
         depth += s;
     }
@@ -837,6 +838,52 @@ mod tests {
         assert!((faced - 1600.0).abs() < 16.0, "{faced}");
         let walled = rough.layers[1].cleared_area_mm2;
         assert!(walled > 1600.0 - 21.0 * 21.0 && walled < 1200.0, "{walled}");
+    }
+
+    /// Climb milling with a clockwise (M3) spindle keeps the material a move cuts on the
+    /// cutter's right: the facing loops run clockwise about the blank's centre, and the passes
+    /// along the block's walls keep the block on their right.
+    #[test]
+    fn the_layers_are_cut_climb() {
+        let (block, blank, tool, options) = block_job();
+        let rough =
+            rough_layers(&block, &blank, &tool, 7, Material::Blank, &options).expect("roughing");
+        let cuts_at = |z: f64| {
+            let moves = &rough.toolpath.moves;
+            moves
+                .windows(2)
+                .filter(move |w| {
+                    // Not the ramps: their foot runs back along the pass to its start.
+                    w[1].kind == MoveKind::Cut
+                        && w[1].feed == options.feeds.cut
+                        && (w[0].pose.tip.z - z).abs() < 1e-9
+                        && (w[1].pose.tip.z - z).abs() < 1e-9
+                })
+                .map(|w| (w[0].pose.tip.xy(), w[1].pose.tip.xy()))
+                .filter(|(a, b)| (b - a).norm() > 1e-6)
+                .collect::<Vec<_>>()
+        };
+        let right_of = |(a, b): (nalgebra::Point2<f64>, nalgebra::Point2<f64>),
+                        q: nalgebra::Point2<f64>| {
+            let d = b - a;
+            let to = q - nalgebra::center(&a, &b);
+            d.x * to.y - d.y * to.x < 0.0
+        };
+        let facing = cuts_at(10.0);
+        assert!(facing.len() > 8);
+        for cut in &facing {
+            assert!(right_of(*cut, nalgebra::Point2::origin()), "{cut:?}");
+        }
+        let mut along_walls = 0;
+        for (a, b) in cuts_at(5.0) {
+            let mid = nalgebra::center(&a, &b);
+            let nearest = nalgebra::Point2::new(mid.x.clamp(-10.0, 10.0), mid.y.clamp(-10.0, 10.0));
+            if (mid - nearest).norm() < tool.radius + options.cell * 2.0 {
+                assert!(right_of((a, b), nearest), "{a} → {b}");
+                along_walls += 1;
+            }
+        }
+        assert!(along_walls >= 4, "{along_walls}");
     }
 
     /// A shape standing out of the blank's top (a coarse offset over a blank close to the
