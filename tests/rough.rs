@@ -217,3 +217,51 @@ fn the_conventional_baseline_cuts_equal_layers_at_the_depth_asked_for() {
     assert!(thin.estimated_time_s > deep.estimated_time_s);
     assert_eq!(thin.max_depth_mm, Some(2.5));
 }
+
+/// Slots and concave corners are cut as trochoidal loops: with every pass straight the D10
+/// takes a full slot somewhere (the first pass between two blades); with the default bound of
+/// half its diameter, no layer's pass takes much more than the bound (the stretches with no
+/// room for a loop beside them are the rest), and the looped program is still exact against
+/// the shape and clean on the tri-dexel stock.
+#[test]
+fn slots_and_corners_are_looped_within_the_engagement_bound() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
+    let run = |max_engagement: f64| {
+        let options = RoughOptions {
+            tool_id: Some(3),
+            rest_tools: 0,
+            resolution: Some(1.0),
+            max_engagement,
+            ..Default::default()
+        };
+        let out = job::rough(&raw, "data/impeller.glb", "mm", &library(), &options).expect("rough");
+        assert_eq!(out.failure, None);
+        out.report.tools.into_iter().next().expect("one tool")
+    };
+    let widest = |t: &job::RoughToolRun| {
+        t.layers
+            .iter()
+            .map(|l| l.max_engagement_mm)
+            .fold(0.0, f64::max)
+    };
+    let (straight, looped) = (run(1.0), run(0.5));
+    let d = 10.0;
+    assert!(widest(&straight) > 0.95 * d, "{}", widest(&straight));
+    assert!(straight.layers.iter().all(|l| l.looped_stretches == 0));
+    assert!(
+        looped
+            .layers
+            .iter()
+            .map(|l| l.looped_stretches)
+            .sum::<usize>()
+            > 10
+    );
+    assert!(widest(&looped) <= 1.3 * 0.5 * d, "{}", widest(&looped));
+    assert!(looped.overcut_vs_shape.overcuts.is_empty());
+    assert!(looped.overcut_vs_shape.min_clearance_mm > -1e-4);
+    let s = &looped.stock;
+    assert_eq!(
+        (s.gouges, s.rapids_through_material, s.collisions),
+        (0, 0, 0)
+    );
+}

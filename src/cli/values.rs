@@ -29,6 +29,14 @@ pub(crate) fn positive(text: &str) -> std::result::Result<f64, String> {
     }
 }
 
+/// A share: a number in (0, 1].
+pub(crate) fn share(text: &str) -> std::result::Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!("`{text}`: expected a share in (0, 1]")),
+    }
+}
+
 /// A finite number ≥ 0.
 pub(crate) fn non_negative(text: &str) -> std::result::Result<f64, String> {
     match text.trim().parse::<f64>() {

@@ -228,6 +228,12 @@ impl MaterialMap {
     /// Cuts `seg` from its start (already swept) to its end, feeding `window` with the area
     /// each stamp clears and the advance to it.
     pub fn cut(&mut self, seg: &Segment, window: &mut Window) {
+        self.cut_stamps(seg, |fresh, advance, p| window.push(fresh, advance, p));
+    }
+
+    /// Cuts `seg` as [`Self::cut`] does, handing each stamp's fresh area, its advance and
+    /// where it stood to `each`: stamps at most a cell apart.
+    pub fn cut_stamps(&mut self, seg: &Segment, mut each: impl FnMut(f64, f64, Point2)) {
         let len = seg.length();
         let n = ((len / self.cell).ceil() as usize).max(1);
         let area = self.cell * self.cell;
@@ -237,7 +243,7 @@ impl MaterialMap {
         for k in 1..=n {
             let p = point_at(seg, k as f64 / n as f64);
             let fresh = self.stamp(p, previous) as f64 * area;
-            window.push(fresh, len / n as f64, p);
+            each(fresh, len / n as f64, p);
             previous = Some(p);
         }
     }

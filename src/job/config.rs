@@ -122,6 +122,10 @@ pub struct RoughingSection {
     pub cut_feed: f64,
     /// Feed down the ramps into material, mm/min.
     pub entry_feed: f64,
+    /// Widest radial engagement a layer's pass may take, as a share of the tool's diameter:
+    /// slots and concave corners heavier than this are cut as trochoidal loops where there
+    /// is room (1 cuts every pass straight).
+    pub max_engagement: f64,
     /// When the operations are not listed: after the end mills, rough the rest they leave
     /// under overhangs and between blades with the job's ball, 5-axis, in offset layers
     /// (`channel-rough`).
@@ -145,6 +149,7 @@ impl Default for RoughingSection {
             spindle_rpm: 8000,
             cut_feed: 2000.0,
             entry_feed: 800.0,
+            max_engagement: 0.5,
             channel: false,
             channel_step: None,
             channel_max_layers: 40,
@@ -539,6 +544,13 @@ impl Job {
         positive("roughing.allowance", self.roughing.allowance)?;
         positive("roughing.cut_feed", self.roughing.cut_feed)?;
         positive("roughing.entry_feed", self.roughing.entry_feed)?;
+        let e = self.roughing.max_engagement;
+        if !(e > 0.0 && e <= 1.0) {
+            return Err(invalid(
+                "roughing.max_engagement",
+                format!("{e} is not a share of the diameter in (0, 1]"),
+            ));
+        }
         if let Some(step) = self.roughing.channel_step {
             positive("roughing.channel_step", step)?;
         }

@@ -187,6 +187,7 @@ pub fn plan_roughing(
                 .map(|model| (model, f64::from(job.roughing.spindle_rpm))),
             uniform_layers: false,
             max_depth: None,
+            max_engagement: job.roughing.max_engagement,
         },
         &mut context.stock,
         from_blank,

@@ -69,6 +69,9 @@ pub struct RoughOptions {
     pub uniform_layers: bool,
     /// The largest depth of cut of every tool, mm; `None`: each tool's radius.
     pub max_depth: Option<f64>,
+    /// Widest radial engagement of a pass, as a share of the tool's diameter (1: every pass
+    /// straight).
+    pub max_engagement: f64,
 }
 
 impl Default for RoughOptions {
@@ -92,6 +95,7 @@ impl Default for RoughOptions {
             feed_control: Some(crate::feed::CuttingModel::default()),
             uniform_layers: false,
             max_depth: None,
+            max_engagement: 0.5,
         }
     }
 }
@@ -154,6 +158,8 @@ pub struct RoughReport {
     /// The largest depth of cut asked for, mm (`None`: each tool's radius).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_depth_mm: Option<f64>,
+    /// The widest radial engagement of a pass, as a share of the diameter.
+    pub max_engagement: f64,
     pub shape_triangles: usize,
     pub resolution_mm: f64,
     pub blank_volume_mm3: f64,
@@ -249,6 +255,7 @@ pub fn rough(
                     .map(|model| (model, f64::from(options.spindle_rpm))),
                 uniform_layers: options.uniform_layers,
                 max_depth: options.max_depth,
+                max_engagement: options.max_engagement,
             },
             &mut planning_stock,
             from_blank,
@@ -417,6 +424,7 @@ pub fn rough(
         allowance_mm: options.allowance,
         uniform_layers: options.uniform_layers,
         max_depth_mm: options.max_depth,
+        max_engagement: options.max_engagement,
         shape_triangles: shape.triangles.len(),
         resolution_mm: spacing,
         blank_volume_mm3: blank_volume,

@@ -52,6 +52,9 @@ pub(super) struct ToolRoughing<'a> {
     pub uniform_layers: bool,
     /// The largest depth of cut, mm; `None`: the tool's radius.
     pub max_depth: Option<f64>,
+    /// Widest radial engagement of a pass, as a share of the tool's diameter (1: every pass
+    /// straight, slots and all).
+    pub max_engagement: f64,
 }
 
 /// One tool's layers, and what feed control made of their feeds.
@@ -102,6 +105,8 @@ pub(super) fn rough_with_tool(
     if how.uniform_layers {
         options.layers.flat_area = f64::INFINITY;
     }
+    options.max_engagement =
+        (how.max_engagement < 1.0).then(|| how.max_engagement * assembly.cutter.diameter());
     if let Some(depth) = how.max_depth {
         options.layers.max_depth = depth;
         options.layers.min_depth = options.layers.min_depth.min(depth);

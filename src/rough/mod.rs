@@ -26,6 +26,7 @@ pub mod layers;
 pub mod moves;
 pub mod region;
 pub mod rest;
+pub mod trochoid;
 
 use serde::Serialize;
 
@@ -161,6 +162,10 @@ pub struct RoughingOptions {
     pub clearance: f64,
     /// Arcs are replaced by straight moves at most this far outside them, mm.
     pub tolerance: f64,
+    /// Radial engagement a pass may take, averaged over a tool radius of travel, mm: heavier
+    /// stretches (slots, concave corners) are cut as trochoidal loops where there is room
+    /// ([`trochoid`]); `None` cuts every pass straight.
+    pub max_engagement: Option<f64>,
     /// Lowest layer (the floor the part stands on, or above it), mm; `None`: the blank's bottom
     /// or the shape's lowest point, whichever is higher.
     pub floor: Option<f64>,
@@ -169,7 +174,7 @@ pub struct RoughingOptions {
 
 impl RoughingOptions {
     /// Options for a tool of radius `r`: layers of at most r deep (at least r/5), stepover
-    /// 0.8 r, cells of r/8, 3° ramps.
+    /// 0.8 r, engagement at most r (half the diameter), cells of r/8, 3° ramps.
     pub fn for_radius(r: f64) -> RoughingOptions {
         RoughingOptions {
             layers: LayerOptions {
@@ -186,6 +191,7 @@ impl RoughingOptions {
             shank_clearance: 0.5,
             clearance: 1.0,
             tolerance: 0.01,
+            max_engagement: Some(r),
             floor: None,
             feeds: RoughingFeeds {
                 cut: 2000.0,
@@ -267,6 +273,18 @@ impl RoughingOptions {
                 "clearance and tolerance must be positive",
             );
         }
+        if let Some(e) = self.max_engagement
+            && !(positive(e) && e <= 2.0 * tool.radius)
+        {
+            return bad(
+                "max_engagement",
+                e,
+                &format!(
+                    "must lie in (0, {}] (the tool's diameter)",
+                    2.0 * tool.radius
+                ),
+            );
+        }
         let f = &self.feeds;
         if !(positive(f.cut) && positive(f.entry) && positive(f.rapid)) {
             return bad("feeds", f.cut, "feeds must be positive");
@@ -296,6 +314,15 @@ pub struct LayerReport {
     pub max_engagement_at: [f64; 2],
     pub max_link_engagement_mm: f64,
     pub cut_length_mm: f64,
+    /// Stretches of the passes that would have engaged more than the bound, cut as loops,
+    /// and their length along the passes (each from a radius before its heavy part), mm.
+    #[serde(skip_serializing_if = "is_zero_count")]
+    pub looped_stretches: usize,
+    #[serde(skip_serializing_if = "is_zero")]
+    pub looped_length_mm: f64,
+    /// Length of such stretches cut straight for want of room for a loop beside them, mm.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub heavy_unlooped_mm: f64,
     /// Length of the passes left out because the tool would meet material still standing
     /// above the layer above (rest the layers above could not take), mm.
     #[serde(skip_serializing_if = "is_zero")]
@@ -304,6 +331,10 @@ pub struct LayerReport {
 
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
+}
+
+fn is_zero_count(x: &usize) -> bool {
+    *x == 0
 }
 
 /// Layers the tool cannot reach.
@@ -439,8 +470,12 @@ pub fn rough_layers(
             max_engagement_at: [0.0, 0.0],
             max_link_engagement_mm: 0.0,
             cut_length_mm: 0.0,
+            looped_stretches: 0,
+            looped_length_mm: 0.0,
+            heavy_unlooped_mm: 0.0,
             kept_from_material_above_mm: 0.0,
         };
+        let part_index = forbidden.as_ref().map(RegionIndex::new);
         // What still stands above the height the tool moves at between passes (just above
         // the layer above): rest the layers above could not take (a wall thinner than they
         // take, a corner between passes). Rapids at that height go round it, and descend
@@ -552,6 +587,27 @@ pub fn rough_layers(
                     };
                     writer.push(Point3::new(points[0].x, points[0].y, z), kind, feed);
                 }
+                let points = match options.max_engagement {
+                    Some(bound) => {
+                        let keep_off: Vec<&RegionIndex> =
+                            [part_index.as_ref(), above_flutes.as_ref()]
+                                .into_iter()
+                                .flatten()
+                                .collect();
+                        let looped = trochoid::loop_heavy_stretches(
+                            &points,
+                            &map,
+                            &keep_off,
+                            r,
+                            &trochoid::LoopOptions::for_radius(tool.radius, bound),
+                        );
+                        report.looped_stretches += looped.stretches;
+                        report.looped_length_mm += looped.looped_mm;
+                        report.heavy_unlooped_mm += looped.unlooped_mm;
+                        looped.points
+                    }
+                    None => points,
+                };
                 let mut window = Window::new(r);
                 for w in points.windows(2) {
                     map.cut(
@@ -583,7 +639,7 @@ pub fn rough_layers(
         // The next layer is planned from what this one leaves.
         material.take_off(&writer.moves, &mut removed, tool_id, options.tolerance);
         if report.passes > 0 || rest {
-            above = forbidden.as_ref().map(RegionIndex::new);
+            above = part_index;
             z_above = z;
         }
         if report.passes > 0 {

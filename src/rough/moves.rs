@@ -101,7 +101,7 @@ pub fn polyline_length(points: &[Point2]) -> f64 {
 }
 
 /// The point `distance` along the polyline from its start (its end beyond its length).
-fn point_along(points: &[Point2], distance: f64) -> Point2 {
+pub(super) fn point_along(points: &[Point2], distance: f64) -> Point2 {
     let mut left = distance;
     for w in points.windows(2) {
         let len = (w[1] - w[0]).norm();
@@ -115,7 +115,7 @@ fn point_along(points: &[Point2], distance: f64) -> Point2 {
 
 /// The polyline's vertices strictly between `from` and `to` (distances along it), in the
 /// direction of travel, followed by the point at `to`.
-fn walk(points: &[Point2], from: f64, to: f64) -> Vec<(Point2, f64)> {
+pub(super) fn walk(points: &[Point2], from: f64, to: f64) -> Vec<(Point2, f64)> {
     let mut out = Vec::new();
     let mut at = 0.0;
     let (lo, hi) = (from.min(to), from.max(to));

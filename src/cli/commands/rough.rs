@@ -60,6 +60,11 @@ pub struct RoughArgs {
     /// material.
     #[arg(long, value_parser = positive)]
     pub layer_depth: Option<f64>,
+    /// Widest radial engagement a pass may take, as a share of the tool's diameter: slots and
+    /// concave corners heavier than this are cut as trochoidal loops where there is room
+    /// [default: 0.5; 1 with --conventional: every pass straight].
+    #[arg(long, value_parser = share)]
+    pub max_engagement: Option<f64>,
     /// The material's specific cutting force K_t, N/mm² (aluminium 7075: 800, Ti-6Al-4V:
     /// about 2000, Inconel 718: 3000); feed control holds K_t·A·f/(π·D·n) at the target.
     #[arg(long, default_value_t = 800.0, value_parser = positive)]
@@ -111,6 +116,9 @@ pub fn run(args: &RoughArgs) -> Result<()> {
         resolution: args.resolution,
         uniform_layers: args.conventional,
         max_depth: args.layer_depth,
+        max_engagement: args
+            .max_engagement
+            .unwrap_or(if args.conventional { 1.0 } else { 0.5 }),
         feed_control: (!args.no_feed_control && !args.conventional).then_some(
             crate::feed::CuttingModel {
                 specific_force: args.specific_force,
