@@ -20,7 +20,7 @@
 //! farther for the same crescent (measured on the sample impeller: loops of r took 42 % longer
 //! than loops of r/2 for a higher peak engagement).
 //!
-//! Where each loop goes is decided point by point along the stretch ([`loops_for`]):
+//! Where each loop goes is decided point by point along the stretch (`loops_for`):
 //! centred on the pass where it lies more than ρ + r (+ `margin`) from the regions the tool
 //! must keep r from (the part; what the shank must not touch); else moved away from the
 //! nearest of them by up to ρ; else the largest loop that, moved off the nearest wall by its
