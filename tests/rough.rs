@@ -265,3 +265,42 @@ fn slots_and_corners_are_looped_within_the_engagement_bound() {
         (0, 0, 0)
     );
 }
+
+/// The layers cleared by the contour engine's other method, seed 004's wavelet passes inside
+/// the loose convex hull: the same checks hold (exact against the shape, clean on the
+/// tri-dexel stock), and the layers are cleared to about the same material.
+#[test]
+fn wavelet_layers_rough_the_sample_as_cleanly() {
+    let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
+    let run = |layer_paths| {
+        let options = RoughOptions {
+            tool_id: Some(3),
+            rest_tools: 0,
+            resolution: Some(1.0),
+            layer_paths,
+            ..Default::default()
+        };
+        let out = job::rough(&raw, "data/impeller.glb", "mm", &library(), &options).expect("rough");
+        assert_eq!(out.failure, None);
+        out.report
+    };
+    let (offsets, wavelet) = (
+        run(wavemill::rough::LayerPaths::Offsets),
+        run(wavemill::rough::LayerPaths::Wavelet),
+    );
+    let t = &wavelet.tools[0];
+    assert!(t.overcut_vs_shape.overcuts.is_empty());
+    assert!(t.overcut_vs_shape.min_clearance_mm > -1e-4);
+    let s = &t.stock;
+    assert_eq!(
+        (s.gouges, s.rapids_through_material, s.collisions),
+        (0, 0, 0)
+    );
+    let left = |r: &job::RoughReport| r.volume_after_mm3;
+    assert!(
+        (left(&wavelet) - left(&offsets)).abs() < 0.02 * left(&offsets),
+        "{} against {}",
+        left(&wavelet),
+        left(&offsets)
+    );
+}

@@ -126,6 +126,9 @@ pub struct RoughingSection {
     /// slots and concave corners heavier than this are cut as trochoidal loops where there
     /// is room (1 cuts every pass straight).
     pub max_engagement: f64,
+    /// The planner of each layer's passes: `offsets` (exact offsets of the section, far side
+    /// first) or `wavelet` (seed 004's wavelet passes inside the loose convex hull).
+    pub layer_paths: crate::rough::LayerPaths,
     /// When the operations are not listed: after the end mills, rough the rest they leave
     /// under overhangs and between blades with the job's ball, 5-axis, in offset layers
     /// (`channel-rough`).
@@ -150,6 +153,7 @@ impl Default for RoughingSection {
             cut_feed: 2000.0,
             entry_feed: 800.0,
             max_engagement: 0.5,
+            layer_paths: crate::rough::LayerPaths::default(),
             channel: false,
             channel_step: None,
             channel_max_layers: 40,

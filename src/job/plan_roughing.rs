@@ -188,6 +188,7 @@ pub fn plan_roughing(
             uniform_layers: false,
             max_depth: None,
             max_engagement: job.roughing.max_engagement,
+            paths: job.roughing.layer_paths,
         },
         &mut context.stock,
         from_blank,

@@ -72,6 +72,8 @@ pub struct RoughOptions {
     /// Widest radial engagement of a pass, as a share of the tool's diameter (1: every pass
     /// straight).
     pub max_engagement: f64,
+    /// The planner of each layer's passes.
+    pub layer_paths: crate::rough::LayerPaths,
 }
 
 impl Default for RoughOptions {
@@ -96,6 +98,7 @@ impl Default for RoughOptions {
             uniform_layers: false,
             max_depth: None,
             max_engagement: 0.5,
+            layer_paths: crate::rough::LayerPaths::default(),
         }
     }
 }
@@ -160,6 +163,8 @@ pub struct RoughReport {
     pub max_depth_mm: Option<f64>,
     /// The widest radial engagement of a pass, as a share of the diameter.
     pub max_engagement: f64,
+    /// The planner of each layer's passes.
+    pub layer_paths: crate::rough::LayerPaths,
     pub shape_triangles: usize,
     pub resolution_mm: f64,
     pub blank_volume_mm3: f64,
@@ -256,6 +261,7 @@ pub fn rough(
                 uniform_layers: options.uniform_layers,
                 max_depth: options.max_depth,
                 max_engagement: options.max_engagement,
+                paths: options.layer_paths,
             },
             &mut planning_stock,
             from_blank,
@@ -425,6 +431,7 @@ pub fn rough(
         uniform_layers: options.uniform_layers,
         max_depth_mm: options.max_depth,
         max_engagement: options.max_engagement,
+        layer_paths: options.layer_paths,
         shape_triangles: shape.triangles.len(),
         resolution_mm: spacing,
         blank_volume_mm3: blank_volume,

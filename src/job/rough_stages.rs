@@ -55,6 +55,8 @@ pub(super) struct ToolRoughing<'a> {
     /// Widest radial engagement of a pass, as a share of the tool's diameter (1: every pass
     /// straight, slots and all).
     pub max_engagement: f64,
+    /// The planner of each layer's passes.
+    pub paths: crate::rough::LayerPaths,
 }
 
 /// One tool's layers, and what feed control made of their feeds.
@@ -105,6 +107,7 @@ pub(super) fn rough_with_tool(
     if how.uniform_layers {
         options.layers.flat_area = f64::INFINITY;
     }
+    options.paths = how.paths;
     options.max_engagement =
         (how.max_engagement < 1.0).then(|| how.max_engagement * assembly.cutter.diameter());
     if let Some(depth) = how.max_depth {

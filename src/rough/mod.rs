@@ -34,7 +34,9 @@ use crate::contour::geometry::{Contour, Point2, Segment, Shape};
 use crate::contour::material::{MaterialMap, Window};
 use crate::contour::region::RegionIndex;
 use crate::contour::toolpath::{CenterPath, Link, Pass};
-use crate::contour::{ContourError, ParallelOptions, contour_parallel};
+use crate::contour::{
+    ContourError, MultiresOptions, ParallelOptions, contour_parallel, multires_paths,
+};
 use crate::geom::{Direction, Move, MoveKind, Point3, ToolPose, Toolpath, Vector3};
 use crate::mesh::Mesh;
 use crate::stock::Stock;
@@ -138,10 +140,25 @@ pub struct RoughingFeeds {
     pub rapid: f64,
 }
 
+/// Which 2.5D planner clears a layer's region (the contour engine's two methods).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LayerPaths {
+    /// Exact offsets of the shape's section at r, r + s, …, far side first
+    /// ([`crate::contour::contour_parallel`]).
+    #[default]
+    Offsets,
+    /// Seed 004's multiresolution paths: wavelet-simplified passes within a band of their
+    /// level, inside the loose convex hull of the section ([`crate::contour::multires_paths`]).
+    Wavelet,
+}
+
 /// How the layers are planned.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughingOptions {
     pub layers: LayerOptions,
+    /// The planner of each layer's passes.
+    pub paths: LayerPaths,
     /// Stepover between passes, mm (0 < s ≤ tool radius, so nothing reachable is left between
     /// passes and the column above every pass is clear: that is what lets the tool drop to
     /// just above a layer).
@@ -177,6 +194,7 @@ impl RoughingOptions {
     /// 0.8 r, engagement at most r (half the diameter), cells of r/8, 3° ramps.
     pub fn for_radius(r: f64) -> RoughingOptions {
         RoughingOptions {
+            paths: LayerPaths::default(),
             layers: LayerOptions {
                 max_depth: r,
                 min_depth: 0.2 * r,
@@ -449,12 +467,17 @@ pub fn rough_layers(
                 }
             }
         };
-        let path = match &forbidden {
-            Some(part) => {
+        let path = match (&forbidden, options.paths) {
+            (Some(part), LayerPaths::Offsets) => {
                 contour_parallel(part, &section, &ParallelOptions::new(r, options.stepover))
                     .map_err(err)?
             }
-            None => facing(&section, r, options.stepover).map_err(err)?,
+            (Some(part), LayerPaths::Wavelet) => {
+                multires_paths(part, &section, &MultiresOptions::new(r, options.stepover))
+                    .map_err(err)?
+                    .path
+            }
+            (None, _) => facing(&section, r, options.stepover).map_err(err)?,
         };
         let mut map =
             MaterialMap::of_stock(&section, forbidden.as_ref(), tool.radius, tool.radius / 8.0)

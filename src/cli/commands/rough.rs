@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 
 use crate::cli::load;
 use crate::cli::values::*;
@@ -65,6 +65,10 @@ pub struct RoughArgs {
     /// [default: 0.5; 1 with --conventional: every pass straight].
     #[arg(long, value_parser = share)]
     pub max_engagement: Option<f64>,
+    /// The planner of each layer's passes: exact offsets of the section, far side first, or
+    /// seed 004's wavelet passes inside the loose convex hull.
+    #[arg(long, value_enum, default_value_t = LayerPathsArg::Offsets)]
+    pub layer_paths: LayerPathsArg,
     /// The material's specific cutting force K_t, N/mm² (aluminium 7075: 800, Ti-6Al-4V:
     /// about 2000, Inconel 718: 3000); feed control holds K_t·A·f/(π·D·n) at the target.
     #[arg(long, default_value_t = 800.0, value_parser = positive)]
@@ -90,6 +94,15 @@ pub struct RoughArgs {
     /// fails; exit 3).
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// `--layer-paths`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum LayerPathsArg {
+    /// Exact offsets of the section at r, r + s, …, far side first.
+    Offsets,
+    /// Seed 004's wavelet passes within a band of their level, inside the loose convex hull.
+    Wavelet,
 }
 
 /// Runs the command.
@@ -119,6 +132,10 @@ pub fn run(args: &RoughArgs) -> Result<()> {
         max_engagement: args
             .max_engagement
             .unwrap_or(if args.conventional { 1.0 } else { 0.5 }),
+        layer_paths: match args.layer_paths {
+            LayerPathsArg::Offsets => crate::rough::LayerPaths::Offsets,
+            LayerPathsArg::Wavelet => crate::rough::LayerPaths::Wavelet,
+        },
         feed_control: (!args.no_feed_control && !args.conventional).then_some(
             crate::feed::CuttingModel {
                 specific_force: args.specific_force,
