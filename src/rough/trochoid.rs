@@ -481,19 +481,14 @@ fn trochoid(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contour::geometry::Contour;
-    use crate::contour::geometry::{Shape, Vertex};
+    use crate::contour::geometry::Shape;
 
     fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Shape {
         Shape {
-            contours: vec![Contour {
-                vertices: vec![
-                    Vertex::line(x0, y0),
-                    Vertex::line(x1, y0),
-                    Vertex::line(x1, y1),
-                    Vertex::line(x0, y1),
-                ],
-            }],
+            contours: vec![crate::rough::region::rectangle(
+                Point2::new(x0, y0),
+                Point2::new(x1, y1),
+            )],
         }
     }
 
