@@ -66,7 +66,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             // Roughing has its own stage (`job::plan_roughing`, from a `[stock]` blank; channel
             // roughing `job::channel_rough` on the stock it leaves) and a program with tool
             // changes (`job::post_program_with_tool_changes`): `job::plan` wires it in.
-            OperationKind::Rough | OperationKind::RestRough | OperationKind::ChannelRough => {
+            OperationKind::Rough
+            | OperationKind::RestRough
+            | OperationKind::IndexedRough
+            | OperationKind::ChannelRough => {
                 return Err(format!(
                     "{}: this example runs the ball operations only; job::plan runs roughing",
                     operation.name

@@ -129,6 +129,12 @@ pub struct RoughingSection {
     /// The planner of each layer's passes: `offsets` (exact offsets of the section, far side
     /// first) or `wavelet` (seed 004's wavelet passes inside the loose convex hull).
     pub layer_paths: crate::rough::LayerPaths,
+    /// When the operations are not listed: after the vertical end mills, at most this many
+    /// indexed (3+2) setups rough the rest they leave under overhangs, with the last end
+    /// mill along tilted axes proposed from the visibility maps (`indexed-rough`); 0: none.
+    pub indexed_setups: usize,
+    /// Indexed setups: the steepest tilt of the tool axis from the vertical, degrees.
+    pub indexed_max_tilt_deg: f64,
     /// When the operations are not listed: after the end mills, rough the rest they leave
     /// under overhangs and between blades with the job's ball, 5-axis, in offset layers
     /// (`channel-rough`).
@@ -154,6 +160,8 @@ impl Default for RoughingSection {
             entry_feed: 800.0,
             max_engagement: 0.5,
             layer_paths: crate::rough::LayerPaths::default(),
+            indexed_setups: 0,
+            indexed_max_tilt_deg: 60.0,
             channel: false,
             channel_step: None,
             channel_max_layers: 40,
@@ -555,6 +563,13 @@ impl Job {
                 format!("{e} is not a share of the diameter in (0, 1]"),
             ));
         }
+        let tilt = self.roughing.indexed_max_tilt_deg;
+        if !(tilt > 10.0 && tilt <= 90.0) {
+            return Err(invalid(
+                "roughing.indexed_max_tilt_deg",
+                format!("{tilt} must lie in (10, 90] degrees (setups lean at least 10°)"),
+            ));
+        }
         if let Some(step) = self.roughing.channel_step {
             positive("roughing.channel_step", step)?;
         }
@@ -762,6 +777,9 @@ pub enum OperationKind {
     /// Layers again with a smaller end mill, only where the stock the operations before it
     /// leave still holds material outside its offset shape.
     RestRough,
+    /// Layers along fixed tilted axes (3+2), one setup per axis proposed from the visibility
+    /// maps of the rest the roughing before it left under overhangs, with its end mill.
+    IndexedRough,
     /// Offset layers of the job's ball, 5-axis, from the deepest rest the operations before
     /// left down to `stock_to_leave` mm off the part, each cutting only where material stands:
     /// the rest under overhangs and between blades that vertical end mills cannot reach.
@@ -779,16 +797,20 @@ impl OperationKind {
         match self {
             OperationKind::Rough => "rough",
             OperationKind::RestRough => "rest-rough",
+            OperationKind::IndexedRough => "indexed-rough",
             OperationKind::ChannelRough => "channel-rough",
             OperationKind::SemiFinish => "semi-finish",
             OperationKind::Finish => "finish",
         }
     }
 
-    /// Roughing kinds cut with a library end mill along a fixed vertical axis; the others
-    /// with the job's ball along the 5-axis passes.
+    /// Roughing kinds cut with a library end mill along an axis fixed per setup (vertical,
+    /// or tilted for `indexed-rough`); the others with the job's ball along the 5-axis passes.
     pub fn is_roughing(self) -> bool {
-        matches!(self, OperationKind::Rough | OperationKind::RestRough)
+        matches!(
+            self,
+            OperationKind::Rough | OperationKind::RestRough | OperationKind::IndexedRough
+        )
     }
 }
 
@@ -917,6 +939,13 @@ impl Job {
                 };
                 operation(kind, self.roughing.allowance, self.strategy.scallop_height)
             });
+            let indexed = (layered && self.roughing.indexed_setups > 0).then(|| {
+                operation(
+                    OperationKind::IndexedRough,
+                    self.roughing.allowance,
+                    self.strategy.scallop_height,
+                )
+            });
             let channel = (layered && self.roughing.channel).then(|| {
                 operation(
                     OperationKind::ChannelRough,
@@ -932,6 +961,7 @@ impl Job {
                 )
             });
             rough
+                .chain(indexed)
                 .chain(channel)
                 .chain(semi)
                 .chain(std::iter::once(operation(
@@ -953,6 +983,7 @@ impl Job {
                 let stock = s.stock_to_leave.unwrap_or(match s.kind {
                     OperationKind::Rough
                     | OperationKind::RestRough
+                    | OperationKind::IndexedRough
                     | OperationKind::ChannelRough => self.roughing.allowance,
                     _ => 0.0,
                 });
@@ -1030,6 +1061,7 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
         match op.kind {
             OperationKind::Rough
             | OperationKind::RestRough
+            | OperationKind::IndexedRough
             | OperationKind::ChannelRough
             | OperationKind::SemiFinish => {
                 if !(op.stock_to_leave.is_finite() && op.stock_to_leave > 0.0) {
@@ -1044,7 +1076,9 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
                 // every other operation must leave less than what is already there.
                 let same_allowed = matches!(
                     op.kind,
-                    OperationKind::RestRough | OperationKind::ChannelRough
+                    OperationKind::RestRough
+                        | OperationKind::IndexedRough
+                        | OperationKind::ChannelRough
                 );
                 if op.stock_to_leave > previous_stock
                     || (op.stock_to_leave == previous_stock && !same_allowed)
@@ -1080,10 +1114,13 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
                         .into(),
                 ));
             }
-            OperationKind::RestRough if !previous_kind.is_some_and(OperationKind::is_roughing) => {
-                return Err(fail(
-                    "rest-roughing follows a roughing or rest-roughing operation".into(),
-                ));
+            OperationKind::RestRough | OperationKind::IndexedRough
+                if !previous_kind.is_some_and(OperationKind::is_roughing) =>
+            {
+                return Err(fail(format!(
+                    "{} follows a roughing or rest-roughing operation",
+                    op.kind.name()
+                )));
             }
             // Its layers are cut only where material stands, which needs the stock model the
             // roughing from a blank keeps.

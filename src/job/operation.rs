@@ -129,7 +129,7 @@ mod tests {
             ),
             (
                 "[[operation]]\nkind = \"rest-rough\"\n[[operation]]\nkind = \"finish\"\n",
-                "rest-roughing follows a roughing",
+                "rest-rough follows a roughing",
             ),
             (
                 "[[operation]]\nkind = \"rough\"\nstock_to_leave = 0.5\n\

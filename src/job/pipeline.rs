@@ -432,7 +432,18 @@ pub fn plan(
                     prepared.table_z,
                 )?),
             };
-            let rough = plan_roughing(context, part, job, &setup, operation)?;
+            let mut rough = plan_roughing(context, part, job, &setup, operation)?;
+            if operation.kind == OperationKind::IndexedRough {
+                // Between setups the table turns: the stock run sweeps those rapids as the
+                // control moves them.
+                let before = last_move(&planned);
+                split_turning_rapids(
+                    &mut rough.toolpath,
+                    before.as_ref(),
+                    &setup.kinematics,
+                    MAX_RAPID_TURN_DEG,
+                );
+            }
             planned.push(PlannedOperation {
                 operation: operation.clone(),
                 toolpath: rough.toolpath.clone(),
@@ -518,7 +529,10 @@ pub fn plan(
                 );
                 OperationTarget::DriveSurface(&drive)
             }
-            OperationKind::Rough | OperationKind::RestRough | OperationKind::ChannelRough => {
+            OperationKind::Rough
+            | OperationKind::RestRough
+            | OperationKind::IndexedRough
+            | OperationKind::ChannelRough => {
                 return Err(Error::Internal("roughing is planned above".into()));
             }
         };
@@ -612,13 +626,18 @@ pub fn plan(
         header.comments.insert(
             0,
             format!(
-                "layer roughing from {} with {}, 3-axis (A0), to the part + {} mm",
+                "layer roughing from {} with {}, 3-axis (A0){}, to the part + {} mm",
                 job.stock.blank.as_deref().unwrap_or("the blank"),
                 roughing
                     .iter()
                     .map(|r| format!("T{}", r.tool.id))
                     .collect::<Vec<_>>()
                     .join(", then "),
+                if roughing.iter().any(|r| r.summary.indexed.is_some()) {
+                    " and in indexed 3+2 setups"
+                } else {
+                    ""
+                },
                 first.summary.stock_to_leave_mm
             ),
         );
@@ -667,6 +686,11 @@ pub fn plan(
         &mut roughing,
         1 + changes.len(),
         budget.verification_mm,
+        &super::plan_roughing::PostedRoughingLimits {
+            pivot: setup.pivot,
+            safe_distance: setup.safe_distance,
+            table: setup.table,
+        },
     )?;
     timings.back_simulation = ms(t);
     let t = Instant::now();

@@ -49,6 +49,9 @@ pub struct RoughingSummary {
     pub not_reached: Option<NotReached>,
     pub moves: usize,
     pub cutting_length_mm: f64,
+    /// Indexed roughing: the setups proposed from the visibility maps, and what each cut.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub indexed: Option<super::indexed_rough::IndexedSummary>,
     /// The tool's moves as read back from the posted program, against its offset shape and
     /// against the part (filled in after posting).
     pub overcut_vs_shape: Option<OvercutReport>,
@@ -67,12 +70,14 @@ pub struct PlannedRoughing {
 /// What the roughing operations of a plan share: the blank as layers and as a planning
 /// stock model, the library and the offset shapes already built.
 pub struct RoughingContext {
-    library: ToolLibrary,
+    pub(super) library: ToolLibrary,
     blank: crate::rough::Blank,
-    stock: Stock,
+    pub(super) stock: Stock,
     floor: f64,
     shapes: Vec<(f64, Mesh)>,
     previous_diameter: Option<f64>,
+    /// The end mill of the last roughing operation (what indexed setups cut with).
+    pub(super) previous_tool: Option<ToolAssembly>,
 }
 
 impl RoughingContext {
@@ -100,11 +105,12 @@ impl RoughingContext {
             floor,
             shapes: Vec::new(),
             previous_diameter: None,
+            previous_tool: None,
         })
     }
 
     /// The part's verified offset shape at `allowance`, built once per allowance.
-    fn shape(&mut self, part: &Mesh, allowance: f64) -> Result<Mesh> {
+    pub(super) fn shape(&mut self, part: &Mesh, allowance: f64) -> Result<Mesh> {
         if let Some((_, shape)) = self.shapes.iter().find(|(a, _)| *a == allowance) {
             return Ok(shape.clone());
         }
@@ -130,6 +136,9 @@ pub fn plan_roughing(
     setup: &PlanSetup,
     operation: &Operation,
 ) -> Result<PlannedRoughing> {
+    if operation.kind == OperationKind::IndexedRough {
+        return super::indexed_rough::plan_indexed_roughing(context, part, job, setup, operation);
+    }
     let depth = context.blank.top - context.floor;
     let margin = job.safety.holder_margin;
     let from_blank = operation.kind == OperationKind::Rough;
@@ -202,6 +211,7 @@ pub fn plan_roughing(
         )));
     }
     context.previous_diameter = Some(tool.cutter.diameter());
+    context.previous_tool = Some(tool.clone());
     let moves = planned.layers.toolpath.moves.len();
     let cutting_length_mm = planned.cutting_length();
     let ToolLayers {
@@ -225,6 +235,7 @@ pub fn plan_roughing(
             not_reached: roughing.not_reached,
             moves,
             cutting_length_mm,
+            indexed: None,
             overcut_vs_shape: None,
             overcut_vs_part: None,
         },
@@ -433,9 +444,25 @@ fn from_safe_plane(mut toolpath: Toolpath, setup: &PlanSetup) -> Toolpath {
     toolpath
 }
 
+/// Where the roughing moves read back from a program must keep clear of besides the shapes:
+/// the machine's safe plane, where the axis may turn, and the table.
+pub struct PostedRoughingLimits {
+    /// The pivot and the distance of the safe plane from it along the axis, mm.
+    pub pivot: Point3,
+    pub safe_distance: f64,
+    pub table: crate::collide::Table,
+}
+
 /// Checks the roughing tools' moves as read back from `gcode` (the first sections of the
 /// program, one per roughing operation, in order) against each one's offset shape and the
 /// part, exactly; fills in the summaries and returns what is wrong, if anything.
+///
+/// Each run of moves along one axis (read back from the posted rotary angles) is checked in
+/// a frame where that axis is vertical ([`crate::rough::indexed::SetupFrame`]: the vertical
+/// layers are one run, each indexed setup another). Where the axis turns between two moves,
+/// both must stand on the safe plane. Every move keeps every body of the tool above the
+/// table's top by its margin, the bodies' end circles sampled here independently of the
+/// planner's closed form.
 pub fn check_posted_roughing(
     gcode: &str,
     model: &crate::verify::MachineModel,
@@ -443,6 +470,7 @@ pub fn check_posted_roughing(
     roughing: &mut [PlannedRoughing],
     tool_changes: usize,
     max_error: f64,
+    limits: &PostedRoughingLimits,
 ) -> Result<Option<String>> {
     if roughing.is_empty() {
         return Ok(None);
@@ -455,19 +483,70 @@ pub fn check_posted_roughing(
     let mut problems = Vec::new();
     for (planned, section) in roughing.iter_mut().zip(sections) {
         let label = format!("'{}' (T{})", planned.summary.operation, planned.tool.id);
-        if let Some(k) = section
-            .moves
-            .iter()
-            .position(|m| m.pose.axis.z < 1.0 - 1e-9)
-        {
-            problems.push(format!(
-                "{label}: read-back move {k} is not along the vertical axis the roughing is \
-                 checked for"
-            ));
-        }
         let radius = planned.summary.planning.radius;
-        let shape = overcuts(&planned.shape, &section, radius, rounding);
-        let against_part = overcuts(part, &section, radius, rounding);
+        let mut shape = OvercutReport {
+            moves_checked: 0,
+            overcuts: Vec::new(),
+            min_clearance_mm: f64::INFINITY,
+        };
+        let mut against_part = shape.clone();
+        let moves = &section.moves;
+        let mut start = 0;
+        while start < moves.len() {
+            let axis = moves[start].pose.axis;
+            let end = moves[start..]
+                .iter()
+                .position(|m| m.pose.axis != axis)
+                .map_or(moves.len(), |n| start + n);
+            if end < moves.len() {
+                let height = |m: &Move| (m.pose.tip - limits.pivot).dot(&m.pose.axis);
+                let (from, to) = (&moves[end - 1], &moves[end]);
+                if height(from).min(height(to)) < limits.safe_distance - 1e-3 {
+                    problems.push(format!(
+                        "{label}: the axis turns between read-back moves {} and {end} off the \
+                         safe plane",
+                        end - 1
+                    ));
+                }
+            }
+            let run = Toolpath {
+                tool_id: section.tool_id,
+                moves: moves[start..end].to_vec(),
+            };
+            let Some(frame) = crate::rough::indexed::SetupFrame::new(&axis.into_inner()) else {
+                problems.push(format!(
+                    "{label}: read-back move {start} points the tool upwards from below"
+                ));
+                start = end;
+                continue;
+            };
+            let turned = |mesh: &Mesh| frame.mesh_to_setup(mesh);
+            let run = Toolpath {
+                tool_id: run.tool_id,
+                moves: run
+                    .moves
+                    .iter()
+                    .map(|m| {
+                        let mut m = *m;
+                        m.pose.tip = frame.to_setup(&m.pose.tip);
+                        m.pose.axis = nalgebra::Unit::new_normalize(crate::geom::Vector3::z());
+                        m
+                    })
+                    .collect(),
+            };
+            for (report, mesh) in [(&mut shape, &planned.shape), (&mut against_part, part)] {
+                let found = overcuts(&turned(mesh), &run, radius, rounding);
+                report.moves_checked += found.moves_checked;
+                report.min_clearance_mm = report.min_clearance_mm.min(found.min_clearance_mm);
+                report
+                    .overcuts
+                    .extend(found.overcuts.into_iter().map(|mut o| {
+                        o.move_index += start;
+                        o
+                    }));
+            }
+            start = end;
+        }
         for (what, report) in [("its offset shape", &shape), ("the part", &against_part)] {
             if let Some(o) = report.overcuts.first() {
                 problems.push(format!(
@@ -477,10 +556,51 @@ pub fn check_posted_roughing(
                 ));
             }
         }
+        let table = limits.table.top_z + limits.table.margin - rounding;
+        if let Some((k, low)) = moves
+            .iter()
+            .enumerate()
+            .map(|(k, m)| (k, lowest_point(&planned.tool, &m.pose)))
+            .find(|(_, low)| *low < table)
+        {
+            problems.push(format!(
+                "{label}: read-back move {k} brings the tool to z = {low:.4} mm, below the \
+                 table's top plus its margin ({table:.4} mm)"
+            ));
+        }
         planned.summary.overcut_vs_shape = Some(shape);
         planned.summary.overcut_vs_part = Some(against_part);
     }
     Ok((!problems.is_empty()).then(|| problems.join("; ")))
+}
+
+/// The lowest z of `tool` at `pose`: its fluted end as the cylinder of its diameter and every
+/// body above it, each end circle sampled every 2° (within r·(1 − cos 1°) of the exact low
+/// point, 1.5e-4 r).
+fn lowest_point(tool: &ToolAssembly, pose: &crate::geom::ToolPose) -> f64 {
+    let k = pose.axis.into_inner();
+    let u = k.cross(&crate::geom::Vector3::x());
+    let u = if u.norm() > 1e-6 {
+        u.normalize()
+    } else {
+        k.cross(&crate::geom::Vector3::y()).normalize()
+    };
+    let v = k.cross(&u);
+    let cutter = 0.5 * tool.cutter.diameter();
+    let mut circles = vec![(0.0, cutter), (tool.cutter.flute_length(), cutter)];
+    for b in tool.bodies() {
+        circles.push((b.from, b.radius_from));
+        circles.push((b.to, b.radius_to));
+    }
+    let mut low = pose.tip.z;
+    for (h, r) in circles {
+        let centre = pose.tip + k * h;
+        for step in 0..180 {
+            let t = (step as f64 * 2.0).to_radians();
+            low = low.min((centre + r * (t.cos() * u + t.sin() * v)).z);
+        }
+    }
+    low
 }
 
 #[cfg(test)]

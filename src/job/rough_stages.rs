@@ -88,18 +88,13 @@ impl ToolLayers {
     }
 }
 
-/// Layers of one tool down to `shape`: from the whole blank (`from_blank`), else only where
-/// `stock` still holds material; each layer is taken off `stock` as it is planned. `stock` is the planning model the next tool starts from. With feed
-/// control, each move's feed is set from the volume it takes off the stock as it stood.
-pub(super) fn rough_with_tool(
-    shape: &crate::mesh::Mesh,
-    blank: &Blank,
+/// The layer planner's options for `assembly` (its roughing view `tool`) roughing as `how`
+/// says.
+pub(super) fn roughing_options(
+    tool: &RoughingTool,
     assembly: &ToolAssembly,
     how: &ToolRoughing,
-    stock: &mut Stock,
-    from_blank: bool,
-) -> std::result::Result<ToolLayers, crate::rough::RoughError> {
-    let tool = RoughingTool::of(assembly, how.holder_margin);
+) -> RoughingOptions {
     let mut options = RoughingOptions::for_radius(tool.radius);
     options.floor = Some(how.floor);
     options.feeds = how.feeds.clone();
@@ -114,6 +109,22 @@ pub(super) fn rough_with_tool(
         options.layers.max_depth = depth;
         options.layers.min_depth = options.layers.min_depth.min(depth);
     }
+    options
+}
+
+/// Layers of one tool down to `shape`: from the whole blank (`from_blank`), else only where
+/// `stock` still holds material; each layer is taken off `stock` as it is planned. `stock` is the planning model the next tool starts from. With feed
+/// control, each move's feed is set from the volume it takes off the stock as it stood.
+pub(super) fn rough_with_tool(
+    shape: &crate::mesh::Mesh,
+    blank: &Blank,
+    assembly: &ToolAssembly,
+    how: &ToolRoughing,
+    stock: &mut Stock,
+    from_blank: bool,
+) -> std::result::Result<ToolLayers, crate::rough::RoughError> {
+    let tool = RoughingTool::of(assembly, how.holder_margin);
+    let options = roughing_options(&tool, assembly, how);
     let body = CuttingBody::of(&assembly.cutter);
     // Either way each layer comes off the stock as it is planned, which measures what each
     // move removes from the stock as it stood.
@@ -225,7 +236,7 @@ fn roughers(library: &ToolLibrary) -> Vec<&ToolAssembly> {
 }
 
 /// The library tool `id`, or an error naming it.
-fn library_tool(library: &ToolLibrary, id: u32) -> Result<(ToolAssembly, String)> {
+pub(super) fn library_tool(library: &ToolLibrary, id: u32) -> Result<(ToolAssembly, String)> {
     let tool = library
         .tools
         .iter()

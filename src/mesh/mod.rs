@@ -163,7 +163,31 @@ pub(crate) mod fixtures {
         }
     }
 
-    /// A UV sphere of radius `r` around the origin, outward.
+    /// Axis-aligned box from `min` to `max`, outward.
+    pub fn box_between(min: Point3, max: Point3) -> Mesh {
+        let e = max - min;
+        let mut m = cuboid(e.x, e.y, e.z);
+        for p in &mut m.positions {
+            *p += min.coords;
+        }
+        m
+    }
+
+    /// The meshes as one (separate closed pieces stay separate).
+    pub fn joined(meshes: impl IntoIterator<Item = Mesh>) -> Mesh {
+        let mut out = Mesh {
+            positions: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for m in meshes {
+            let base = out.positions.len() as u32;
+            out.positions.extend(m.positions);
+            out.triangles
+                .extend(m.triangles.into_iter().map(|t| t.map(|i| i + base)));
+        }
+        out
+    }
+
     /// A 100 × 100 plate `plate_height` thick with a 10 × 100 × 60 block (a wall) standing at
     /// x = `wall_x`: two closed pieces, for tests of tools near walls.
     pub fn plate_and_wall(plate_height: f64, wall_x: f64) -> Mesh {
@@ -180,6 +204,7 @@ pub(crate) mod fixtures {
         m
     }
 
+    /// A UV sphere of radius `r` around the origin, outward.
     pub fn uv_sphere(r: f64, stacks: u32, slices: u32) -> Mesh {
         let mut positions = vec![Point3::new(0.0, 0.0, r)];
         for i in 1..stacks {

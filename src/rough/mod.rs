@@ -22,10 +22,12 @@
 
 pub mod check;
 pub mod envelope;
+pub mod indexed;
 pub mod layers;
 pub mod moves;
 pub mod region;
 pub mod rest;
+pub mod setups;
 pub mod trochoid;
 
 use serde::Serialize;
@@ -186,6 +188,12 @@ pub struct RoughingOptions {
     /// Lowest layer (the floor the part stands on, or above it), mm; `None`: the blank's bottom
     /// or the shape's lowest point, whichever is higher.
     pub floor: Option<f64>,
+    /// Layers clear rest material only inside this convex counter-clockwise polygon (an
+    /// indexed setup's zone, [`indexed`]); `None`: wherever it stands.
+    pub zone: Option<Vec<Point2>>,
+    /// The height the holder must stay above, by the tool's reach, mm; `None`: the blank's
+    /// top. An indexed setup gives the top of the material its holder can pass over.
+    pub holder_top: Option<f64>,
     pub feeds: RoughingFeeds,
 }
 
@@ -211,6 +219,8 @@ impl RoughingOptions {
             tolerance: 0.01,
             max_engagement: Some(r),
             floor: None,
+            zone: None,
+            holder_top: None,
             feeds: RoughingFeeds {
                 cut: 2000.0,
                 entry: 800.0,
@@ -401,7 +411,8 @@ pub fn rough_layers(
     let floor = options
         .floor
         .unwrap_or_else(|| blank.bottom.max(shape_bottom));
-    let reach_floor = blank.top - tool.reach;
+    let holder_top = options.holder_top.unwrap_or(blank.top);
+    let reach_floor = holder_top - tool.reach;
     let cell_area = options.cell * options.cell;
     let planned = layers::layer_heights(
         &envelope.top,
@@ -414,10 +425,11 @@ pub fn rough_layers(
         deepest_cut_z: reach_floor,
         floor_z: floor,
         reason: format!(
-            "the tool reaches {:.1} mm below the blank's top with its holder {:.1} mm above it; \
-             the material below z = {reach_floor:.3} is left for a longer tool",
+            "the tool reaches {:.1} mm below the top of what its holder passes over with the \
+             holder {:.1} mm above it; the material below z = {reach_floor:.3} is left for a \
+             longer tool",
             tool.reach,
-            blank.top - reach_floor - tool.reach
+            holder_top - reach_floor - tool.reach
         ),
     });
 
@@ -456,7 +468,14 @@ pub fn rough_layers(
         let section = match &mut material {
             Material::Blank | Material::BlankOnStock { .. } => blank.outline.clone(),
             Material::Stock { stock, .. } => {
-                match rest::material_in_slab(stock, &envelope, z, z_above, REST_MIN_THICKNESS) {
+                match rest::material_in_slab_within(
+                    stock,
+                    &envelope,
+                    z,
+                    z_above,
+                    REST_MIN_THICKNESS,
+                    options.zone.as_deref(),
+                ) {
                     Some(region) => region,
                     None => {
                         // Nothing stands in this slab: the layers below start from here.

@@ -24,7 +24,30 @@ pub fn material_in_slab(
     z_high: f64,
     min_thickness: f64,
 ) -> Option<Shape> {
-    material_cells(stock, envelope, z_low, z_high, min_thickness, true)
+    material_cells(stock, envelope, z_low, z_high, min_thickness, true, None)
+}
+
+/// [`material_in_slab`] inside the convex counter-clockwise polygon `zone` only (cells whose
+/// centre lies in it): an indexed setup clears the rest it was proposed for, not the skin
+/// every surface keeps.
+pub fn material_in_slab_within(
+    stock: &Stock,
+    envelope: &TopEnvelope,
+    z_low: f64,
+    z_high: f64,
+    min_thickness: f64,
+    zone: Option<&[Point2]>,
+) -> Option<Shape> {
+    material_cells(stock, envelope, z_low, z_high, min_thickness, true, zone)
+}
+
+/// Whether `p` lies in the convex counter-clockwise polygon `hull` (on its boundary counts).
+pub fn in_convex(hull: &[Point2], p: Point2) -> bool {
+    hull.len() >= 3
+        && (0..hull.len()).all(|k| {
+            let (a, b) = (hull[k], hull[(k + 1) % hull.len()]);
+            (b - a).perp(&(p - a)) >= 0.0
+        })
 }
 
 /// [`material_in_slab`] without the growth: the cells whose own vertical dexel, or a
@@ -36,7 +59,7 @@ pub fn material_on_lines(
     z_low: f64,
     z_high: f64,
 ) -> Option<Shape> {
-    material_cells(stock, envelope, z_low, z_high, 0.0, false)
+    material_cells(stock, envelope, z_low, z_high, 0.0, false, None)
 }
 
 fn material_cells(
@@ -46,6 +69,7 @@ fn material_cells(
     z_high: f64,
     min_thickness: f64,
     grow: bool,
+    zone: Option<&[Point2]>,
 ) -> Option<Shape> {
     let vertical = stock.grid(2);
     let [w, h] = vertical.counts();
@@ -103,7 +127,7 @@ fn material_cells(
                 origin.x + (i as f64 + 0.5) * s,
                 origin.y + (j as f64 + 0.5) * s,
             );
-            if envelope.top_at(c) > z_low {
+            if envelope.top_at(c) > z_low || zone.is_some_and(|hull| !in_convex(hull, c)) {
                 material[i + j * w] = false;
             }
         }

@@ -25,6 +25,7 @@ pub mod clearance;
 pub mod convex;
 pub mod cutter;
 pub mod replay;
+pub mod resample;
 pub mod rest;
 pub mod simulate;
 pub mod slide;
