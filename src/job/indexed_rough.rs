@@ -10,10 +10,10 @@
 //! each setup's frame like the vertical ones ([`super::plan_roughing::check_posted_roughing`]),
 //! against the table, and by the stock run with the whole tool assembly.
 
-use serde::Serialize;
-
 use super::config::{Job, Operation};
-use super::plan_roughing::{PlannedRoughing, RoughingContext, RoughingSummary};
+use super::plan_roughing::{
+    IndexedSummary, PlannedRoughing, RoughingContext, RoughingSummary, SetupSummary,
+};
 use super::rough_stages::{ToolRoughing, library_tool, roughing_options};
 use super::setup::PlanSetup;
 use crate::error::{Error, JobError, Result};
@@ -22,38 +22,12 @@ use crate::geom::{Move, MoveKind, Point3, ToolPose, Toolpath, Vector3};
 use crate::mesh::Mesh;
 use crate::post::MachineKinematics;
 use crate::rough::indexed::{SetupFrame, SetupRoughing, lifted_to, lowest_tip_z, rough_setup};
-use crate::rough::setups::{Proposal, RestPoint, SetupOptions, propose_setups};
-use crate::rough::{LayerReport, NotReached, RoughingFeeds, RoughingTool};
+use crate::rough::setups::{RestPoint, SetupOptions, propose_setups};
+use crate::rough::{RoughingFeeds, RoughingTool};
 use crate::stock::cutter::CuttingBody;
 
-/// What the indexed setups of an operation did, for `report.json`.
-#[derive(Clone, Debug, Serialize)]
-pub struct IndexedSummary {
-    /// Rest above this much (mm off the part) counted for the proposal.
-    pub rest_threshold_mm: f64,
-    pub proposal: Proposal,
-    pub setups: Vec<SetupSummary>,
-}
-
-/// One indexed setup.
-#[derive(Clone, Debug, Serialize)]
-pub struct SetupSummary {
-    /// Tool axis in the part frame, its tilt from the vertical, and the machine's rotary
-    /// angles for it, degrees.
-    pub axis: [f64; 3],
-    pub tilt_deg: f64,
-    pub rotary_deg: [f64; 2],
-    /// Share of the rest's weight the proposal saw first from this setup.
-    pub seen_share: f64,
-    pub layers: Vec<LayerReport>,
-    pub moves: usize,
-    /// Taken off the planning stock, mm³.
-    pub removed_mm3: f64,
-    pub not_reached: Option<NotReached>,
-}
-
 /// Plans `operation` (an `indexed-rough`) on what `context`'s stock holds now.
-pub(super) fn plan_indexed_roughing(
+pub fn plan_indexed_roughing(
     context: &mut RoughingContext,
     part: &Mesh,
     job: &Job,
@@ -179,6 +153,13 @@ pub(super) fn plan_indexed_roughing(
                 (p.point, p.point + p.normal.normalize() * rest_of[k])
             })
             .collect();
+        // Apart by more than the tool's diameter, the rest is cleared zone by zone, each
+        // holder clearing only what stands about its own zone.
+        let starts: Vec<Point3> = seen.iter().map(|(a, _)| *a).collect();
+        let zones: Vec<Vec<(Point3, Point3)>> = clusters(&starts, 2.0 * planning.radius)
+            .into_iter()
+            .map(|members| members.into_iter().map(|k| seen[k]).collect())
+            .collect();
         let axis = Vector3::from(proposed.axis);
         let frame = SetupFrame::new(&axis)
             .ok_or_else(|| Error::Internal(format!("setup axis {axis:?} points down")))?;
@@ -196,7 +177,7 @@ pub(super) fn plan_indexed_roughing(
             tool.id,
             &SetupRoughing {
                 lowest_tip_z: lowest,
-                rest: &seen,
+                zones: &zones,
                 holder_radius,
                 body: &body,
                 options: &options,
@@ -301,4 +282,73 @@ pub(super) fn plan_indexed_roughing(
         toolpath,
         shape,
     })
+}
+
+/// `points` grouped by chains of neighbours within `link` of each other (union–find over a
+/// grid of `link`-sized cells), each group in index order, the groups by their first index.
+fn clusters(points: &[Point3], link: f64) -> Vec<Vec<usize>> {
+    use std::collections::HashMap;
+    let cell = |p: &Point3| [p.x, p.y, p.z].map(|v| (v / link).floor() as i64);
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (k, p) in points.iter().enumerate() {
+        grid.entry(cell(p)).or_default().push(k);
+    }
+    let mut parent: Vec<usize> = (0..points.len()).collect();
+    fn root(parent: &mut [usize], mut k: usize) -> usize {
+        while parent[k] != k {
+            parent[k] = parent[parent[k]];
+            k = parent[k];
+        }
+        k
+    }
+    for (k, p) in points.iter().enumerate() {
+        let c = cell(p);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(near) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
+                        continue;
+                    };
+                    for &m in near {
+                        if m < k && (points[m] - p).norm() <= link {
+                            let (a, b) = (root(&mut parent, k), root(&mut parent, m));
+                            parent[a.max(b)] = a.min(b);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut group_of: HashMap<usize, usize> = HashMap::new();
+    for k in 0..points.len() {
+        let r = root(&mut parent, k);
+        let g = *group_of.entry(r).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(k);
+    }
+    groups
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two rows of points 1 mm apart, 10 mm from each other: two groups at a 2 mm link, one
+    /// at 12.
+    #[test]
+    fn points_chain_into_groups_by_their_link() {
+        let points: Vec<Point3> = (0..20)
+            .map(|k| Point3::new((k % 10) as f64, 10.0 * (k / 10) as f64, 0.0))
+            .collect();
+        let groups = clusters(&points, 2.0);
+        assert_eq!(
+            groups,
+            vec![(0..10).collect::<Vec<_>>(), (10..20).collect()]
+        );
+        assert_eq!(clusters(&points, 12.0).len(), 1);
+        assert!(clusters(&[], 1.0).is_empty());
+    }
 }

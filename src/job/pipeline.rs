@@ -432,7 +432,11 @@ pub fn plan(
                     prepared.table_z,
                 )?),
             };
-            let mut rough = plan_roughing(context, part, job, &setup, operation)?;
+            let mut rough = if operation.kind == OperationKind::IndexedRough {
+                super::indexed_rough::plan_indexed_roughing(context, part, job, &setup, operation)?
+            } else {
+                plan_roughing(context, part, job, &setup, operation)?
+            };
             if operation.kind == OperationKind::IndexedRough {
                 // Between setups the table turns: the stock run sweeps those rapids as the
                 // control moves them.

@@ -51,11 +51,37 @@ pub struct RoughingSummary {
     pub cutting_length_mm: f64,
     /// Indexed roughing: the setups proposed from the visibility maps, and what each cut.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub indexed: Option<super::indexed_rough::IndexedSummary>,
+    pub indexed: Option<IndexedSummary>,
     /// The tool's moves as read back from the posted program, against its offset shape and
     /// against the part (filled in after posting).
     pub overcut_vs_shape: Option<OvercutReport>,
     pub overcut_vs_part: Option<OvercutReport>,
+}
+
+/// What the indexed setups of an operation did, for `report.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct IndexedSummary {
+    /// Rest above this much (mm off the part) counted for the proposal.
+    pub rest_threshold_mm: f64,
+    pub proposal: crate::rough::setups::Proposal,
+    pub setups: Vec<SetupSummary>,
+}
+
+/// One indexed setup.
+#[derive(Clone, Debug, Serialize)]
+pub struct SetupSummary {
+    /// Tool axis in the part frame, its tilt from the vertical, and the machine's rotary
+    /// angles for it, degrees.
+    pub axis: [f64; 3],
+    pub tilt_deg: f64,
+    pub rotary_deg: [f64; 2],
+    /// Share of the rest's weight the proposal saw first from this setup.
+    pub seen_share: f64,
+    pub layers: Vec<LayerReport>,
+    pub moves: usize,
+    /// Taken off the planning stock, mm³.
+    pub removed_mm3: f64,
+    pub not_reached: Option<NotReached>,
 }
 
 /// A roughing operation, planned: its tool, its moves (from the safe plane back to it) and
@@ -126,7 +152,8 @@ impl RoughingContext {
     }
 }
 
-/// Plans `operation` (a `rough` or `rest-rough`) on `part`: chooses its tool, roughs its
+/// Plans `operation` (a `rough` or `rest-rough`; the indexed setups have their own planner)
+/// on `part`: chooses its tool, roughs its
 /// layers from the blank or from what the roughing before it left, and takes its moves off
 /// the planning stock for the next one.
 pub fn plan_roughing(
@@ -136,9 +163,6 @@ pub fn plan_roughing(
     setup: &PlanSetup,
     operation: &Operation,
 ) -> Result<PlannedRoughing> {
-    if operation.kind == OperationKind::IndexedRough {
-        return super::indexed_rough::plan_indexed_roughing(context, part, job, setup, operation);
-    }
     let depth = context.blank.top - context.floor;
     let margin = job.safety.holder_margin;
     let from_blank = operation.kind == OperationKind::Rough;

@@ -100,10 +100,11 @@ pub fn lowest_tip_z(tool: &ToolAssembly, axis: &Direction, table_top: f64, margi
 pub struct SetupRoughing<'a> {
     /// The lowest part-frame z the tip may go ([`lowest_tip_z`]).
     pub lowest_tip_z: f64,
-    /// The rest this setup is for, part frame: from a point of the part out to where its
-    /// material ends. The layers clear material only within the convex hull of these seen
-    /// along the axis, grown by the tool's radius and a dexel spacing.
-    pub rest: &'a [(Point3, Point3)],
+    /// The rest this setup is for, part frame, in zones: each from a point of the part out to
+    /// where its material ends. Each zone's layers clear material only within the convex hull
+    /// of its rest seen along the axis, grown by the tool's radius and a dexel spacing; empty:
+    /// wherever material stands.
+    pub zones: &'a [Vec<(Point3, Point3)>],
     /// The widest radius of the tool's holder, mm: the holder must clear the material it can
     /// pass over (the zone grown by the tool's and the holder's radii), not all of it.
     pub holder_radius: f64,
@@ -126,7 +127,9 @@ pub fn rough_setup(
     how: &SetupRoughing,
 ) -> Result<Option<Roughing>, RoughError> {
     let spacing = stock.spacing();
-    let mut turned = match stock.resampled(frame.rotation(), spacing, spacing, DEFAULT_MAX_DEXELS) {
+    // Not grown: what the planner keeps off is checked on the original model by the stock run
+    // with the whole tool, and a grown copy shows a skin of rest over every surface.
+    let mut turned = match stock.resampled(frame.rotation(), spacing, 0.0, DEFAULT_MAX_DEXELS) {
         Ok(turned) => turned,
         Err(crate::stock::StockError::Blank(_)) => return Ok(None),
         Err(e) => {
@@ -161,31 +164,55 @@ pub fn rough_setup(
     };
     let mut options = how.options.clone();
     options.floor = Some(material.min.z);
-    if !how.rest.is_empty() {
-        let seen: Vec<Point2> = how
-            .rest
-            .iter()
-            .flat_map(|(a, b)| [frame.to_setup(a), frame.to_setup(b)])
-            .map(|p| Point2::new(p.x, p.y))
-            .collect();
-        let zone = grown_hull(&seen, tool.radius + spacing);
-        options.holder_top = Some(highest_within(
-            &turned,
-            &grown_hull(&zone, how.holder_radius + spacing),
-        ));
-        options.zone = Some(zone);
+    let whole = [Vec::new()];
+    let zones = if how.zones.is_empty() {
+        &whole[..]
+    } else {
+        how.zones
+    };
+    let mut roughing: Option<Roughing> = None;
+    for rest in zones {
+        if !rest.is_empty() {
+            let seen: Vec<Point2> = rest
+                .iter()
+                .flat_map(|(a, b)| [frame.to_setup(a), frame.to_setup(b)])
+                .map(|p| Point2::new(p.x, p.y))
+                .collect();
+            let zone = grown_hull(&seen, tool.radius + spacing);
+            options.holder_top = Some(highest_within(
+                &turned,
+                &grown_hull(&zone, how.holder_radius + spacing),
+            ));
+            options.zone = Some(zone);
+            options.skin = 2.0 * spacing;
+        }
+        let zone = super::rough_layers(
+            &shape,
+            &blank,
+            tool,
+            tool_id,
+            Material::Stock {
+                stock: &mut turned,
+                body: how.body,
+            },
+            &options,
+        )?;
+        roughing = Some(match roughing {
+            None => zone,
+            Some(mut so_far) => {
+                // Both start and end on the setup's safe height, above all the material.
+                so_far.toolpath.moves.extend(zone.toolpath.moves);
+                so_far.layers.extend(zone.layers);
+                so_far.removed_mm3.extend(zone.removed_mm3);
+                so_far.safe_z = so_far.safe_z.max(zone.safe_z);
+                so_far.not_reached = so_far.not_reached.or(zone.not_reached);
+                so_far
+            }
+        });
     }
-    let mut roughing = super::rough_layers(
-        &shape,
-        &blank,
-        tool,
-        tool_id,
-        Material::Stock {
-            stock: &mut turned,
-            body: how.body,
-        },
-        &options,
-    )?;
+    let Some(mut roughing) = roughing else {
+        return Ok(None);
+    };
     for m in &mut roughing.toolpath.moves {
         m.pose.tip = frame.to_part(&m.pose.tip);
         m.pose.axis = frame.axis();

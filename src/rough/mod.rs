@@ -191,6 +191,9 @@ pub struct RoughingOptions {
     /// Layers clear rest material only inside this convex counter-clockwise polygon (an
     /// indexed setup's zone, [`indexed`]); `None`: wherever it stands.
     pub zone: Option<Vec<Point2>>,
+    /// With a zone: material within this distance of the shape above the layer, mm, is the
+    /// skin the surfaces keep (the allowance the layers before left), not rest; it is left.
+    pub skin: f64,
     /// The height the holder must stay above, by the tool's reach, mm; `None`: the blank's
     /// top. An indexed setup gives the top of the material its holder can pass over.
     pub holder_top: Option<f64>,
@@ -220,6 +223,7 @@ impl RoughingOptions {
             max_engagement: Some(r),
             floor: None,
             zone: None,
+            skin: 0.0,
             holder_top: None,
             feeds: RoughingFeeds {
                 cut: 2000.0,
@@ -474,7 +478,7 @@ pub fn rough_layers(
                     z,
                     z_above,
                     REST_MIN_THICKNESS,
-                    options.zone.as_deref(),
+                    options.zone.as_deref().map(|hull| (hull, options.skin)),
                 ) {
                     Some(region) => region,
                     None => {

@@ -28,17 +28,29 @@ pub fn material_in_slab(
 }
 
 /// [`material_in_slab`] inside the convex counter-clockwise polygon `zone` only (cells whose
-/// centre lies in it): an indexed setup clears the rest it was proposed for, not the skin
-/// every surface keeps.
+/// centre lies in it), and without the cells within `skin` mm of the envelope above `z_low`:
+/// an indexed setup clears the rest it was proposed for, not the skin every surface keeps.
 pub fn material_in_slab_within(
     stock: &Stock,
     envelope: &TopEnvelope,
     z_low: f64,
     z_high: f64,
     min_thickness: f64,
-    zone: Option<&[Point2]>,
+    zone: Option<(&[Point2], f64)>,
 ) -> Option<Shape> {
     material_cells(stock, envelope, z_low, z_high, min_thickness, true, zone)
+}
+
+/// Whether a cell of `envelope` taller than `z` lies within `distance` of `c` (its centre, on
+/// the envelope's lattice about `c`).
+fn near_envelope(envelope: &TopEnvelope, c: Point2, distance: f64, z: f64) -> bool {
+    let k = (distance / envelope.cell).ceil() as i64;
+    (-k..=k).any(|a| {
+        (-k..=k).any(|b| {
+            let d = crate::geom::Vector2::new(a as f64, b as f64) * envelope.cell;
+            d.norm() <= distance && envelope.top_at(c + d) > z
+        })
+    })
 }
 
 /// Whether `p` lies in the convex counter-clockwise polygon `hull` (on its boundary counts).
@@ -69,7 +81,7 @@ fn material_cells(
     z_high: f64,
     min_thickness: f64,
     grow: bool,
-    zone: Option<&[Point2]>,
+    zone: Option<(&[Point2], f64)>,
 ) -> Option<Shape> {
     let vertical = stock.grid(2);
     let [w, h] = vertical.counts();
@@ -127,7 +139,12 @@ fn material_cells(
                 origin.x + (i as f64 + 0.5) * s,
                 origin.y + (j as f64 + 0.5) * s,
             );
-            if envelope.top_at(c) > z_low || zone.is_some_and(|hull| !in_convex(hull, c)) {
+            if envelope.top_at(c) > z_low {
+                material[i + j * w] = false;
+            } else if let Some((hull, skin)) = zone
+                && material[i + j * w]
+                && (!in_convex(hull, c) || near_envelope(envelope, c, skin, z_low))
+            {
                 material[i + j * w] = false;
             }
         }

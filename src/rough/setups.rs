@@ -68,8 +68,10 @@ pub struct Proposal {
     /// Rest points in all, and those the vertical already sees (left out).
     pub rest_points: usize,
     pub seen_from_vertical: usize,
-    /// Share of the whole weight no allowed direction sees with room about it.
+    /// Share of the whole weight no direction within the tilt limits sees with room about it.
     pub unseen_share: f64,
+    /// Share seen with room only along directions the machine cannot take.
+    pub beyond_machine_share: f64,
 }
 
 /// Proposes setups for `points` on the part `scene` holds; `allowed` says which axes the
@@ -104,11 +106,16 @@ pub fn propose_setups(
         options.max_tilt_deg.to_radians().cos(),
         options.min_tilt_deg.to_radians().cos(),
     );
-    let candidates: Vec<usize> = (0..count)
+    let in_tilt: Vec<usize> = (0..count)
         .filter(|&i| {
             let d = directions[i].normalize();
-            d.z >= min_cos && d.z <= max_cos && allowed(&d)
+            d.z >= min_cos && d.z <= max_cos
         })
+        .collect();
+    let candidates: Vec<usize> = in_tilt
+        .iter()
+        .copied()
+        .filter(|&i| allowed(&directions[i].normalize()))
         .collect();
     // Per point, the candidates it sees with room about them.
     let roomy = |map: &crate::access::directions::VisibilityMap, i: usize| {
@@ -121,7 +128,7 @@ pub fn propose_setups(
     let total: f64 = points.iter().map(|p| p.weight).sum();
     let mut seen_from_vertical = 0;
     let mut open: Vec<(usize, f64, Vec<usize>)> = Vec::new();
-    let mut unseen = 0.0;
+    let (mut unseen, mut beyond_machine) = (0.0, 0.0);
     for (index, (p, map)) in points.iter().zip(&maps.maps).enumerate() {
         if map.contains(up) {
             seen_from_vertical += 1;
@@ -131,7 +138,11 @@ pub fn propose_setups(
             .filter(|&k| roomy(map, candidates[k]))
             .collect();
         if sees.is_empty() {
-            unseen += p.weight;
+            if in_tilt.iter().any(|&i| roomy(map, i)) {
+                beyond_machine += p.weight;
+            } else {
+                unseen += p.weight;
+            }
         } else {
             open.push((index, p.weight, sees));
         }
@@ -165,11 +176,13 @@ pub fn propose_setups(
             seen: seen.into_iter().map(|(index, _, _)| index).collect(),
         });
     }
+    let share = |w: f64| if total > 0.0 { w / total } else { 0.0 };
     Ok(Proposal {
         setups,
         rest_points: points.len(),
         seen_from_vertical,
-        unseen_share: if total > 0.0 { unseen / total } else { 0.0 },
+        unseen_share: share(unseen),
+        beyond_machine_share: share(beyond_machine),
     })
 }
 
@@ -244,5 +257,10 @@ mod tests {
         // A machine that cannot lean towards +x gets no setup.
         let none = propose_setups(&scene, &points, |d| d.x < 0.0, &options).unwrap();
         assert!(none.setups.is_empty(), "{none:?}");
+        assert!(
+            (none.beyond_machine_share - 25.0 / 26.0).abs() < 1e-12,
+            "{none:?}"
+        );
+        assert_eq!(none.unseen_share, 0.0);
     }
 }
