@@ -25,6 +25,7 @@ pub mod contour;
 pub mod error;
 pub mod feed;
 pub mod geom;
+pub mod impeller;
 pub mod job;
 pub mod mesh;
 pub mod multires;

@@ -673,3 +673,28 @@ fn offsets_of_an_open_surface_are_refused() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `info` recognises the sample impeller (in its JSON as in its text) and pictures it as a
+/// GLB; on a part that is not an impeller it says why, and `--glb` is a usage error.
+#[test]
+fn info_reports_the_impeller_and_writes_its_picture() {
+    let json = wavemill(&["info", "data/impeller.glb", "--json"]);
+    assert_eq!(json.status.code(), Some(0));
+    let report: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(report["impeller"]["order"], 7);
+    assert_eq!(report["impeller"]["blades"], 7);
+    assert_eq!(report["triangles"], 38502, "the mesh report stays flat");
+    let dir = temp_dir("impeller-glb");
+    std::fs::create_dir_all(&dir).unwrap();
+    let glb = dir.join("impeller.glb");
+    let out = wavemill(&["info", "data/impeller.glb", "--glb", glb.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("7 blades, 7-fold symmetric"));
+    let bytes = std::fs::read(&glb).unwrap();
+    assert_eq!(&bytes[..4], b"glTF");
+    let blade = wavemill(&["info", "data/blade.glb"]);
+    assert!(String::from_utf8_lossy(&blade.stdout).contains("impeller         no: "));
+    let refused = wavemill(&["info", "data/blade.glb", "--glb", glb.to_str().unwrap()]);
+    assert_eq!(refused.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -19,22 +19,58 @@ pub struct InfoArgs {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Write the part coloured by what the impeller recognition found (hub, each blade and
+    /// splitter) to this GLB file.
+    #[arg(long, value_name = "FILE")]
+    pub glb: Option<PathBuf>,
+}
+
+/// The JSON report: the mesh's, and the impeller found in it or why there is none.
+#[derive(serde::Serialize)]
+struct InfoReport<'a> {
+    #[serde(flatten)]
+    mesh: &'a crate::mesh::MeshReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    impeller: Option<&'a crate::impeller::Impeller>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    not_an_impeller: Option<String>,
 }
 
 /// Runs the command.
 pub fn run(args: &InfoArgs) -> Result<()> {
     let raw = job::load_part(&args.part, &args.units)?;
     let name = args.part.display().to_string();
-    let (_, report) =
+    let (mesh, report) =
         prepare(&raw.mesh, &PrepareOptions::default()).map_err(|reason| Error::Mesh {
             file: name.clone(),
             reason: reason.to_string(),
         })?;
+    // Recognition needs inside and outside told apart.
+    let impeller = if report.watertight {
+        crate::impeller::recognise(&mesh, &Default::default()).map_err(|e| e.to_string())
+    } else {
+        Err("the mesh is not closed".to_string())
+    };
+    if let Some(path) = &args.glb {
+        let found = impeller.as_ref().map_err(|reason| {
+            Error::Usage(format!(
+                "--glb {}: {name} is not recognised as an impeller: {reason}",
+                path.display()
+            ))
+        })?;
+        let bytes = crate::impeller::impeller_glb(&mesh, found).map_err(|error| Error::Glb {
+            file: path.display().to_string(),
+            error,
+        })?;
+        job::write_atomically(path, &bytes)?;
+    }
     if args.json {
-        say!(
-            "{}",
-            serde_json::to_string_pretty(&report).unwrap_or_default()
-        );
+        let out = InfoReport {
+            mesh: &report,
+            impeller: impeller.as_ref().ok(),
+            not_an_impeller: impeller.as_ref().err().cloned(),
+        };
+        say!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
         return Ok(());
     }
     let [x0, y0, z0] = report.bounding_box_min;
@@ -97,6 +133,46 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         for p in problems {
             say!("    - {p}");
         }
+    }
+    match &impeller {
+        Ok(found) => {
+            let [ax, ay, az] = found.axis;
+            let [cx, cy, cz] = found.centre;
+            say!(
+                "  impeller         {} blades{}, {}-fold symmetric (turned by a pitch, p99 \
+                 {:.4} mm, max {:.4} mm off itself)",
+                found.blades,
+                if found.splitters > 0 {
+                    format!(" and {} splitters", found.splitters)
+                } else {
+                    String::new()
+                },
+                found.order,
+                found.symmetry_p99_mm,
+                found.symmetry_max_mm
+            );
+            say!(
+                "    axis           ({ax:.4}, {ay:.4}, {az:.4}) through ({cx:.3}, {cy:.3}, {cz:.3})"
+            );
+            say!(
+                "    hub            {} triangles, {:.1} mm^2, radius {:.3} .. {:.3} mm",
+                found.hub_triangles,
+                found.hub_area_mm2,
+                found.hub_radius_mm[0],
+                found.hub_radius_mm[1]
+            );
+            if let (Some(low), Some(high)) = (found.shroud.first(), found.shroud.last()) {
+                say!(
+                    "    shroud         blade tips at radius {:.3} mm (height {:.3}) to {:.3} mm \
+                     (height {:.3})",
+                    low[1],
+                    low[0],
+                    high[1],
+                    high[0]
+                );
+            }
+        }
+        Err(reason) => say!("  impeller         no: {reason}"),
     }
     Ok(())
 }

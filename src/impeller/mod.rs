@@ -1,0 +1,14 @@
+//! Impellers and blisks (issue 21): the typed geometry the impeller strategies plan from.
+//!
+//! [`recognise()`] finds the rotation axis, the order of rotational symmetry (checked on the
+//! surface), the hub and the blades (main and splitters) in a closed mesh, or says why the
+//! mesh is not an impeller; [`impeller_glb`] pictures what it found.
+
+pub mod picture;
+pub mod recognise;
+
+pub use picture::impeller_glb;
+
+pub use recognise::{
+    Impeller, NotAnImpeller, Piece, PieceKind, RecogniseOptions, Region, recognise,
+};
