@@ -17,6 +17,7 @@ const LAYERS: &[&str] = &[
     "tool",        // cutters and tool assemblies
     "access",      // visibility maps (obvhs rays)
     "multires",    // remeshing, Loop subdivision, lifting wavelets
+    "impeller",    // impeller recognition: axis, symmetry, hub, blades
     "offset",      // stock-to-leave shapes
     "stock",       // in-process material (tri-dexel) and its removal
     "contour",     // 2.5D contour paths
