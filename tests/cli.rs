@@ -698,3 +698,26 @@ fn info_reports_the_impeller_and_writes_its_picture() {
     assert_eq!(refused.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `[impeller]` keys are checked on the part: the sample has seven blades, not five, and the
+/// plan says so before it plans anything.
+#[test]
+fn a_stated_impeller_that_does_not_match_is_refused() {
+    let dir = temp_dir("impeller-given");
+    std::fs::create_dir_all(&dir).unwrap();
+    let job = dir.join("job.toml");
+    std::fs::write(&job, "[impeller]\nblades = 5\n").unwrap();
+    let out = wavemill(&[
+        "plan",
+        "data/impeller.glb",
+        "--job",
+        job.to_str().unwrap(),
+        "--out",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    assert_ne!(out.status.code(), Some(0));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("[impeller]") && err.contains("order"), "{err}");
+    assert!(!dir.join("out").join("job.nc").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -34,9 +34,9 @@ pub enum NotAnImpeller {
     #[error("the mesh has no area")]
     Empty,
     #[error(
-        "no rotational symmetry of order 3 to {max_order} about its principal or vertical axis \
-         (best: order {best_order}, {share_on:.1} % of the sampled points land on the surface \
-         turned by a pitch, within {tolerance:.4} mm)"
+        "no rotational symmetry of order 3 to {max_order} about its principal or vertical axis, \
+         or of the order and about the axis given (best: order {best_order}, {share_on:.1} % of \
+         the sampled points land on the surface turned by a pitch, within {tolerance:.4} mm)"
     )]
     NoSymmetry {
         max_order: usize,
@@ -70,6 +70,11 @@ pub struct RecogniseOptions {
     pub symmetric_share: f64,
     /// Vertices sampled for the symmetry test (evenly through the vertex list).
     pub sample_points: usize,
+    /// The rotation axis, given (part frame, any length): only it is tried, through the
+    /// surface's centroid.
+    pub axis: Option<[f64; 3]>,
+    /// The order of symmetry (the main blades' count), given: only it is tried.
+    pub order: Option<usize>,
 }
 
 impl Default for RecogniseOptions {
@@ -79,6 +84,8 @@ impl Default for RecogniseOptions {
             tolerance: None,
             symmetric_share: 0.98,
             sample_points: 4000,
+            axis: None,
+            order: None,
         }
     }
 }
@@ -204,9 +211,20 @@ pub fn recognise(mesh: &Mesh, options: &RecogniseOptions) -> Result<Impeller, No
 
     let mut best: Option<(usize, f64, Vector3)> = None;
     let mut found: Option<(usize, Vector3, Vec<f64>)> = None;
-    'axes: for axis in candidate_axes(&moments) {
+    let axes = match options.axis {
+        Some(axis) => vec![Vector3::from(axis)],
+        None => candidate_axes(&moments),
+    };
+    'axes: for axis in axes {
+        if axis.norm() == 0.0 || !axis.iter().all(|v| v.is_finite()) {
+            continue;
+        }
         let frame = AxisFrame::new(centroid, &axis);
-        for order in candidate_orders(mesh, &frame, options.max_order) {
+        let orders = match options.order {
+            Some(order) => vec![order.max(1)],
+            None => candidate_orders(mesh, &frame, options.max_order),
+        };
+        for order in orders {
             let turn = frame.turn(std::f64::consts::TAU / order as f64);
             let misses: Vec<f64> = samples
                 .iter()
@@ -673,6 +691,33 @@ mod tests {
             "{:?}",
             found.shroud
         );
+    }
+
+    /// Given an axis or an order, only those are tried: the six-fold part is also three-fold
+    /// (a third of a turn maps it onto itself), not four-fold, and not about x.
+    #[test]
+    fn a_given_axis_or_order_is_checked_not_taken() {
+        let sixth = std::f64::consts::TAU / 6.0;
+        let mut parts = vec![prism(96, 20.0, 0.0, 5.0)];
+        for k in 0..6 {
+            parts.push(blade(8.0, 30.0, k as f64 * sixth));
+        }
+        let mesh = joined(parts);
+        let given = |axis, order| RecogniseOptions {
+            axis,
+            order,
+            ..RecogniseOptions::default()
+        };
+        let three = recognise(&mesh, &given(Some([0.0, 0.0, 2.0]), Some(3))).expect("3-fold");
+        assert_eq!((three.order, three.blades), (3, 6));
+        assert!(matches!(
+            recognise(&mesh, &given(None, Some(4))),
+            Err(NotAnImpeller::NoSymmetry { .. })
+        ));
+        assert!(matches!(
+            recognise(&mesh, &given(Some([1.0, 0.0, 0.0]), None)),
+            Err(NotAnImpeller::NoSymmetry { .. })
+        ));
     }
 
     /// Not impellers: a body of revolution (no blades), a box (4-fold, but its sides are one

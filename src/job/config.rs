@@ -34,10 +34,42 @@ pub struct Job {
     pub stock: StockSection,
     pub roughing: RoughingSection,
     pub cutting: CuttingSection,
+    pub impeller: ImpellerSection,
     /// The operations, in order (`[[operation]]` tables); empty: the ones today's
     /// `[strategy]` keys describe (see [`Job::operations`]).
     #[serde(rename = "operation", skip_serializing_if = "Vec::is_empty")]
     pub operations: Vec<OperationSection>,
+}
+
+/// `[impeller]`: recognising the part as an impeller (axis, blades, splitters, hub;
+/// [`crate::impeller`]), reported in `report.json`. Given keys are checked on the part, not
+/// taken on trust: a part that does not match them is an error.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ImpellerSection {
+    /// Look for an impeller at all.
+    pub recognise: bool,
+    /// The rotation axis in the part frame (after `part.up`); left out: found.
+    pub axis: Option<[f64; 3]>,
+    /// The main blades' count (the order of the rotational symmetry); left out: found.
+    pub blades: Option<usize>,
+}
+
+impl Default for ImpellerSection {
+    fn default() -> Self {
+        Self {
+            recognise: true,
+            axis: None,
+            blades: None,
+        }
+    }
+}
+
+impl ImpellerSection {
+    /// Whether the job states anything about the impeller (then it must be one).
+    pub fn is_given(&self) -> bool {
+        self.axis.is_some() || self.blades.is_some()
+    }
 }
 
 /// How much work a job may ask for before it is refused (with a message saying how to raise
@@ -561,6 +593,22 @@ impl Job {
             return Err(invalid(
                 "roughing.max_engagement",
                 format!("{e} is not a share of the diameter in (0, 1]"),
+            ));
+        }
+        if let Some(axis) = self.impeller.axis
+            && unit_direction(axis).is_none()
+        {
+            return Err(invalid(
+                "impeller.axis",
+                format!("must be a non-zero vector, got {axis:?}"),
+            ));
+        }
+        if let Some(blades) = self.impeller.blades
+            && blades < 3
+        {
+            return Err(invalid(
+                "impeller.blades",
+                format!("{blades}: an impeller has at least three blades"),
             ));
         }
         let tilt = self.roughing.indexed_max_tilt_deg;
@@ -1269,6 +1317,24 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("ball radius"), "{e}");
+    }
+
+    /// `[impeller]` keys: an axis must be a direction and a count at least three; unknown keys
+    /// are refused; by default the plan looks for an impeller and states nothing.
+    #[test]
+    fn impeller_keys_are_checked() {
+        let check = |text: &str| Job::from_toml(text, "j.toml").and_then(|j| j.validate());
+        let e = check("[impeller]\nblades = 2\n").unwrap_err().to_string();
+        assert!(e.contains("impeller.blades"), "{e}");
+        let e = check("[impeller]\naxis = [0.0, 0.0, 0.0]\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("impeller.axis"), "{e}");
+        assert!(Job::from_toml("[impeller]\nblade = 7\n", "j.toml").is_err());
+        let job =
+            Job::from_toml("[impeller]\naxis = [0.0, 0.0, 1.0]\nblades = 7\n", "j.toml").unwrap();
+        assert!(job.validate().is_ok() && job.impeller.is_given());
+        assert!(Job::default().impeller.recognise && !Job::default().impeller.is_given());
     }
 
     /// The machine's kinematics is a typed kind: a name the post does not know is refused

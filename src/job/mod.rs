@@ -46,9 +46,10 @@ pub use channel_rough::{
     ChannelLayerSummary, ChannelPlan, ChannelSummary, channel_rough, layer_allowances,
 };
 pub use config::{
-    ChannelLayers, CuttingSection, FeedSection, Job, JobError, Layering, LimitsSection,
-    MachineSection, NO_BLANK, Operation, OperationKind, OperationSection, PartSection,
-    RoughingSection, SafetySection, StockSection, StrategySection, ToolSection, unit_direction,
+    ChannelLayers, CuttingSection, FeedSection, ImpellerSection, Job, JobError, Layering,
+    LimitsSection, MachineSection, NO_BLANK, Operation, OperationKind, OperationSection,
+    PartSection, RoughingSection, SafetySection, StockSection, StrategySection, ToolSection,
+    unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,

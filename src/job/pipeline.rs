@@ -364,6 +364,7 @@ pub fn plan(
     observer.stage("prepare part", 0);
     let prepared = prepare_part(raw, part_name, job)?;
     let part = &prepared.part;
+    let impeller = recognise_impeller(part, part_name, job)?;
     timings.prepare = ms(t);
 
     let t = Instant::now();
@@ -822,6 +823,8 @@ pub fn plan(
                 moves_over_bound: finishing.smoothing.moves_over_bound,
             },
         },
+        not_an_impeller: impeller.as_ref().and_then(|r| r.as_ref().err().cloned()),
+        impeller: impeller.and_then(|r| r.ok()),
         stock_to_leave: semi_summaries,
         roughing: roughing.into_iter().map(|r| r.summary).collect(),
         channel_roughing: channel_summaries,
@@ -864,6 +867,31 @@ pub fn plan(
         stock_models: stock_run.map(|run| run.models).unwrap_or_default(),
         verification_failure,
     })
+}
+
+/// The impeller in `part`, or why it is not one (`None` when the job does not look). With
+/// `[impeller]` keys given, a part that does not match them is an error naming them.
+fn recognise_impeller(
+    part: &crate::mesh::Mesh,
+    part_name: &str,
+    job: &Job,
+) -> Result<Option<std::result::Result<crate::impeller::Impeller, String>>> {
+    if !job.impeller.recognise {
+        return Ok(None);
+    }
+    let options = crate::impeller::RecogniseOptions {
+        axis: job.impeller.axis,
+        order: job.impeller.blades,
+        ..Default::default()
+    };
+    match crate::impeller::recognise(part, &options) {
+        Ok(found) => Ok(Some(Ok(found))),
+        Err(reason) if job.impeller.is_given() => Err(Error::JobFile(JobError::Invalid {
+            key: "impeller".into(),
+            reason: format!("{part_name} does not match the [impeller] given: {reason}"),
+        })),
+        Err(reason) => Ok(Some(Err(reason.to_string()))),
+    }
 }
 
 /// The post stage: `toolpath` linearised for `setup`'s machine within the budget's

@@ -18,6 +18,11 @@ pub struct PlanReport {
     pub machine: MachineSummary,
     pub surface: SurfaceSummary,
     pub strategy: StrategySummary,
+    /// The impeller recognised in the part (`[impeller]`), or why it is not one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub impeller: Option<crate::impeller::Impeller>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_an_impeller: Option<String>,
     /// The semi-finishing operations before finishing, in machining order: which shapes were
     /// used as stock to leave, and what the checks measured (issue 4 point 5). Empty: none.
     pub stock_to_leave: Vec<super::semi_finish::SemiFinishSummary>,

@@ -415,11 +415,11 @@ fn trochoid(
     let step = std::f64::consts::TAU / per_turn as f64;
     let mut out = Vec::with_capacity((turns_out + turns_along + 1) * per_turn + 1);
     // Point k of the loops about the placement of `base`, grown to `grown` of it.
-    let at = |k: usize, base: Point2, grown: f64| {
-        let (centre, rho) = place(base);
+    let at_placed = |k: usize, base: Point2, (centre, rho): (Point2, f64), grown: f64| {
         let angle = phase + k as f64 * step;
         base + (centre - base) * grown + Vector2::new(angle.cos(), angle.sin()) * (rho * grown)
     };
+    let at = |k: usize, base: Point2, grown: f64| at_placed(k, base, place(base), grown);
     let mut k = 0;
     let (first, last) = (stretch[0], stretch[stretch.len() - 1]);
     let steps_along = turns_along * per_turn;
@@ -438,7 +438,9 @@ fn trochoid(
     for m in 0..steps_along {
         let along = length * m as f64 / steps_along as f64;
         let base = point_along(stretch, along);
-        if straight_at.contains(&m) || place(base).1 < options.min_loop_radius {
+        // Placed once (it was asked twice, to test the radius and to place the point).
+        let placed = (!straight_at.contains(&m)).then(|| place(base));
+        let Some(placed) = placed.filter(|(_, rho)| *rho >= options.min_loop_radius) else {
             straight += length / steps_along as f64;
             // Straight on from a straight sample: along the pass, through its corners (a
             // chord across a corner would cut in toward the wall the pass goes round).
@@ -451,10 +453,12 @@ fn trochoid(
             }
             out.push(base);
             previous = Some(along);
-        } else {
-            out.push(at(k, base, 1.0));
-            previous = None;
-        }
+            sample.push(m);
+            k += 1;
+            continue;
+        };
+        out.push(at_placed(k, base, placed, 1.0));
+        previous = None;
         sample.push(m);
         k += 1;
     }
