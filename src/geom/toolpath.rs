@@ -42,3 +42,14 @@ pub struct Toolpath {
     pub tool_id: u32,
     pub moves: Vec<Move>,
 }
+
+impl Toolpath {
+    /// Length of the cutting moves, mm.
+    pub fn cutting_length(&self) -> f64 {
+        self.moves
+            .windows(2)
+            .filter(|w| w[1].kind == MoveKind::Cut)
+            .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+            .sum()
+    }
+}

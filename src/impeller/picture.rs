@@ -20,25 +20,14 @@ pub fn impeller_glb(mesh: &Mesh, impeller: &Impeller) -> Result<Vec<u8>, GlbErro
     let mut glb = GlbBuilder::new();
     // Each region with only the vertices it uses.
     let subset = |keep: &dyn Fn(Region) -> bool| {
-        let mut index = vec![u32::MAX; mesh.positions.len()];
-        let mut positions = Vec::new();
-        let mut triangles = Vec::new();
-        for (t, region) in mesh.triangles.iter().zip(&impeller.regions) {
-            if !keep(*region) {
-                continue;
-            }
-            triangles.push(t.map(|v| {
-                if index[v as usize] == u32::MAX {
-                    index[v as usize] = positions.len() as u32;
-                    positions.push(mesh.positions[v as usize]);
-                }
-                index[v as usize]
-            }));
-        }
-        Mesh {
-            positions,
-            triangles,
-        }
+        Mesh::compacted(
+            &mesh.positions,
+            mesh.triangles
+                .iter()
+                .zip(&impeller.regions)
+                .filter(|(_, r)| keep(**r))
+                .map(|(t, _)| *t),
+        )
     };
     glb.add_triangles(
         "hub",

@@ -48,7 +48,7 @@ use super::rapids::split_turning_rapids;
 use super::setup::PlanSetup;
 use crate::error::Result;
 use crate::feed::FeedReport;
-use crate::geom::{Move, MoveKind, Point3, Toolpath, Vector3};
+use crate::geom::{Move, Point3, Toolpath, Vector3};
 use crate::mesh::Mesh;
 use crate::path::{self, FinishingOptions, MaterialFilter, unreachable_by_reason};
 use crate::stock::Stock;
@@ -281,7 +281,7 @@ pub fn channel_rough(
             unreachable: passes.unreachable.len(),
             unreachable_by_reason: unreachable_by_reason(&passes.unreachable),
             segments: passes.segments.len(),
-            cutting_length_mm: cutting_length(&layer_path),
+            cutting_length_mm: layer_path.cutting_length(),
             removed_mm3: volume_before - context.stock_volume(),
             min_stock_left_minus_allowance_mm: stock_left,
             chord_tolerance_mm: tolerance,
@@ -410,14 +410,6 @@ impl HubField {
             triangles,
         }
     }
-}
-
-fn cutting_length(path: &Toolpath) -> f64 {
-    path.moves
-        .windows(2)
-        .filter(|w| w[1].kind == MoveKind::Cut)
-        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
-        .sum()
 }
 
 #[cfg(test)]

@@ -249,12 +249,7 @@ pub fn plan_indexed_roughing(
         }
         report
     });
-    let cutting_length_mm = toolpath
-        .moves
-        .windows(2)
-        .filter(|w| w[1].kind == MoveKind::Cut)
-        .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
-        .sum();
+    let cutting_length_mm = toolpath.cutting_length();
     Ok(PlannedRoughing {
         summary: RoughingSummary {
             operation: operation.name.clone(),

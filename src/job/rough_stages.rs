@@ -78,13 +78,7 @@ impl ToolLayers {
 
     /// Length of the cutting moves, mm.
     pub fn cutting_length(&self) -> f64 {
-        self.layers
-            .toolpath
-            .moves
-            .windows(2)
-            .filter(|w| w[1].kind == crate::geom::MoveKind::Cut)
-            .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
-            .sum()
+        self.layers.toolpath.cutting_length()
     }
 }
 

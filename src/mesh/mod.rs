@@ -43,6 +43,29 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// `triangles` (indices into `positions`) as a mesh with only the vertices they use, in
+    /// the order they are first used.
+    pub fn compacted(positions: &[Point3], triangles: impl IntoIterator<Item = [u32; 3]>) -> Mesh {
+        let mut index = vec![u32::MAX; positions.len()];
+        let mut kept = Vec::new();
+        let triangles = triangles
+            .into_iter()
+            .map(|t| {
+                t.map(|v| {
+                    if index[v as usize] == u32::MAX {
+                        index[v as usize] = kept.len() as u32;
+                        kept.push(positions[v as usize]);
+                    }
+                    index[v as usize]
+                })
+            })
+            .collect();
+        Mesh {
+            positions: kept,
+            triangles,
+        }
+    }
+
     /// The three corners of triangle `t`.
     pub fn corners(&self, t: usize) -> [Point3; 3] {
         let [a, b, c] = self.triangles[t];

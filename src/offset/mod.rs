@@ -113,7 +113,7 @@ impl ShapeSpec {
             .into_iter()
             .zip(levels)
             .filter(|(triangles, _)| !triangles.is_empty())
-            .map(|(triangles, level)| (compact(&self.surface.positions, triangles), level))
+            .map(|(triangles, level)| (Mesh::compacted(&self.surface.positions, triangles), level))
             .collect()
     }
 
@@ -140,28 +140,6 @@ impl ShapeSpec {
             }
         }
         bound.iter().map(|e| clearance + e).collect()
-    }
-}
-
-/// The triangles with only the vertices they use.
-fn compact(positions: &[Point3], triangles: Vec<[u32; 3]>) -> Mesh {
-    let mut index = vec![u32::MAX; positions.len()];
-    let mut kept = Vec::new();
-    let triangles = triangles
-        .into_iter()
-        .map(|t| {
-            t.map(|v| {
-                if index[v as usize] == u32::MAX {
-                    index[v as usize] = kept.len() as u32;
-                    kept.push(positions[v as usize]);
-                }
-                index[v as usize]
-            })
-        })
-        .collect();
-    Mesh {
-        positions: kept,
-        triangles,
     }
 }
 
