@@ -4,9 +4,15 @@
 //! surface), the hub and the blades (main and splitters) in a closed mesh, or says why the
 //! mesh is not an impeller; [`impeller_glb`] pictures what it found.
 
+pub mod blade;
+pub mod frame;
+pub mod passage;
 pub mod picture;
 pub mod recognise;
 
+pub use blade::{BladeLoops, blade_loops};
+pub use frame::AxisFrame;
+pub use passage::{FlowLine, HubPassage, PassageOptions, stepover_on_convex};
 pub use picture::impeller_glb;
 
 pub use recognise::{

@@ -21,12 +21,14 @@
 //!   main blades, smaller sets of at least a tenth of their area splitters, and the rest other
 //!   features (fillet slivers, bosses).
 
-use nalgebra::{Matrix3, Rotation3, SymmetricEigen, Unit};
+use nalgebra::{Matrix3, Rotation3, SymmetricEigen};
 use serde::Serialize;
 
 use crate::geom::{Direction, Point3, Vector3};
 use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
+
+use super::frame::AxisFrame;
 
 /// Why a mesh is not taken for an impeller.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -149,53 +151,6 @@ pub struct Impeller {
     /// Per triangle of the mesh.
     #[serde(skip)]
     pub regions: Vec<Region>,
-}
-
-/// A frame about the axis: radial, tangential and axial components.
-struct AxisFrame {
-    centre: Point3,
-    axis: Vector3,
-    u: Vector3,
-    v: Vector3,
-}
-
-impl AxisFrame {
-    fn new(centre: Point3, axis: &Vector3) -> AxisFrame {
-        let axis = axis.normalize();
-        let helper = if axis.x.abs() < 0.9 {
-            Vector3::x()
-        } else {
-            Vector3::y()
-        };
-        let u = (helper - axis * axis.dot(&helper)).normalize();
-        let v = axis.cross(&u);
-        AxisFrame { centre, axis, u, v }
-    }
-
-    /// Radius, angle (radians) and height of `p`.
-    fn cylindrical(&self, p: &Point3) -> (f64, f64, f64) {
-        let d = p - self.centre;
-        let (x, y) = (d.dot(&self.u), d.dot(&self.v));
-        (x.hypot(y), y.atan2(x), d.dot(&self.axis))
-    }
-
-    /// The unit tangential direction at `p` (zero on the axis).
-    fn tangent(&self, p: &Point3) -> Vector3 {
-        let d = p - self.centre;
-        let radial = d - self.axis * d.dot(&self.axis);
-        self.axis
-            .cross(&radial)
-            .try_normalize(1e-12)
-            .unwrap_or_else(Vector3::zeros)
-    }
-
-    fn turn(&self, angle: f64) -> Rotation3<f64> {
-        Rotation3::from_axis_angle(&Unit::new_unchecked(self.axis), angle)
-    }
-
-    fn turned(&self, p: &Point3, rotation: &Rotation3<f64>) -> Point3 {
-        self.centre + rotation * (p - self.centre)
-    }
 }
 
 /// Recognises the impeller in `mesh` (closed, consistently oriented), or says why it is not one.
@@ -611,6 +566,18 @@ pub fn axis_of(impeller: &Impeller) -> Direction {
     Direction::new_normalize(Vector3::from(impeller.axis))
 }
 
+impl Impeller {
+    /// Cylindrical coordinates about the impeller's axis.
+    pub fn frame(&self) -> AxisFrame {
+        AxisFrame::new(Point3::from(self.centre), &Vector3::from(self.axis))
+    }
+
+    /// The angle between neighbouring passages, radians.
+    pub fn pitch(&self) -> f64 {
+        std::f64::consts::TAU / self.order as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -662,7 +629,7 @@ mod tests {
         }
         let mut mesh = joined(parts);
         let tilt =
-            Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::new(1.0, 2.0, 0.0)), 0.4);
+            Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(Vector3::new(1.0, 2.0, 0.0)), 0.4);
         for p in &mut mesh.positions {
             *p = tilt * *p;
         }

@@ -53,6 +53,37 @@ pub struct ImpellerSection {
     pub axis: Option<[f64; 3]>,
     /// The main blades' count (the order of the rotational symmetry); left out: found.
     pub blades: Option<usize>,
+    /// Finish a recognised impeller with its own strategies (flow lines over the hub between
+    /// the blades, loops around the blades, copied by the symmetry; the parallel planes for
+    /// the rest); `false`: the parallel planes everywhere.
+    pub finishing: bool,
+    /// The tool axes on the hub: `"passage"`, one per passage (the mean of its walls' span
+    /// directions: the rotary axes stand still along the passes), or `"walls"`, the walls'
+    /// span directions interpolated across the passage, leaning toward the feed.
+    pub hub_axes: HubAxes,
+    /// The tool axes around a blade: `"blade"`, the passages' axis turned to the blade (the
+    /// rotary axes stand still round each loop), or `"lean"`, the blade's rising direction
+    /// leaned off its surface by `blade_lean_deg`.
+    pub blade_axes: BladeAxes,
+    /// How far the tool leans off a blade's surface with `blade_axes = "lean"`, degrees (0:
+    /// along the blade, cutting with the ball's equator; 90: square to the surface).
+    pub blade_lean_deg: f64,
+}
+
+/// How the tool axes are set around a blade.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BladeAxes {
+    Blade,
+    Lean,
+}
+
+/// How the tool axes are set on the hub between the blades.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HubAxes {
+    Passage,
+    Walls,
 }
 
 impl Default for ImpellerSection {
@@ -61,6 +92,10 @@ impl Default for ImpellerSection {
             recognise: true,
             axis: None,
             blades: None,
+            finishing: true,
+            hub_axes: HubAxes::Passage,
+            blade_axes: BladeAxes::Blade,
+            blade_lean_deg: 20.0,
         }
     }
 }
@@ -486,6 +521,10 @@ pub struct FeedSection {
     pub retract: f64,
     /// Distance above the entry point where the rapid plunge turns into the approach feed, mm.
     pub clearance: f64,
+    /// Longest short link between two ball passes, mm: the next pass starting this near is
+    /// reached by a small lift, a checked move across at the retract feed and a plunge, not
+    /// by way of the safe plane. 0: always the safe plane.
+    pub max_short_link: f64,
 }
 
 impl Default for FeedSection {
@@ -495,6 +534,7 @@ impl Default for FeedSection {
             approach: 600.0,
             retract: 3000.0,
             clearance: 3.0,
+            max_short_link: 20.0,
         }
     }
 }
@@ -759,6 +799,13 @@ impl Job {
             positive(key, v)?;
         }
         non_negative("feeds.clearance", self.feeds.clearance)?;
+        non_negative("feeds.max_short_link", self.feeds.max_short_link)?;
+        if !(0.0..=90.0).contains(&self.impeller.blade_lean_deg) {
+            return Err(invalid(
+                "impeller.blade_lean_deg",
+                format!("must be 0 to 90 degrees, not {}", self.impeller.blade_lean_deg),
+            ));
+        }
         non_negative("safety.shank_margin", self.safety.shank_margin)?;
         non_negative("safety.holder_margin", self.safety.holder_margin)?;
         non_negative("safety.table_margin", self.safety.table_margin)?;

@@ -15,6 +15,7 @@ mod channel_rough;
 mod config;
 mod contour;
 mod contour_picture;
+mod impeller_finish;
 mod indexed_rough;
 mod levels;
 mod observer;

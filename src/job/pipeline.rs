@@ -28,6 +28,9 @@ use super::plan_roughing::{BallTakeOff, RoughingContext, check_posted_roughing, 
 use super::preview::preview;
 use super::rapids::{MAX_RAPID_TURN_DEG, split_turning_rapids};
 use super::report::*;
+use super::impeller_finish::{ImpellerFinishOptions, ImpellerFinishSummary, finish_impeller};
+use crate::impeller::Impeller;
+use crate::verify::measure_scallop;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
 use crate::error::{Error, JobError, Result};
@@ -177,6 +180,11 @@ fn significant(v: f64) -> String {
     }
 }
 
+/// Distance between the points the finishing scallop is measured at, mm: near the stepover of
+/// a 4 mm ball at 0.01 mm but not a multiple of it, so the points fall at every phase between
+/// neighbouring passes.
+const SCALLOP_SAMPLE_SPACING: f64 = 0.5;
+
 fn ms(since: Instant) -> f64 {
     (since.elapsed().as_secs_f64() * 1e3 * 10.0).round() / 10.0
 }
@@ -201,6 +209,8 @@ pub enum OperationDetails {
     Finish {
         passes: Finishing,
         linking: LinkReport,
+        /// What the impeller strategies planned, when the part was finished as an impeller.
+        impeller: Option<ImpellerFinishSummary>,
     },
 }
 
@@ -212,6 +222,13 @@ pub enum OperationTarget<'a> {
         shape: &'a OffsetShape,
     },
     DriveSurface(&'a Mesh),
+    /// Finishing an impeller: its strategies on the part, the planes on the drive surface for
+    /// what they leave.
+    Impeller {
+        drive: &'a Mesh,
+        part: &'a Mesh,
+        impeller: &'a Impeller,
+    },
 }
 
 /// Plans one operation on `target` from the material `stock` the operations before it leave;
@@ -257,7 +274,7 @@ pub fn plan_operation(
                 semi.failure,
             ))
         }
-        (OperationKind::Finish, OperationTarget::DriveSurface(drive)) => {
+        (OperationKind::Finish, target @ (OperationTarget::DriveSurface(_) | OperationTarget::Impeller { .. })) => {
             let reachable = |axis: &Vector3| setup.reachable(axis);
             let with_material = material.map(|m| setup.collider.with_material(m));
             let collider = with_material.as_ref().unwrap_or(&setup.collider);
@@ -268,7 +285,33 @@ pub fn plan_operation(
             };
             // Sections follow the drive surface; every pose is placed and checked against
             // the part (and the material).
-            let passes = path::finishing_passes(drive, &ctx, &options, advance);
+            let (passes, impeller) = match target {
+                OperationTarget::Impeller {
+                    drive,
+                    part,
+                    impeller,
+                } => {
+                    let (passes, summary) = finish_impeller(
+                        part,
+                        drive,
+                        impeller,
+                        &ctx,
+                        &options,
+                        &ImpellerFinishOptions {
+                            hub_axes: setup.impeller.hub_axes,
+                            blade_axes: setup.impeller.blade_axes,
+                            blade_lean_deg: setup.impeller.blade_lean_deg,
+                            pole: setup.pole(),
+                        },
+                        advance,
+                    );
+                    (passes, Some(summary))
+                }
+                OperationTarget::DriveSurface(drive) => {
+                    (path::finishing_passes(drive, &ctx, &options, advance), None)
+                }
+                OperationTarget::Shape { .. } => unreachable!("matched above"),
+            };
             let (toolpath, linking) = path::link(
                 &passes.segments,
                 collider,
@@ -278,7 +321,11 @@ pub fn plan_operation(
             );
             Ok(planned(
                 toolpath,
-                OperationDetails::Finish { passes, linking },
+                OperationDetails::Finish {
+                    passes,
+                    linking,
+                    impeller,
+                },
                 None,
             ))
         }
@@ -532,7 +579,14 @@ pub fn plan(
                     "finishing passes",
                     (extent / stepover.max(1e-3)).ceil() as u64,
                 );
-                OperationTarget::DriveSurface(&drive)
+                match impeller.as_ref() {
+                    Some(Ok(impeller)) if job.impeller.finishing => OperationTarget::Impeller {
+                        drive: &drive,
+                        part,
+                        impeller,
+                    },
+                    _ => OperationTarget::DriveSurface(&drive),
+                }
             }
             OperationKind::Rough
             | OperationKind::RestRough
@@ -609,6 +663,22 @@ pub fn plan(
         &setup.prepared_tool,
         setup.search,
     );
+    // The scallop the finishing moves leave on the part, measured from the moves alone.
+    let finish_scallop = planned
+        .iter()
+        .rfind(|p| p.operation.kind == OperationKind::Finish)
+        .map(|p| {
+            let radius = p.operation.tool.diameter / 2.0;
+            measure_scallop(
+                part,
+                &p.toolpath,
+                radius,
+                p.operation.scallop_height,
+                SCALLOP_SAMPLE_SPACING,
+                radius,
+                prepared.table_z,
+            )
+        });
     timings.verification = ms(t);
     let pose_failure = verification
         .passes(
@@ -735,10 +805,14 @@ pub fn plan(
             OperationDetails::Rough(_) => {}
             OperationDetails::ChannelRough(summary) => channel_summaries.push(*summary),
             OperationDetails::SemiFinish(summary) => semi_summaries.push(summary),
-            OperationDetails::Finish { passes, linking } => finishing = Some((passes, linking)),
+            OperationDetails::Finish {
+                passes,
+                linking,
+                impeller,
+            } => finishing = Some((passes, linking, impeller)),
         }
     }
-    let (finishing, link_report) = finishing.ok_or_else(|| {
+    let (finishing, link_report, impeller_finishing) = finishing.ok_or_else(|| {
         Error::JobFile(JobError::Operations(
             "the operations must end with finishing".into(),
         ))
@@ -802,7 +876,11 @@ pub fn plan(
         },
         surface,
         strategy: StrategySummary {
-            kind: "parallel-plane ball-end finishing",
+            kind: if impeller_finishing.is_some() {
+                "impeller: hub flow lines, parallel planes for the rest"
+            } else {
+                "parallel-plane ball-end finishing"
+            },
             scallop_height_mm: finish.scallop_height,
             stepover_mm: stepover,
             tolerance_mm: setup.finishing.tolerance,
@@ -823,6 +901,7 @@ pub fn plan(
                 moves_over_bound: finishing.smoothing.moves_over_bound,
             },
         },
+        impeller_finishing,
         not_an_impeller: impeller.as_ref().and_then(|r| r.as_ref().err().cloned()),
         impeller: impeller.and_then(|r| r.ok()),
         stock_to_leave: semi_summaries,
@@ -851,6 +930,7 @@ pub fn plan(
                 .map(|(p, _)| p.coords.into())
                 .collect(),
         },
+        finish_scallop,
         linking: link_report,
         nc_blocks: program.len(),
         stock: stock_run.as_ref().map(|run| run.report.clone()),

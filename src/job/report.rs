@@ -23,6 +23,9 @@ pub struct PlanReport {
     pub impeller: Option<crate::impeller::Impeller>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_an_impeller: Option<String>,
+    /// What the impeller finishing strategies planned, when they finished the part.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub impeller_finishing: Option<super::impeller_finish::ImpellerFinishSummary>,
     /// The semi-finishing operations before finishing, in machining order: which shapes were
     /// used as stock to leave, and what the checks measured (issue 4 point 5). Empty: none.
     pub stock_to_leave: Vec<super::semi_finish::SemiFinishSummary>,
@@ -57,6 +60,11 @@ pub struct PlanReport {
     /// read back, which fails the plan).
     pub posted: Option<crate::verify::PostedClearance>,
     pub unreachable: UnreachableSummary,
+    /// The scallop the finishing moves leave, measured on the part from the moves alone
+    /// ([`crate::verify::measure_scallop`]): heights over the area the passes reach, and the
+    /// area they do not reach (the face on the table apart).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub finish_scallop: Option<crate::verify::ScallopReport>,
     pub linking: LinkReport,
     /// Blocks in `job.nc` after linearisation.
     pub nc_blocks: usize,

@@ -107,6 +107,8 @@ pub struct PlanSetup {
     pub link: LinkOptions,
     /// How far collision queries look beyond the margins, mm.
     pub search: f64,
+    /// How an impeller is finished (`[impeller]`).
+    pub impeller: super::config::ImpellerSection,
 }
 
 impl PlanSetup {
@@ -197,6 +199,8 @@ impl PlanSetup {
             retract_feed: job.feeds.retract,
             rapid_feed: job.machine.rapid_feed,
             rapid_margin: job.safety.shank_margin,
+            max_short_link: job.feeds.max_short_link,
+            chord_tolerance: budget.chord_mm,
         };
         let search = job.safety.holder_margin.max(job.safety.shank_margin) + 5.0;
         Ok(PlanSetup {
@@ -211,6 +215,7 @@ impl PlanSetup {
             pivot,
             safe_distance,
             budget,
+            impeller: job.impeller.clone(),
             gcode_options,
             chooser,
             finishing,
@@ -231,6 +236,12 @@ impl PlanSetup {
 
     /// The finishing context against `collider`/`rays` (the part, or a stock-to-leave
     /// shape), with this setup's tool, axis chooser and machine.
+    /// The tool axis, in the part frame, at which the machine's rotary axes are singular:
+    /// the table-table A/C machine's C axis, along which the part is clamped (+Z).
+    pub fn pole(&self) -> Vector3 {
+        Vector3::z()
+    }
+
     pub fn finishing_context<'a>(
         &'a self,
         collider: &'a PartCollider,
@@ -246,6 +257,8 @@ impl PlanSetup {
             allowance: 0.0,
             lift: 0.0,
             material_filter: None,
+            axis_field: None,
+            region: None,
         }
     }
 }

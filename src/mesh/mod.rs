@@ -24,7 +24,7 @@ pub mod topology;
 pub mod weld;
 
 pub use distance::{Closest, SegmentSearch, SurfaceDistance};
-pub use section::{DrivePoint, SectionCurve, plane_section};
+pub use section::{DrivePoint, SectionCurve, level_section, plane_section};
 
 pub use pieces::{Piece, PieceSplit, StrayPieceRule, set_aside_warning, split_stray_pieces};
 pub use prepare::{

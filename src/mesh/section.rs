@@ -47,6 +47,14 @@ pub fn plane_section(
         .iter()
         .map(|p| normal.dot(&p.coords) - offset)
         .collect();
+    level_section(mesh, face_normals, &side)
+}
+
+/// The curves where the function given by its value at each vertex (linear on each triangle)
+/// crosses zero, oriented and chained as plane sections are: a plane section is the level
+/// set of the signed distance to the plane; the impeller's blade loops are level sets of the
+/// height above the hub.
+pub fn level_section(mesh: &Mesh, face_normals: &[Vector3], side: &[f64]) -> Vec<SectionCurve> {
     let above = |i: u32| side[i as usize] >= 0.0;
     let crossing = |a: u32, b: u32| {
         let (da, db) = (side[a as usize], side[b as usize]);

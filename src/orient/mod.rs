@@ -95,6 +95,22 @@ pub fn preferred_axis(normal: &Vector3, feed: &Vector3, lead_deg: f64, tilt_deg:
     (normal * (l.cos() * t.cos()) + f * l.sin() + side * (l.cos() * t.sin())).normalize()
 }
 
+/// `axis` leaned away from the machine's `pole` (the rotary axis the tool must not stand
+/// near: there the other rotary axis swings half a turn for a small change of the tool axis)
+/// to at least `min_tilt_deg`, toward `outward` (unit, square to the pole): fully within the
+/// tilt, not at all beyond twice it, blended between so the change is continuous.
+pub fn away_from_pole(axis: &Vector3, pole: &Vector3, outward: &Vector3, min_tilt_deg: f64) -> Vector3 {
+    let s0 = min_tilt_deg.to_radians().sin();
+    let along = pole * pole.dot(axis);
+    let across = axis - along;
+    let tilt = across.norm();
+    let weight = ((2.0 * s0 - tilt) / s0).clamp(0.0, 1.0);
+    let missing = (s0 - across.dot(outward)).max(0.0);
+    (along + across + outward * (weight * missing))
+        .try_normalize(1e-12)
+        .unwrap_or(*axis)
+}
+
 /// Whether a ball-end tool with its ball centred at `centre` can stand along unit `axis`: the
 /// machine reaches the axis, the axis ray escapes the part (cheap, screens most candidates),
 /// and the flutes, shank and holder clear the part (exact test, the last word).
@@ -174,6 +190,28 @@ impl AxisChooser {
             return Err(NoAxis::Table);
         }
         let preferred = preferred_axis(normal, feed, self.options.lead_deg, self.options.tilt_deg);
+        self.choose_around(part, rays, tool, centre, &preferred, previous, reachable)
+    }
+
+    /// Chooses the axis nearest `preferred` (a strategy's own, rather than the lead and tilt
+    /// from the normal) for a ball centred at `centre`, as [`Self::choose`] does.
+    #[allow(clippy::too_many_arguments)]
+    pub fn choose_around(
+        &self,
+        part: &PartCollider,
+        rays: &RayScene,
+        tool: &PreparedTool,
+        centre: &Point3,
+        preferred: &Vector3,
+        previous: Option<&Vector3>,
+        reachable: &dyn Fn(&Vector3) -> bool,
+    ) -> Result<Direction, NoAxis> {
+        if let Some(table) = part.table()
+            && centre.z - tool.ball_radius < table.top_z + table.margin
+        {
+            return Err(NoAxis::Table);
+        }
+        let preferred = preferred.normalize();
         let (u, v) = orthonormal_frame(&preferred);
         let mut candidates: Vec<(f64, usize, Vector3)> = self
             .cones

@@ -14,9 +14,11 @@
 //! ([`crate::mesh::section`]) live below it, where every stage can use them.
 
 mod contact;
+mod curves;
 mod link;
 
 pub use contact::{place_ball, place_ball_from};
+pub use curves::{TurnedCopy, curve_passes, nearest_order, turned_copy};
 pub use link::{LinkOptions, LinkReport, link};
 
 use rayon::prelude::*;
@@ -131,6 +133,8 @@ pub struct Finishing {
     /// Drive points a roughing layer leaves out because their ball (placed) cuts nothing
     /// there ([`MaterialFilter`]).
     pub points_in_air: usize,
+    /// Drive points left to another strategy ([`FinishingContext::region`]).
+    pub points_left_to_others: usize,
 }
 
 /// Everything the per-point work needs, borrowed.
@@ -152,6 +156,12 @@ pub struct FinishingContext<'a> {
     /// A roughing layer's test of where there is anything to cut; `None` machines every drive
     /// point.
     pub material_filter: Option<&'a MaterialFilter<'a>>,
+    /// A strategy's own preferred axis at a drive point (point, normal, feed direction), in
+    /// place of the lead and tilt from the normal; the chooser searches around it.
+    pub axis_field: Option<&'a (dyn Fn(&Point3, &Vector3, &Vector3) -> Vector3 + Sync)>,
+    /// Which drive points this strategy machines, when others take the rest (the impeller
+    /// strategies take the hub and blades, the planes what is left); `None` machines all.
+    pub region: Option<&'a (dyn Fn(&Point3) -> bool + Sync)>,
 }
 
 /// Where a roughing layer has something to cut: `touches(centre, radius)` says
@@ -217,18 +227,26 @@ pub fn finishing_passes(
         .collect();
     let mut out = Finishing::default();
     for p in planes {
-        out.segments.extend(p.segments);
-        out.unreachable.extend(p.unreachable);
-        out.drive_points += p.drive_points;
-        out.planes += p.planes;
-        out.inserted_poses += p.inserted_poses;
-        out.splits_at_unreachable += p.splits_at_unreachable;
-        out.splits_at_refinement += p.splits_at_refinement;
-        out.backward_poses_dropped += p.backward_poses_dropped;
-        out.points_in_air += p.points_in_air;
-        out.smoothing.merge(&p.smoothing);
+        out.merge(p);
     }
     out
+}
+
+impl Finishing {
+    /// Adds `other`'s segments after this one's, and its counts to these.
+    pub fn merge(&mut self, other: Finishing) {
+        self.segments.extend(other.segments);
+        self.unreachable.extend(other.unreachable);
+        self.drive_points += other.drive_points;
+        self.planes += other.planes;
+        self.inserted_poses += other.inserted_poses;
+        self.splits_at_unreachable += other.splits_at_unreachable;
+        self.splits_at_refinement += other.splits_at_refinement;
+        self.backward_poses_dropped += other.backward_poses_dropped;
+        self.points_in_air += other.points_in_air;
+        self.points_left_to_others += other.points_left_to_others;
+        self.smoothing.merge(&other.smoothing);
+    }
 }
 
 /// One placed pose with the drive point it came from.
@@ -265,6 +283,10 @@ fn drive_curve(
         }
         None => (None, vec![true; points.len()]),
     };
+    let ours: Vec<bool> = match ctx.region {
+        Some(region) => points.iter().map(|p| region(&p.point)).collect(),
+        None => vec![true; points.len()],
+    };
     // 1. Place every drive point; unreachable ones (and a roughing layer's points in the air)
     //    split the curve into runs.
     let mut runs: Vec<Vec<(Placed, Vector3)>> = Vec::new();
@@ -272,6 +294,13 @@ fn drive_curve(
     for i in 0..points.len() {
         out.drive_points += 1;
         let drive = points[i];
+        if !ours[i] {
+            out.points_left_to_others += 1;
+            if !run.is_empty() {
+                runs.push(std::mem::take(&mut run));
+            }
+            continue;
+        }
         if !keep[i] {
             // A roughing layer's ball that does not fit there is unreachable, not in the air:
             // whether there is anything to cut cannot be told without a place for it.
@@ -524,16 +553,27 @@ fn place(
             axis: Direction::new_normalize(*axis),
         });
     }
-    let axis = ctx.chooser.choose(
-        ctx.part,
-        ctx.rays,
-        ctx.tool,
-        &centre,
-        &drive.normal,
-        feed,
-        previous,
-        ctx.reachable,
-    )?;
+    let axis = match ctx.axis_field {
+        Some(field) => ctx.chooser.choose_around(
+            ctx.part,
+            ctx.rays,
+            ctx.tool,
+            &centre,
+            &field(&drive.point, &drive.normal, feed),
+            previous,
+            ctx.reachable,
+        )?,
+        None => ctx.chooser.choose(
+            ctx.part,
+            ctx.rays,
+            ctx.tool,
+            &centre,
+            &drive.normal,
+            feed,
+            previous,
+            ctx.reachable,
+        )?,
+    };
     Ok(Placed {
         drive: *drive,
         centre,
@@ -687,6 +727,8 @@ mod tests {
             allowance,
             lift: allowance,
             material_filter: Some(&layer),
+            axis_field: None,
+            region: None,
         };
         let options = FinishingOptions {
             scallop_height: 0.2,
@@ -771,6 +813,8 @@ mod tests {
             allowance: 1.0,
             lift: 1.0,
             material_filter: None,
+            axis_field: None,
+            region: None,
         };
         let options = FinishingOptions {
             scallop_height: 0.3,

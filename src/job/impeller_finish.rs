@@ -1,0 +1,283 @@
+//! Finishing an impeller with its own strategies (issue 21): flow-line passes over the hub
+//! between two blades ([`crate::impeller::passage`]) and loops around the blade
+//! ([`crate::impeller::blade`]), planned for one passage and its blade and copied to the
+//! others by the symmetry, each copy checked on the part ([`crate::path::turned_copy`]); the
+//! parallel planes finish what the impeller strategies leave (splitters, nose, rim), their
+//! drive points on the hub and blades left out.
+//!
+//! Axes. On the hub the preferred axis is either one axis per passage (the mean of the walls'
+//! span directions down its middle: the rotary axes stand still along the passes) or the
+//! walls' span directions interpolated across the passage, leaning toward the feed. Around a
+//! blade it is either the same axis turned to the blade (the rotary axes stand still round
+//! the loop) or the blade's rising direction leaned off the surface by `blade_lean_deg`, so
+//! the tool stands along the blade and the ball cuts with its side. Both are kept off the
+//! machine's pole; the chooser searches around them with the exact checks as everywhere.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::config::{BladeAxes, HubAxes};
+use crate::geom::{Point3, Vector3};
+use crate::impeller::{HubPassage, Impeller, PassageOptions, blade_loops};
+use crate::mesh::Mesh;
+use crate::orient::{away_from_pole, preferred_axis};
+use crate::path::{self, Finishing, FinishingContext, FinishingOptions, TurnedCopy};
+
+/// Distance between the stations along the hub's meridian, mm.
+const STATION_STEP: f64 = 0.25;
+
+/// Least tilt of the tool from the machine's pole (its C axis), degrees: nearer, C swings
+/// fast for small changes of the tool axis.
+const MIN_TILT_FROM_POLE_DEG: f64 = 15.0;
+
+/// How far a partial flow line runs on past where it is needed, in stepovers.
+const OVERLAP_STEPOVERS: f64 = 4.0;
+
+/// How the impeller strategies are asked to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImpellerFinishOptions {
+    pub hub_axes: HubAxes,
+    pub blade_axes: BladeAxes,
+    /// How far the tool leans off a blade's surface, degrees.
+    pub blade_lean_deg: f64,
+    /// The tool axis at which the machine's rotary axes are singular (part frame).
+    pub pole: Vector3,
+}
+
+/// What the hub finishing planned.
+#[derive(Clone, Debug, Serialize)]
+pub struct HubSummary {
+    pub flow_triangles: usize,
+    pub flow_area_mm2: f64,
+    /// Largest distance of a hub vertex from the meridian found, mm.
+    pub profile_fit_mm: f64,
+    pub stations: usize,
+    /// Flow lines across one passage, and how many of them are partial (inserted only where
+    /// the passage is wide, alg. 5.1).
+    pub flow_lines: usize,
+    pub partial_lines: usize,
+    pub axes: HubAxes,
+}
+
+/// What the blade finishing planned (for one blade; the others are its copies).
+#[derive(Clone, Debug, Serialize)]
+pub struct BladeSummary {
+    pub levels: usize,
+    pub loops: usize,
+    /// Height between levels, mm.
+    pub level_step_mm: f64,
+    /// The blade's height above the hub, mm.
+    pub height_mm: f64,
+    pub axes: BladeAxes,
+    pub lean_deg: f64,
+}
+
+/// What the impeller finishing planned, by strategy.
+#[derive(Clone, Debug, Serialize)]
+pub struct ImpellerFinishSummary {
+    pub hub: Option<HubSummary>,
+    pub blade: Option<BladeSummary>,
+    /// Why the hub and blades are finished by the planes instead, when they are.
+    pub not_planned: Option<String>,
+    /// Passages (each with its blade) planned, and copied from the first.
+    pub passages: usize,
+    /// Planning the first passage and its blade, and copying them to the others, ms.
+    pub first_passage_ms: f64,
+    pub copies_ms: f64,
+    pub copies: TurnedCopy,
+    /// Drive points of the planes over the regions the impeller strategies finish.
+    pub plane_points_left_to_impeller: usize,
+}
+
+/// Plans the finishing of `part` (recognised as `impeller`): hub flow lines and blade loops
+/// for every passage, then the parallel planes over `drive` for the rest.
+pub fn finish_impeller(
+    part: &Mesh,
+    drive: &Mesh,
+    impeller: &Impeller,
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    impeller_options: &ImpellerFinishOptions,
+    advance: &(dyn Fn() + Sync),
+) -> (Finishing, ImpellerFinishSummary) {
+    let radius = ctx.tool.ball_radius;
+    let stepover = path::stepover_for_scallop(radius, options.scallop_height);
+    let passage_options = PassageOptions {
+        station_step: STATION_STEP,
+        ball_radius: radius,
+        scallop_height: options.scallop_height,
+        overlap: OVERLAP_STEPOVERS * stepover,
+    };
+    let mut finishing = Finishing::default();
+    let mut summary = ImpellerFinishSummary {
+        hub: None,
+        blade: None,
+        not_planned: None,
+        passages: 0,
+        first_passage_ms: 0.0,
+        copies_ms: 0.0,
+        copies: TurnedCopy::default(),
+        plane_points_left_to_impeller: 0,
+    };
+    let mut handled = vec![false; part.triangles.len()];
+    match HubPassage::new(part, impeller, &passage_options) {
+        Ok(passage) => {
+            let t = Instant::now();
+            let pole = impeller_options.pole;
+            // Leans `axis` off the pole toward the outside of the wheel at `p`.
+            let off_pole = |p: &Point3, axis: &Vector3| {
+                let (_, angle, _) = passage.frame.cylindrical(p);
+                let radial = passage.frame.radial(angle);
+                let outward = (radial - pole * pole.dot(&radial))
+                    .try_normalize(1e-9)
+                    .unwrap_or(radial);
+                away_from_pole(axis, &pole, &outward, MIN_TILT_FROM_POLE_DEG)
+            };
+
+            // The hub: flow lines across passage 0.
+            let lines = passage.flow_lines(&passage_options);
+            let curves = passage.drive_curves(&lines, ctx.part.surface());
+            let lead = ctx.chooser.options().lead_deg;
+            let (mean, middle) = passage.mean_wall_axis();
+            let hub_axes = impeller_options.hub_axes;
+            let hub_field = |p: &Point3, _normal: &Vector3, feed: &Vector3| {
+                let axis = match hub_axes {
+                    HubAxes::Passage => {
+                        // The passage's own axis, turned to the passage `p` is in.
+                        let (_, angle, _) = passage.frame.cylindrical(p);
+                        let k = ((angle - middle) / passage.pitch).round();
+                        let radial = passage.frame.radial(middle + k * passage.pitch);
+                        passage.frame.axis * mean[0]
+                            + radial * mean[1]
+                            + passage.frame.axis.cross(&radial) * mean[2]
+                    }
+                    HubAxes::Walls => preferred_axis(&passage.wall_axis(p), feed, lead, 0.0),
+                };
+                off_pole(p, &axis)
+            };
+            let hub_ctx = FinishingContext {
+                axis_field: Some(&hub_field),
+                ..*ctx
+            };
+            let mut hub = Finishing::default();
+            for result in path::curve_passes(&curves, &hub_ctx, options, advance) {
+                hub.merge(result);
+            }
+            // One fixed axis leaves the passes free to run either way; leaning toward the
+            // feed does not.
+            hub.segments = path::nearest_order(
+                std::mem::take(&mut hub.segments),
+                hub_axes == HubAxes::Passage,
+            );
+
+            // The blade passage 0 starts at: loops from the tip down.
+            let loops = blade_loops(part, impeller, &passage, passage.first_blade, stepover);
+            let lean = impeller_options.blade_lean_deg.to_radians();
+            let blade_axes = impeller_options.blade_axes;
+            let blade_field = |p: &Point3, normal: &Vector3, _feed: &Vector3| {
+                let axis = match blade_axes {
+                    BladeAxes::Blade => {
+                        // The passages' axis, turned to the blade `p` is on (half a pitch
+                        // before its passage).
+                        let (_, angle, _) = passage.frame.cylindrical(p);
+                        let blade = middle - 0.5 * passage.pitch;
+                        let k = ((angle - blade) / passage.pitch).round();
+                        let radial = passage.frame.radial(blade + k * passage.pitch);
+                        passage.frame.axis * mean[0]
+                            + radial * mean[1]
+                            + passage.frame.axis.cross(&radial) * mean[2]
+                    }
+                    BladeAxes::Lean => {
+                        let (_, up) = passage.above_hub(p);
+                        let across = up - normal * normal.dot(&up);
+                        // On the tip the rising direction is the normal itself.
+                        let rising = if across.norm() > 0.3 {
+                            across.normalize()
+                        } else {
+                            up
+                        };
+                        rising * lean.cos() + normal * lean.sin()
+                    }
+                };
+                off_pole(p, &axis)
+            };
+            let blade_ctx = FinishingContext {
+                axis_field: Some(&blade_field),
+                ..*ctx
+            };
+            let mut blade = Finishing::default();
+            for result in path::curve_passes(&loops.curves, &blade_ctx, options, advance) {
+                blade.merge(result);
+            }
+            blade.segments = path::nearest_order(
+                std::mem::take(&mut blade.segments),
+                blade_axes == BladeAxes::Blade,
+            );
+            summary.first_passage_ms = round_ms(t);
+
+            let t = Instant::now();
+            let mut copies = Vec::new();
+            for k in 1..impeller.order {
+                let rotation = passage.frame.turn(k as f64 * passage.pitch);
+                let centre = passage.frame.centre;
+                let (hub_copy, hub_stats) =
+                    path::turned_copy(&hub, &rotation, &centre, &hub_ctx, options);
+                let (blade_copy, blade_stats) =
+                    path::turned_copy(&blade, &rotation, &centre, &blade_ctx, options);
+                summary.copies.merge(&hub_stats);
+                summary.copies.merge(&blade_stats);
+                copies.push((hub_copy, blade_copy));
+            }
+            summary.copies_ms = round_ms(t);
+            summary.passages = impeller.order;
+            finishing.merge(hub);
+            finishing.merge(blade);
+            for (hub_copy, blade_copy) in copies {
+                finishing.merge(hub_copy);
+                finishing.merge(blade_copy);
+            }
+            for (t, h) in handled.iter_mut().enumerate() {
+                *h = passage.flow[t]
+                    || matches!(impeller.regions[t], crate::impeller::Region::Blade(_));
+            }
+            summary.hub = Some(HubSummary {
+                flow_triangles: passage.flow_triangles,
+                flow_area_mm2: passage.flow_area_mm2,
+                profile_fit_mm: passage.profile_fit_mm,
+                stations: passage.stations.len(),
+                flow_lines: lines.len(),
+                partial_lines: lines.iter().filter(|l| l.runs != lines[0].runs).count(),
+                axes: hub_axes,
+            });
+            summary.blade = Some(BladeSummary {
+                levels: loops.levels,
+                loops: loops.curves.len(),
+                level_step_mm: loops.level_step,
+                height_mm: loops.top,
+                axes: blade_axes,
+                lean_deg: impeller_options.blade_lean_deg,
+            });
+        }
+        Err(reason) => summary.not_planned = Some(reason),
+    }
+    // The planes take every drive point whose nearest part triangle no strategy above took.
+    let surface = ctx.part.surface();
+    let region = |p: &Point3| {
+        surface
+            .closest(p, 1.0)
+            .is_none_or(|c| !handled[c.triangle as usize])
+    };
+    let planes_ctx = FinishingContext {
+        region: Some(&region),
+        ..*ctx
+    };
+    let planes = path::finishing_passes(drive, &planes_ctx, options, advance);
+    summary.plane_points_left_to_impeller = planes.points_left_to_others;
+    finishing.merge(planes);
+    (finishing, summary)
+}
+
+fn round_ms(since: Instant) -> f64 {
+    (since.elapsed().as_secs_f64() * 1e4).round() / 10.0
+}

@@ -1,0 +1,266 @@
+//! Finishing passes along drive curves a strategy hands in (the impeller's flow lines and
+//! blade loops) rather than plane sections, and copies of planned passes turned about a
+//! symmetry axis — each copied pose checked on the part and mended where it does not hold.
+//!
+//! A symmetric part is symmetric only to its tolerance: the hub's facets differ from passage
+//! to passage, and an STL's vertices are rounded. So a copy is never taken on trust: each
+//! turned ball centre is pushed out of the part if the turned surface comes closer than the
+//! radius (the same placement as the original's), each turned axis goes through the same exact
+//! test the chooser's picks do (rays, shank and holder, table, machine limits) and is chosen
+//! anew where it fails, and each move between two copied poses is checked like a refined
+//! chord (ball within the chord tolerance, axis turn within its bound); where a pose cannot be
+//! mended or a move fails, the pass is split there.
+
+use nalgebra::Rotation3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::{
+    CutSegment, Finishing, FinishingContext, FinishingOptions, Unreachable, drive_curve,
+    place_ball_from,
+};
+use crate::geom::{Direction, Point3, ToolPose, angle_between};
+use crate::mesh::{DrivePoint, SectionCurve};
+use crate::orient::axis_is_valid;
+
+/// Plans finishing passes along `curves` (each simplified and resampled as a plane section
+/// is); one result per curve, in order. Curves run in parallel; each result depends only on
+/// its curve, so the output is the same for any number of threads.
+pub fn curve_passes(
+    curves: &[SectionCurve],
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Vec<Finishing> {
+    curves
+        .par_iter()
+        .map(|curve| {
+            let points = curve
+                .simplified(
+                    ctx.tool.ball_radius + ctx.lift,
+                    0.25 * options.tolerance,
+                    options.max_step,
+                )
+                .resampled(options.max_step);
+            let mut result = Finishing::default();
+            drive_curve(&points, ctx, options, &mut result);
+            progress();
+            result
+        })
+        .collect()
+}
+
+/// What checking a turned copy found.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct TurnedCopy {
+    /// Poses copied.
+    pub poses: usize,
+    /// Poses whose ball the turned part came nearer than the radius: pushed out.
+    pub centres_moved: usize,
+    /// Poses whose turned axis failed its test: given a new one.
+    pub axes_chosen_anew: usize,
+    /// Poses that could not be mended (left out, the pass split there).
+    pub poses_dropped: usize,
+    /// Passes split because a move between two copied poses failed its check.
+    pub splits: usize,
+}
+
+impl TurnedCopy {
+    pub fn merge(&mut self, other: &TurnedCopy) {
+        self.poses += other.poses;
+        self.centres_moved += other.centres_moved;
+        self.axes_chosen_anew += other.axes_chosen_anew;
+        self.poses_dropped += other.poses_dropped;
+        self.splits += other.splits;
+    }
+}
+
+/// `source`'s passes turned by `rotation` about `centre`, each pose checked on the part and
+/// mended (see the module docs). The unreachable points are turned with them: they are the
+/// places the source could not reach, reported for the copy, not tried again.
+pub fn turned_copy(
+    source: &Finishing,
+    rotation: &Rotation3<f64>,
+    centre: &Point3,
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+) -> (Finishing, TurnedCopy) {
+    let r = ctx.tool.ball_radius;
+    let held = r + ctx.allowance;
+    let turn_point = |p: &Point3| centre + rotation * (p - centre);
+    let pieces: Vec<(Vec<CutSegment>, TurnedCopy)> = source
+        .segments
+        .par_iter()
+        .map(|segment| {
+            let mut stats = TurnedCopy::default();
+            let mut out = Vec::new();
+            let mut run = CutSegment {
+                poses: Vec::new(),
+                pass_directions: Vec::new(),
+            };
+            let flush = |run: &mut CutSegment, out: &mut Vec<CutSegment>| {
+                let taken = std::mem::replace(
+                    run,
+                    CutSegment {
+                        poses: Vec::new(),
+                        pass_directions: Vec::new(),
+                    },
+                );
+                if taken.poses.len() >= 2 {
+                    out.push(taken);
+                }
+            };
+            for (pose, direction) in segment.poses.iter().zip(&segment.pass_directions) {
+                stats.poses += 1;
+                let axis = rotation * pose.axis.into_inner();
+                let feed = rotation * direction;
+                let turned_centre = turn_point(&(pose.tip + pose.axis.into_inner() * r));
+                let Some(ball) = place_ball_from(
+                    ctx.part.surface(),
+                    &DrivePoint {
+                        point: turned_centre,
+                        normal: axis,
+                    },
+                    0.0,
+                    held,
+                ) else {
+                    stats.poses_dropped += 1;
+                    flush(&mut run, &mut out);
+                    continue;
+                };
+                if (ball - turned_centre).norm() > 0.0 {
+                    stats.centres_moved += 1;
+                }
+                let axis = if axis_is_valid(ctx.part, ctx.rays, ctx.tool, &ball, &axis, ctx.reachable)
+                    .is_ok()
+                {
+                    Some(Direction::new_normalize(axis))
+                } else {
+                    stats.axes_chosen_anew += 1;
+                    let normal = ctx
+                        .part
+                        .surface()
+                        .closest(&ball, held + 1.0)
+                        .and_then(|c| (ball - c.point).try_normalize(1e-12))
+                        .unwrap_or(axis);
+                    let previous = run.poses.last().map(|p| p.axis.into_inner());
+                    let chosen = match ctx.axis_field {
+                        Some(field) => ctx.chooser.choose_around(
+                            ctx.part,
+                            ctx.rays,
+                            ctx.tool,
+                            &ball,
+                            &field(&(ball - normal * held), &normal, &feed),
+                            previous.as_ref(),
+                            ctx.reachable,
+                        ),
+                        None => ctx.chooser.choose(
+                            ctx.part,
+                            ctx.rays,
+                            ctx.tool,
+                            &ball,
+                            &normal,
+                            &feed,
+                            previous.as_ref(),
+                            ctx.reachable,
+                        ),
+                    };
+                    chosen.ok()
+                };
+                let Some(axis) = axis else {
+                    stats.poses_dropped += 1;
+                    flush(&mut run, &mut out);
+                    continue;
+                };
+                let copied = ToolPose {
+                    tip: ball - axis.into_inner() * r,
+                    axis,
+                };
+                if let Some(last) = run.poses.last() {
+                    let last_centre = last.tip + last.axis.into_inner() * r;
+                    let chord_ok = !ctx.part.surface().segment_within(
+                        &last_centre,
+                        &ball,
+                        held - options.tolerance,
+                    );
+                    let turn_ok = angle_between(&last.axis, &axis).to_degrees()
+                        <= options.max_axis_turn_deg;
+                    let forward = (ball - last_centre).dot(&feed) > 0.0;
+                    if !(chord_ok && turn_ok && forward) {
+                        stats.splits += 1;
+                        flush(&mut run, &mut out);
+                    }
+                }
+                run.poses.push(copied);
+                run.pass_directions.push(feed);
+            }
+            flush(&mut run, &mut out);
+            (out, stats)
+        })
+        .collect();
+    let mut copy = Finishing {
+        unreachable: source
+            .unreachable
+            .iter()
+            .map(|(p, why)| (turn_point(p), *why))
+            .collect::<Vec<(Point3, Unreachable)>>(),
+        drive_points: source.drive_points,
+        ..Default::default()
+    };
+    let mut stats = TurnedCopy::default();
+    for (segments, s) in pieces {
+        copy.segments.extend(segments);
+        stats.merge(&s);
+    }
+    (copy, stats)
+}
+
+/// `segments` reordered so that each starts near where the one before ended (greedy nearest
+/// neighbour from the first, ties to the lower index), each run backwards when `may_reverse`
+/// and its end is the nearer. Fewer and shorter links; the passes themselves are unchanged
+/// (a reversed one runs the same poses the other way, its pass directions turned round).
+pub fn nearest_order(segments: Vec<CutSegment>, may_reverse: bool) -> Vec<CutSegment> {
+    let n = segments.len();
+    let mut slots: Vec<Option<CutSegment>> = segments.into_iter().map(Some).collect();
+    let mut out: Vec<CutSegment> = Vec::with_capacity(n);
+    let ends = |s: &CutSegment| {
+        (
+            s.poses.first().map(|p| p.tip),
+            s.poses.last().map(|p| p.tip),
+        )
+    };
+    let mut here: Option<Point3> = None;
+    for _ in 0..n {
+        let mut best: Option<(f64, usize, bool)> = None;
+        for (i, slot) in slots.iter().enumerate() {
+            let Some(s) = slot else { continue };
+            let (Some(first), Some(last)) = ends(s) else {
+                continue;
+            };
+            let Some(at) = here else {
+                best = Some((0.0, i, false));
+                break;
+            };
+            let forward = (first - at).norm();
+            if best.is_none_or(|b| forward < b.0) {
+                best = Some((forward, i, false));
+            }
+            let backward = (last - at).norm();
+            if may_reverse && backward < best.map_or(f64::INFINITY, |b| b.0) {
+                best = Some((backward, i, true));
+            }
+        }
+        let Some((_, i, reverse)) = best else { break };
+        let Some(mut s) = slots[i].take() else { break };
+        if reverse {
+            s.poses.reverse();
+            s.pass_directions.reverse();
+            for d in &mut s.pass_directions {
+                *d = -*d;
+            }
+        }
+        here = s.poses.last().map(|p| p.tip);
+        out.push(s);
+    }
+    out
+}

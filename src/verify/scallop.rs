@@ -1,0 +1,334 @@
+//! The scallop a finishing toolpath leaves, measured on the part (issue 21 item 4), from the
+//! moves alone: nothing of how they were planned.
+//!
+//! The part's surface is sampled evenly (a barycentric grid on every triangle, points about
+//! `spacing` apart). Each cut move sweeps its ball along the straight segment between two ball
+//! centres: a capsule. At a sample point p with outward normal n, the material left is the
+//! stretch of the ray p + t·n (t ≥ 0) below the first swept capsule it meets: the scallop
+//! height is the least entry t over all capsules (0 where p lies inside one, a touch or a cut
+//! within the tolerance). A point whose ray meets no capsule within `reach` is not reached:
+//! the strategy left it (unreachable, or a region no pass covers). The face the part stands
+//! on is left out of both (no tool gets there). Capsules are found through a uniform grid;
+//! entries are exact (the ray against the capsule's cylinder and its two end spheres).
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::geom::{MoveKind, Point3, Toolpath, Vector3, closest_point_on_segment};
+use crate::mesh::Mesh;
+
+/// What the measure found.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ScallopReport {
+    pub samples: usize,
+    pub sample_spacing_mm: f64,
+    /// Area of the samples the moves reach (each sample stands for its share of its
+    /// triangle), and of those they do not, mm²; the face on the table is left out.
+    pub reached_area_mm2: f64,
+    pub unreached_area_mm2: f64,
+    pub table_area_mm2: f64,
+    /// Scallop height over the reached samples, mm.
+    pub max_mm: f64,
+    pub p99_mm: f64,
+    pub mean_mm: f64,
+    /// Reached area whose scallop is above `target`, mm².
+    pub over_target_area_mm2: f64,
+    pub target_mm: f64,
+}
+
+/// Measures the scallop `toolpath`'s cut moves (ball radius `radius`) leave on `part`, target
+/// `target` mm; samples about `spacing` apart; a point is reached when a swept ball comes
+/// within `reach` above it. The part stands on the plane z = `table_z` (samples there facing
+/// down are the table's).
+pub fn measure_scallop(
+    part: &Mesh,
+    toolpath: &Toolpath,
+    radius: f64,
+    target: f64,
+    spacing: f64,
+    reach: f64,
+    table_z: f64,
+) -> ScallopReport {
+    let capsules: Vec<(Point3, Point3)> = toolpath
+        .moves
+        .windows(2)
+        .filter(|w| w[1].kind == MoveKind::Cut)
+        .map(|w| {
+            let centre = |m: &crate::geom::Move| m.pose.tip + m.pose.axis.into_inner() * radius;
+            (centre(&w[0]), centre(&w[1]))
+        })
+        .collect();
+    let grid = Grid::new(&capsules, radius, (2.0 * radius).max(reach));
+
+    // Samples: per triangle, a barycentric grid with `k` divisions along its longest edge.
+    let samples: Vec<(Point3, Vector3, f64)> = (0..part.triangles.len())
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let [a, b, c] = part.corners(t);
+            let n = (b - a).cross(&(c - a));
+            let area = 0.5 * n.norm();
+            let normal = n.try_normalize(1e-300).unwrap_or_else(Vector3::z);
+            let longest = (b - a).norm().max((c - b).norm()).max((a - c).norm());
+            let k = (longest / spacing).ceil().max(1.0) as usize;
+            let count = k * (k + 1) / 2;
+            (0..k).flat_map(move |i| {
+                (0..k - i).map(move |j| {
+                    // Centres of the sub-triangles pointing up: every sample inside.
+                    let u = (i as f64 + 1.0 / 3.0) / k as f64;
+                    let v = (j as f64 + 1.0 / 3.0) / k as f64;
+                    (a + (b - a) * u + (c - a) * v, normal, area / count as f64)
+                })
+            })
+        })
+        .collect();
+    let heights: Vec<Option<f64>> = samples
+        .par_iter()
+        .map(|(p, n, _)| {
+            if n.z < -0.99 && (p.z - table_z).abs() < 1e-6 {
+                return Some(f64::NAN);
+            }
+            let end = p + n * reach;
+            let mut best: Option<f64> = None;
+            grid.for_each_near(p, &end, |i| {
+                let (a, b) = capsules[i];
+                if let Some(t) = ray_capsule_entry(p, n, &a, &b, radius)
+                    && t <= reach
+                    && best.is_none_or(|h| t < h)
+                {
+                    best = Some(t);
+                }
+            });
+            best
+        })
+        .collect();
+    let mut reached = Vec::new();
+    let (mut reached_area, mut unreached_area, mut table_area, mut over) = (0.0, 0.0, 0.0, 0.0);
+    let mut sum = 0.0;
+    for ((_, _, area), h) in samples.iter().zip(&heights) {
+        match h {
+            Some(h) if h.is_nan() => table_area += area,
+            Some(h) => {
+                reached_area += area;
+                sum += h * area;
+                if *h > target {
+                    over += area;
+                }
+                reached.push(*h);
+            }
+            None => unreached_area += area,
+        }
+    }
+    reached.sort_by(f64::total_cmp);
+    let p99 = reached
+        .get(((reached.len() as f64 * 0.99) as usize).min(reached.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(0.0);
+    ScallopReport {
+        samples: samples.len(),
+        sample_spacing_mm: spacing,
+        reached_area_mm2: reached_area,
+        unreached_area_mm2: unreached_area,
+        table_area_mm2: table_area,
+        max_mm: reached.last().copied().unwrap_or(0.0),
+        p99_mm: p99,
+        mean_mm: if reached_area > 0.0 { sum / reached_area } else { 0.0 },
+        over_target_area_mm2: over,
+        target_mm: target,
+    }
+}
+
+/// Where the ray `p + t·d` (unit `d`, t ≥ 0) enters the capsule of radius `r` about segment
+/// `ab`: 0 when `p` is inside, `None` when it misses or the capsule lies behind.
+pub fn ray_capsule_entry(p: &Point3, d: &Vector3, a: &Point3, b: &Point3, r: f64) -> Option<f64> {
+    if (p - closest_point_on_segment(p, a, b)).norm() <= r {
+        return Some(0.0);
+    }
+    let mut entry: Option<f64> = None;
+    let mut take = |t: f64| {
+        if t >= 0.0 && entry.is_none_or(|e| t < e) {
+            entry = Some(t);
+        }
+    };
+    // The lateral surface of the cylinder between the end planes.
+    let ba = b - a;
+    let oa = p - a;
+    let baba = ba.dot(&ba);
+    if baba > 0.0 {
+        let bard = ba.dot(d);
+        let baoa = ba.dot(&oa);
+        let k2 = baba - bard * bard;
+        let k1 = baba * oa.dot(d) - baoa * bard;
+        let k0 = baba * oa.dot(&oa) - baoa * baoa - r * r * baba;
+        let disc = k1 * k1 - k2 * k0;
+        if k2 > 1e-12 * baba && disc >= 0.0 {
+            let t = (-k1 - disc.sqrt()) / k2;
+            let y = baoa + t * bard;
+            if y > 0.0 && y < baba {
+                take(t);
+            }
+        }
+    }
+    // The two end spheres.
+    for centre in [a, b] {
+        let oc = p - centre;
+        let half_b = oc.dot(d);
+        let c = oc.dot(&oc) - r * r;
+        let disc = half_b * half_b - c;
+        if disc >= 0.0 {
+            take(-half_b - disc.sqrt());
+        }
+    }
+    entry
+}
+
+/// A uniform grid of capsules by their bounding boxes.
+struct Grid {
+    cell: f64,
+    origin: Point3,
+    dims: [usize; 3],
+    starts: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Grid {
+    fn new(capsules: &[(Point3, Point3)], radius: f64, cell: f64) -> Grid {
+        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut hi = Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for (a, b) in capsules {
+            for p in [a, b] {
+                lo = lo.inf(p);
+                hi = hi.sup(p);
+            }
+        }
+        if capsules.is_empty() {
+            lo = Point3::origin();
+            hi = Point3::origin();
+        }
+        let origin = lo - Vector3::repeat(radius + cell);
+        let extent = hi - origin + Vector3::repeat(radius + cell);
+        let dims = [0, 1, 2].map(|k| ((extent[k] / cell).ceil() as usize).clamp(1, 1024));
+        let cell_of = |p: &Point3, k: usize| {
+            (((p[k] - origin[k]) / cell).floor().max(0.0) as usize).min(dims[k] - 1)
+        };
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
+        for (i, (a, b)) in capsules.iter().enumerate() {
+            let (l, h) = (a.inf(b) - Vector3::repeat(radius), a.sup(b) + Vector3::repeat(radius));
+            for x in cell_of(&l, 0)..=cell_of(&h, 0) {
+                for y in cell_of(&l, 1)..=cell_of(&h, 1) {
+                    for z in cell_of(&l, 2)..=cell_of(&h, 2) {
+                        lists[(x * dims[1] + y) * dims[2] + z].push(i as u32);
+                    }
+                }
+            }
+        }
+        let mut starts = Vec::with_capacity(lists.len() + 1);
+        let mut items = Vec::new();
+        for list in lists {
+            starts.push(items.len() as u32);
+            items.extend(list);
+        }
+        starts.push(items.len() as u32);
+        Grid {
+            cell,
+            origin,
+            dims,
+            starts,
+            items,
+        }
+    }
+
+    /// Calls `visit` with every capsule whose box meets the box of segment `pq` (a capsule
+    /// may come more than once).
+    fn for_each_near(&self, p: &Point3, q: &Point3, mut visit: impl FnMut(usize)) {
+        let cell_of = |v: f64, k: usize| -> Option<usize> {
+            let c = ((v - self.origin[k]) / self.cell).floor();
+            (c >= 0.0 && (c as usize) < self.dims[k]).then_some(c as usize)
+        };
+        let (l, h) = (p.inf(q), p.sup(q));
+        let range = |k: usize| {
+            let lo = cell_of(l[k], k).unwrap_or(if l[k] < self.origin[k] { 0 } else { self.dims[k] });
+            let hi = cell_of(h[k], k).unwrap_or(if h[k] < self.origin[k] { 0 } else { self.dims[k] - 1 });
+            lo..=hi.min(self.dims[k] - 1)
+        };
+        for x in range(0) {
+            for y in range(1) {
+                for z in range(2) {
+                    let c = (x * self.dims[1] + y) * self.dims[2] + z;
+                    for &i in &self.items[self.starts[c] as usize..self.starts[c + 1] as usize] {
+                        visit(i as usize);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{Direction, Move, ToolPose};
+
+    #[test]
+    fn the_ray_enters_a_capsule_where_the_closed_form_says() {
+        let (a, b) = (Point3::new(0.0, 0.0, 3.0), Point3::new(10.0, 0.0, 3.0));
+        let up = Vector3::z();
+        // Under the cylinder: enters at 3 − 2.
+        let t = ray_capsule_entry(&Point3::new(5.0, 0.0, 0.0), &up, &a, &b, 2.0);
+        assert!((t.unwrap() - 1.0).abs() < 1e-12);
+        // Off to the side by 1: 3 − √3.
+        let t = ray_capsule_entry(&Point3::new(5.0, 1.0, 0.0), &up, &a, &b, 2.0);
+        assert!((t.unwrap() - (3.0 - 3f64.sqrt())).abs() < 1e-12);
+        // Beyond the end, under the end sphere: 3 − √(4 − 1).
+        let t = ray_capsule_entry(&Point3::new(11.0, 0.0, 0.0), &up, &a, &b, 2.0);
+        assert!((t.unwrap() - (3.0 - 3f64.sqrt())).abs() < 1e-12);
+        // Inside, and missed.
+        assert_eq!(ray_capsule_entry(&Point3::new(5.0, 0.0, 2.0), &up, &a, &b, 2.0), Some(0.0));
+        assert_eq!(ray_capsule_entry(&Point3::new(5.0, 3.0, 0.0), &up, &a, &b, 2.0), None);
+        assert_eq!(ray_capsule_entry(&Point3::new(5.0, 0.0, 6.0), &up, &a, &b, 2.0), None);
+    }
+
+    fn passes(ys: impl Iterator<Item = f64>) -> Toolpath {
+        let axis = Direction::new_normalize(Vector3::z());
+        let mut moves = Vec::new();
+        for y in ys {
+            for (x, kind) in [(-5.0, MoveKind::Approach), (25.0, MoveKind::Cut)] {
+                moves.push(Move {
+                    pose: ToolPose {
+                        tip: Point3::new(x, y, 1.0),
+                        axis,
+                    },
+                    kind,
+                    feed: 1000.0,
+                });
+            }
+        }
+        Toolpath { tool_id: 1, moves }
+    }
+
+    /// Straight passes a stepover w apart over a flat plate leave the closed-form cusp
+    /// h = r − √(r² − (w/2)²) between them; the sides stand below the balls' reach, the
+    /// bottom on the table.
+    #[test]
+    fn passes_over_a_plate_leave_the_closed_form_scallop() {
+        let plate = crate::mesh::fixtures::cuboid(20.0, 20.0, 1.0);
+        let (r, w) = (2.0, 0.8);
+        let path = passes((0..30).map(|k| -2.0 + k as f64 * w));
+        let report = measure_scallop(&plate, &path, r, 0.02, 0.05, 2.0 * r, 0.0);
+        let cusp = r - (r * r - (w / 2.0) * (w / 2.0)).sqrt();
+        assert!((report.max_mm - cusp).abs() < 2e-3, "{report:?} vs {cusp}");
+        assert!(report.max_mm <= cusp + 1e-9);
+        assert!(report.over_target_area_mm2 > 0.0 && report.over_target_area_mm2 < 400.0);
+        assert!((report.table_area_mm2 - 400.0).abs() < 1e-6);
+        assert!((report.reached_area_mm2 - 400.0).abs() < 1e-6, "{report:?}");
+        assert!((report.unreached_area_mm2 - 80.0).abs() < 1e-6, "{report:?}");
+
+        // Passes over half the plate: the other half, beyond the last ball's reach, is not
+        // reached.
+        let half = measure_scallop(&plate, &passes((0..13).map(|k| k as f64 * w)), r, 0.05, 0.05, 2.0 * r, 0.0);
+        let last = 12.0 * w + r;
+        assert!(
+            (half.unreached_area_mm2 - 80.0 - 20.0 * (20.0 - last)).abs() < 0.5,
+            "{half:?}"
+        );
+    }
+}
