@@ -56,9 +56,7 @@ impl AxisFrame {
 
     /// The point at `radius`, `angle` (radians) and `height`.
     pub fn point(&self, radius: f64, angle: f64, height: f64) -> Point3 {
-        self.centre
-            + self.axis * height
-            + (self.u * angle.cos() + self.v * angle.sin()) * radius
+        self.centre + self.axis * height + (self.u * angle.cos() + self.v * angle.sin()) * radius
     }
 
     /// The unit radial direction at `angle`.

@@ -141,7 +141,10 @@ impl Meridian {
             let p = [w[0][0] + d[0] * t, w[0][1] + d[1] * t];
             let dist = (q[0] - p[0]).hypot(q[1] - p[1]);
             if dist < best.1 {
-                best = (self.along[k] + t * (self.along[k + 1] - self.along[k]), dist);
+                best = (
+                    self.along[k] + t * (self.along[k + 1] - self.along[k]),
+                    dist,
+                );
             }
         }
         best
@@ -242,12 +245,13 @@ impl HubPassage {
         let mut area_of = std::collections::BTreeMap::<u32, f64>::new();
         for t in (0..mesh.triangles.len()).filter(|&t| flow[t]) {
             let [a, b, c] = mesh.corners(t);
-            *area_of.entry(sets.find(t as u32)).or_default() += 0.5 * (b - a).cross(&(c - a)).norm();
+            *area_of.entry(sets.find(t as u32)).or_default() +=
+                0.5 * (b - a).cross(&(c - a)).norm();
         }
         if let Some((&largest, _)) = area_of.iter().max_by(|a, b| a.1.total_cmp(b.1)) {
-            for t in 0..mesh.triangles.len() {
-                if flow[t] && sets.find(t as u32) != largest {
-                    flow[t] = false;
+            for (t, f) in flow.iter_mut().enumerate() {
+                if *f && sets.find(t as u32) != largest {
+                    *f = false;
                 }
             }
         }
@@ -286,12 +290,14 @@ impl HubPassage {
                 continue;
             }
             let corners = mesh.corners(t);
-            let centre = Point3::from((corners[0].coords + corners[1].coords + corners[2].coords) / 3.0);
+            let centre =
+                Point3::from((corners[0].coords + corners[1].coords + corners[2].coords) / 3.0);
             let (_, angle, _) = frame.cylindrical(&centre);
             let (m, _) = first_fit.project(meridional(&centre));
             let (_, tangent) = first_fit.at(m);
             let n = face_normals[t];
-            let facing = (tangent[1] * n.dot(&frame.axis) - tangent[0] * n.dot(&frame.radial(angle))).abs();
+            let facing =
+                (tangent[1] * n.dot(&frame.axis) - tangent[0] * n.dot(&frame.radial(angle))).abs();
             *f = facing >= cos_crease
                 && corners
                     .iter()
@@ -420,7 +426,9 @@ impl HubPassage {
         let last = blade.iter().rposition(Option::is_some).unwrap_or(first);
         let middle = |s: Option<[f64; 2]>| s.map_or(0.0, |[a, b]| 0.5 * (a + b));
         let others: Vec<usize> = (0..piece_count)
-            .filter(|&k| k != first_blade && impeller.pieces[k].kind != super::recognise::PieceKind::Blade)
+            .filter(|&k| {
+                k != first_blade && impeller.pieces[k].kind != super::recognise::PieceKind::Blade
+            })
             .collect();
 
         let stations = along
@@ -536,9 +544,8 @@ impl HubPassage {
         let axis = self.frame.axis * local[0]
             + radial * local[1]
             + self.frame.axis.cross(&radial) * local[2];
-        axis.try_normalize(1e-12).unwrap_or_else(|| {
-            (self.frame.axis * s.normal[0] + radial * s.normal[1]).normalize()
-        })
+        axis.try_normalize(1e-12)
+            .unwrap_or_else(|| (self.frame.axis * s.normal[0] + radial * s.normal[1]).normalize())
     }
 
     /// How far `p` stands above the hub's surface of revolution (negative below it), mm,
@@ -666,7 +673,11 @@ impl HubPassage {
             // Run on past where it is needed, but only where the passage is open.
             let mut span = vec![false; n];
             for j in (0..n).filter(|&j| needed[j]) {
-                for s in span.iter_mut().take((j + reach + 1).min(n)).skip(j.saturating_sub(reach)) {
+                for s in span
+                    .iter_mut()
+                    .take((j + reach + 1).min(n))
+                    .skip(j.saturating_sub(reach))
+                {
                     *s = true;
                 }
             }
@@ -768,7 +779,9 @@ fn meridian_of(points: &[[f64; 2]]) -> Result<Meridian, String> {
     let (lo, hi) = points
         .iter()
         .map(along)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+            (a.min(t), b.max(t))
+        });
     if hi - lo <= 0.0 {
         return Err("the hub between the blades has no extent along its meridian".into());
     }
@@ -864,6 +877,109 @@ fn runs_of(flags: &[bool]) -> Vec<[usize; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::impeller::{RecogniseOptions, blade_loops, recognise};
+
+    /// The bundled sample impeller, recognised, and its passage for a 4 mm ball at 0.01 mm.
+    fn sample() -> (Mesh, Impeller, HubPassage, PassageOptions) {
+        let mesh = crate::sample::impeller(&Default::default()).expect("sample impeller");
+        let impeller = recognise(&mesh, &RecogniseOptions::default()).expect("an impeller");
+        let options = PassageOptions {
+            station_step: 0.25,
+            ball_radius: 2.0,
+            scallop_height: 0.01,
+            overlap: 1.6,
+        };
+        let passage = HubPassage::new(&mesh, &impeller, &options).expect("a passage");
+        (mesh, impeller, passage, options)
+    }
+
+    /// Alg. 5.1's promise: at every station, neighbouring lines present there are no farther
+    /// apart than the stepover the scallop allows there; lines are partial where the passage
+    /// narrows; the drive points lie on the part, inside passage 0.
+    #[test]
+    fn flow_lines_on_the_sample_keep_the_stepover_everywhere_with_partial_passes() {
+        let (mesh, _, passage, options) = sample();
+        assert!(passage.profile_fit_mm < 0.02, "{}", passage.profile_fit_mm);
+        let lines = passage.flow_lines(&options);
+        for j in 0..passage.stations.len() {
+            if passage.stations[j].free_width() <= 0.0 {
+                continue;
+            }
+            let present: Vec<f64> = lines
+                .iter()
+                .filter(|l| l.runs.iter().any(|&[a, b]| a <= j && j <= b))
+                .map(|l| l.fraction)
+                .collect();
+            assert!(present.first() == Some(&0.0) && present.last() == Some(&1.0));
+            let allowed = passage.allowed(j, options.ball_radius, options.scallop_height);
+            for w in present.windows(2) {
+                let gap = passage.spacing(j, w[0], w[1]);
+                assert!(gap <= allowed + 1e-12, "station {j}: {gap} > {allowed}");
+            }
+        }
+        let full = &lines[0].runs;
+        let partial = lines.iter().filter(|l| &l.runs != full).count();
+        assert!(partial > lines.len() / 2, "{partial} of {}", lines.len());
+
+        let surface = SurfaceDistance::new(&mesh);
+        let curves = passage.drive_curves(&lines, &surface);
+        let step = passage.meridian.length() / (passage.stations.len() - 1) as f64;
+        for p in curves.iter().flat_map(|c| &c.points) {
+            let d = surface
+                .closest(&p.point, 1.0)
+                .expect("on the part")
+                .distance;
+            assert!(d < 1e-9, "{d}");
+            // Within its station's window of passage 0 (the part's facets lie up to a few
+            // micrometres off the surface of revolution the point was taken on).
+            let (radius, angle, height) = passage.frame.cylindrical(&p.point);
+            let j = (passage.meridian.project([height, radius]).0 / step).round() as usize;
+            let free = &passage.stations[j.min(passage.stations.len() - 1)].free;
+            let (lo, hi) = (free[0][0], free[free.len() - 1][1]);
+            let into = (angle - lo + 0.1).rem_euclid(TAU) - 0.1;
+            assert!(
+                into > -0.01 && into < hi - lo + 0.01,
+                "angle {angle} outside {lo}..{hi}"
+            );
+        }
+    }
+
+    /// Every loop around a blade runs at its level's height above the hub, the levels a
+    /// stepover apart at most, from the tip down to the root.
+    #[test]
+    fn blade_loops_run_at_constant_height_round_the_blade() {
+        let (mesh, impeller, passage, _) = sample();
+        let loops = blade_loops(&mesh, &impeller, &passage, passage.first_blade, 0.4);
+        assert!(loops.levels > 10 && loops.level_step <= 0.4);
+        let mut heights = Vec::new();
+        // Round the blade, but where a low level meets the blade's edge on the hub.
+        let closed = loops.curves.iter().filter(|c| c.closed).count();
+        assert!(
+            closed * 10 >= loops.curves.len() * 9,
+            "{closed} of {}",
+            loops.curves.len()
+        );
+        for curve in &loops.curves {
+            // The section is linear on each triangle while the height above the curved
+            // meridian is not (long facets, and kinks where two points of the meridian are
+            // equally near): the loop's median height is its level.
+            let mut h: Vec<f64> = curve
+                .points
+                .iter()
+                .map(|p| passage.above_hub(&p.point).0)
+                .collect();
+            h.sort_by(f64::total_cmp);
+            heights.push(h[h.len() / 2]);
+        }
+        // Levels from the tip down, none skipped (a level may hold more than one curve).
+        heights.sort_by(|a, b| b.total_cmp(a));
+        assert!(heights[0] >= loops.top - loops.level_step);
+        for w in heights.windows(2) {
+            let slack = 0.2 * loops.level_step;
+            assert!(w[0] - w[1] <= loops.level_step + slack, "{heights:?}");
+        }
+        assert!(heights.last().is_some_and(|&h| h <= loops.level_step));
+    }
 
     #[test]
     fn the_convex_stepover_is_the_flat_one_in_the_limit_and_exact_on_a_circle() {
@@ -898,6 +1014,9 @@ mod tests {
         assert!((s.angle_at(0.5).unwrap() - 0.4).abs() < 1e-12);
         assert!((s.angle_at(0.75).unwrap() - 0.8).abs() < 1e-12);
         assert_eq!(s.angle_at(1.0), Some(1.0));
-        assert_eq!(runs_of(&[false, true, true, false, true]), vec![[1, 2], [4, 4]]);
+        assert_eq!(
+            runs_of(&[false, true, true, false, true]),
+            vec![[1, 2], [4, 4]]
+        );
     }
 }

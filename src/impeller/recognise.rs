@@ -628,8 +628,10 @@ mod tests {
             parts.push(blade(18.0, 30.0, (k as f64 + 0.5) * sixth));
         }
         let mut mesh = joined(parts);
-        let tilt =
-            Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(Vector3::new(1.0, 2.0, 0.0)), 0.4);
+        let tilt = Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(Vector3::new(1.0, 2.0, 0.0)),
+            0.4,
+        );
         for p in &mut mesh.positions {
             *p = tilt * *p;
         }

@@ -803,7 +803,10 @@ impl Job {
         if !(0.0..=90.0).contains(&self.impeller.blade_lean_deg) {
             return Err(invalid(
                 "impeller.blade_lean_deg",
-                format!("must be 0 to 90 degrees, not {}", self.impeller.blade_lean_deg),
+                format!(
+                    "must be 0 to 90 degrees, not {}",
+                    self.impeller.blade_lean_deg
+                ),
             ));
         }
         non_negative("safety.shank_margin", self.safety.shank_margin)?;

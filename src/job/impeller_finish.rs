@@ -82,8 +82,11 @@ pub struct ImpellerFinishSummary {
     pub not_planned: Option<String>,
     /// Passages (each with its blade) planned, and copied from the first.
     pub passages: usize,
-    /// Planning the first passage and its blade, and copying them to the others, ms.
+    /// Planning the first passage and its blade, and copying them to the others, ms (in the
+    /// report's timings, which a byte-identical report leaves out).
+    #[serde(skip)]
     pub first_passage_ms: f64,
+    #[serde(skip)]
     pub copies_ms: f64,
     pub copies: TurnedCopy,
     /// Drive points of the planes over the regions the impeller strategies finish.

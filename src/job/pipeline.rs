@@ -22,19 +22,18 @@ use std::time::Instant;
 use super::budget::ToleranceBudget;
 use super::channel_rough::channel_rough;
 use super::config::{Job, Operation, OperationKind, SurfaceSection};
+use super::impeller_finish::{ImpellerFinishOptions, ImpellerFinishSummary, finish_impeller};
 use super::offsets::stock_shapes;
 use super::operation::InProcessStock;
 use super::plan_roughing::{BallTakeOff, RoughingContext, check_posted_roughing, plan_roughing};
 use super::preview::preview;
 use super::rapids::{MAX_RAPID_TURN_DEG, split_turning_rapids};
 use super::report::*;
-use super::impeller_finish::{ImpellerFinishOptions, ImpellerFinishSummary, finish_impeller};
-use crate::impeller::Impeller;
-use crate::verify::measure_scallop;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
 use crate::error::{Error, JobError, Result};
 use crate::geom::{Move, MoveKind, Toolpath, Vector3};
+use crate::impeller::Impeller;
 use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, set_aside_warning};
 use crate::multires::Hierarchy;
@@ -42,6 +41,7 @@ use crate::offset::OffsetShape;
 use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader, ProgramSink};
 use crate::stock::clearance::MaterialClearance;
+use crate::verify::measure_scallop;
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
@@ -210,7 +210,7 @@ pub enum OperationDetails {
         passes: Finishing,
         linking: LinkReport,
         /// What the impeller strategies planned, when the part was finished as an impeller.
-        impeller: Option<ImpellerFinishSummary>,
+        impeller: Option<Box<ImpellerFinishSummary>>,
     },
 }
 
@@ -274,7 +274,10 @@ pub fn plan_operation(
                 semi.failure,
             ))
         }
-        (OperationKind::Finish, target @ (OperationTarget::DriveSurface(_) | OperationTarget::Impeller { .. })) => {
+        (
+            OperationKind::Finish,
+            target @ (OperationTarget::DriveSurface(_) | OperationTarget::Impeller { .. }),
+        ) => {
             let reachable = |axis: &Vector3| setup.reachable(axis);
             let with_material = material.map(|m| setup.collider.with_material(m));
             let collider = with_material.as_ref().unwrap_or(&setup.collider);
@@ -305,7 +308,7 @@ pub fn plan_operation(
                         },
                         advance,
                     );
-                    (passes, Some(summary))
+                    (passes, Some(Box::new(summary)))
                 }
                 OperationTarget::DriveSurface(drive) => {
                     (path::finishing_passes(drive, &ctx, &options, advance), None)
@@ -809,7 +812,13 @@ pub fn plan(
                 passes,
                 linking,
                 impeller,
-            } => finishing = Some((passes, linking, impeller)),
+            } => {
+                if let Some(summary) = &impeller {
+                    timings.impeller_first_passage = summary.first_passage_ms;
+                    timings.impeller_copies = summary.copies_ms;
+                }
+                finishing = Some((passes, linking, impeller.map(|s| *s)))
+            }
         }
     }
     let (finishing, link_report, impeller_finishing) = finishing.ok_or_else(|| {

@@ -207,6 +207,9 @@ pub struct StageTimings {
     pub channel_roughing: f64,
     pub semi_finishing: f64,
     pub finishing_passes: f64,
+    /// Of the finishing of an impeller: its first passage and blade, and the copies.
+    pub impeller_first_passage: f64,
+    pub impeller_copies: f64,
     pub linking: f64,
     pub verification: f64,
     pub post: f64,

@@ -99,7 +99,12 @@ pub fn preferred_axis(normal: &Vector3, feed: &Vector3, lead_deg: f64, tilt_deg:
 /// near: there the other rotary axis swings half a turn for a small change of the tool axis)
 /// to at least `min_tilt_deg`, toward `outward` (unit, square to the pole): fully within the
 /// tilt, not at all beyond twice it, blended between so the change is continuous.
-pub fn away_from_pole(axis: &Vector3, pole: &Vector3, outward: &Vector3, min_tilt_deg: f64) -> Vector3 {
+pub fn away_from_pole(
+    axis: &Vector3,
+    pole: &Vector3,
+    outward: &Vector3,
+    min_tilt_deg: f64,
+) -> Vector3 {
     let s0 = min_tilt_deg.to_radians().sin();
     let along = pole * pole.dot(axis);
     let across = axis - along;

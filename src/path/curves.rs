@@ -131,42 +131,43 @@ pub fn turned_copy(
                 if (ball - turned_centre).norm() > 0.0 {
                     stats.centres_moved += 1;
                 }
-                let axis = if axis_is_valid(ctx.part, ctx.rays, ctx.tool, &ball, &axis, ctx.reachable)
-                    .is_ok()
-                {
-                    Some(Direction::new_normalize(axis))
-                } else {
-                    stats.axes_chosen_anew += 1;
-                    let normal = ctx
-                        .part
-                        .surface()
-                        .closest(&ball, held + 1.0)
-                        .and_then(|c| (ball - c.point).try_normalize(1e-12))
-                        .unwrap_or(axis);
-                    let previous = run.poses.last().map(|p| p.axis.into_inner());
-                    let chosen = match ctx.axis_field {
-                        Some(field) => ctx.chooser.choose_around(
-                            ctx.part,
-                            ctx.rays,
-                            ctx.tool,
-                            &ball,
-                            &field(&(ball - normal * held), &normal, &feed),
-                            previous.as_ref(),
-                            ctx.reachable,
-                        ),
-                        None => ctx.chooser.choose(
-                            ctx.part,
-                            ctx.rays,
-                            ctx.tool,
-                            &ball,
-                            &normal,
-                            &feed,
-                            previous.as_ref(),
-                            ctx.reachable,
-                        ),
+                let axis =
+                    if axis_is_valid(ctx.part, ctx.rays, ctx.tool, &ball, &axis, ctx.reachable)
+                        .is_ok()
+                    {
+                        Some(Direction::new_normalize(axis))
+                    } else {
+                        stats.axes_chosen_anew += 1;
+                        let normal = ctx
+                            .part
+                            .surface()
+                            .closest(&ball, held + 1.0)
+                            .and_then(|c| (ball - c.point).try_normalize(1e-12))
+                            .unwrap_or(axis);
+                        let previous = run.poses.last().map(|p| p.axis.into_inner());
+                        let chosen = match ctx.axis_field {
+                            Some(field) => ctx.chooser.choose_around(
+                                ctx.part,
+                                ctx.rays,
+                                ctx.tool,
+                                &ball,
+                                &field(&(ball - normal * held), &normal, &feed),
+                                previous.as_ref(),
+                                ctx.reachable,
+                            ),
+                            None => ctx.chooser.choose(
+                                ctx.part,
+                                ctx.rays,
+                                ctx.tool,
+                                &ball,
+                                &normal,
+                                &feed,
+                                previous.as_ref(),
+                                ctx.reachable,
+                            ),
+                        };
+                        chosen.ok()
                     };
-                    chosen.ok()
-                };
                 let Some(axis) = axis else {
                     stats.poses_dropped += 1;
                     flush(&mut run, &mut out);
@@ -183,8 +184,8 @@ pub fn turned_copy(
                         &ball,
                         held - options.tolerance,
                     );
-                    let turn_ok = angle_between(&last.axis, &axis).to_degrees()
-                        <= options.max_axis_turn_deg;
+                    let turn_ok =
+                        angle_between(&last.axis, &axis).to_degrees() <= options.max_axis_turn_deg;
                     let forward = (ball - last_centre).dot(&feed) > 0.0;
                     if !(chord_ok && turn_ok && forward) {
                         stats.splits += 1;

@@ -137,6 +137,9 @@ pub struct Finishing {
     pub points_left_to_others: usize,
 }
 
+/// A strategy's preferred tool axis at a drive point: (point, normal, feed direction) → axis.
+pub type AxisField<'a> = dyn Fn(&Point3, &Vector3, &Vector3) -> Vector3 + Sync + 'a;
+
 /// Everything the per-point work needs, borrowed.
 pub struct FinishingContext<'a> {
     pub part: &'a PartCollider,
@@ -158,7 +161,7 @@ pub struct FinishingContext<'a> {
     pub material_filter: Option<&'a MaterialFilter<'a>>,
     /// A strategy's own preferred axis at a drive point (point, normal, feed direction), in
     /// place of the lead and tilt from the normal; the chooser searches around it.
-    pub axis_field: Option<&'a (dyn Fn(&Point3, &Vector3, &Vector3) -> Vector3 + Sync)>,
+    pub axis_field: Option<&'a AxisField<'a>>,
     /// Which drive points this strategy machines, when others take the rest (the impeller
     /// strategies take the hub and blades, the planes what is left); `None` machines all.
     pub region: Option<&'a (dyn Fn(&Point3) -> bool + Sync)>,

@@ -131,7 +131,11 @@ pub fn measure_scallop(
         table_area_mm2: table_area,
         max_mm: reached.last().copied().unwrap_or(0.0),
         p99_mm: p99,
-        mean_mm: if reached_area > 0.0 { sum / reached_area } else { 0.0 },
+        mean_mm: if reached_area > 0.0 {
+            sum / reached_area
+        } else {
+            0.0
+        },
         over_target_area_mm2: over,
         target_mm: target,
     }
@@ -212,7 +216,10 @@ impl Grid {
         };
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
         for (i, (a, b)) in capsules.iter().enumerate() {
-            let (l, h) = (a.inf(b) - Vector3::repeat(radius), a.sup(b) + Vector3::repeat(radius));
+            let (l, h) = (
+                a.inf(b) - Vector3::repeat(radius),
+                a.sup(b) + Vector3::repeat(radius),
+            );
             for x in cell_of(&l, 0)..=cell_of(&h, 0) {
                 for y in cell_of(&l, 1)..=cell_of(&h, 1) {
                     for z in cell_of(&l, 2)..=cell_of(&h, 2) {
@@ -246,8 +253,16 @@ impl Grid {
         };
         let (l, h) = (p.inf(q), p.sup(q));
         let range = |k: usize| {
-            let lo = cell_of(l[k], k).unwrap_or(if l[k] < self.origin[k] { 0 } else { self.dims[k] });
-            let hi = cell_of(h[k], k).unwrap_or(if h[k] < self.origin[k] { 0 } else { self.dims[k] - 1 });
+            let lo = cell_of(l[k], k).unwrap_or(if l[k] < self.origin[k] {
+                0
+            } else {
+                self.dims[k]
+            });
+            let hi = cell_of(h[k], k).unwrap_or(if h[k] < self.origin[k] {
+                0
+            } else {
+                self.dims[k] - 1
+            });
             lo..=hi.min(self.dims[k] - 1)
         };
         for x in range(0) {
@@ -282,9 +297,18 @@ mod tests {
         let t = ray_capsule_entry(&Point3::new(11.0, 0.0, 0.0), &up, &a, &b, 2.0);
         assert!((t.unwrap() - (3.0 - 3f64.sqrt())).abs() < 1e-12);
         // Inside, and missed.
-        assert_eq!(ray_capsule_entry(&Point3::new(5.0, 0.0, 2.0), &up, &a, &b, 2.0), Some(0.0));
-        assert_eq!(ray_capsule_entry(&Point3::new(5.0, 3.0, 0.0), &up, &a, &b, 2.0), None);
-        assert_eq!(ray_capsule_entry(&Point3::new(5.0, 0.0, 6.0), &up, &a, &b, 2.0), None);
+        assert_eq!(
+            ray_capsule_entry(&Point3::new(5.0, 0.0, 2.0), &up, &a, &b, 2.0),
+            Some(0.0)
+        );
+        assert_eq!(
+            ray_capsule_entry(&Point3::new(5.0, 3.0, 0.0), &up, &a, &b, 2.0),
+            None
+        );
+        assert_eq!(
+            ray_capsule_entry(&Point3::new(5.0, 0.0, 6.0), &up, &a, &b, 2.0),
+            None
+        );
     }
 
     fn passes(ys: impl Iterator<Item = f64>) -> Toolpath {
@@ -320,11 +344,22 @@ mod tests {
         assert!(report.over_target_area_mm2 > 0.0 && report.over_target_area_mm2 < 400.0);
         assert!((report.table_area_mm2 - 400.0).abs() < 1e-6);
         assert!((report.reached_area_mm2 - 400.0).abs() < 1e-6, "{report:?}");
-        assert!((report.unreached_area_mm2 - 80.0).abs() < 1e-6, "{report:?}");
+        assert!(
+            (report.unreached_area_mm2 - 80.0).abs() < 1e-6,
+            "{report:?}"
+        );
 
         // Passes over half the plate: the other half, beyond the last ball's reach, is not
         // reached.
-        let half = measure_scallop(&plate, &passes((0..13).map(|k| k as f64 * w)), r, 0.05, 0.05, 2.0 * r, 0.0);
+        let half = measure_scallop(
+            &plate,
+            &passes((0..13).map(|k| k as f64 * w)),
+            r,
+            0.05,
+            0.05,
+            2.0 * r,
+            0.0,
+        );
         let last = 12.0 * w + r;
         assert!(
             (half.unreached_area_mm2 - 80.0 - 20.0 * (20.0 - last)).abs() < 0.5,
