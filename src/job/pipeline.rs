@@ -34,6 +34,7 @@ use super::setup::{PlanSetup, PreparedPart, prepare_part};
 use crate::error::{Error, JobError, Result};
 use crate::geom::{Move, MoveKind, Toolpath, Vector3};
 use crate::impeller::Impeller;
+use crate::impeller::Region;
 use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, set_aside_warning};
 use crate::multires::Hierarchy;
@@ -41,8 +42,8 @@ use crate::offset::OffsetShape;
 use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader, ProgramSink};
 use crate::stock::clearance::MaterialClearance;
-use crate::verify::measure_scallop;
 use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
+use crate::verify::{ScallopOptions, measure_scallop};
 
 pub use super::observer::{Observer, Quiet};
 
@@ -672,14 +673,29 @@ pub fn plan(
         .rfind(|p| p.operation.kind == OperationKind::Finish)
         .map(|p| {
             let radius = p.operation.tool.diameter / 2.0;
+            let labels: Option<Vec<&str>> =
+                impeller.as_ref().and_then(|i| i.as_ref().ok()).map(|i| {
+                    i.regions
+                        .iter()
+                        .map(|r| match r {
+                            Region::Hub => "hub",
+                            Region::Blade(_) => "blade",
+                            Region::Splitter(_) => "splitter",
+                            Region::Other(_) => "other",
+                        })
+                        .collect()
+                });
             measure_scallop(
                 part,
                 &p.toolpath,
-                radius,
-                p.operation.scallop_height,
-                SCALLOP_SAMPLE_SPACING,
-                radius,
-                prepared.table_z,
+                &ScallopOptions {
+                    radius,
+                    target: p.operation.scallop_height,
+                    spacing: SCALLOP_SAMPLE_SPACING,
+                    reach: radius,
+                    table_z: prepared.table_z,
+                },
+                labels.as_deref(),
             )
         });
     timings.verification = ms(t);

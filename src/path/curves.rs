@@ -55,7 +55,8 @@ pub fn curve_passes(
 pub struct TurnedCopy {
     /// Poses copied.
     pub poses: usize,
-    /// Poses whose ball the turned part came nearer than the radius: pushed out.
+    /// Poses whose ball the turned part came nearer or farther than the radius: pushed out or
+    /// brought down to touch.
     pub centres_moved: usize,
     /// Poses whose turned axis failed its test: given a new one.
     pub axes_chosen_anew: usize,
@@ -127,6 +128,25 @@ pub fn turned_copy(
                     stats.poses_dropped += 1;
                     flush(&mut run, &mut out);
                     continue;
+                };
+                // Where the turned surface lies lower than the original (its facets differ),
+                // the ball would float: brought down to touch, and pushed out again if that
+                // brings another face nearer than its radius.
+                let ball = match ctx.part.surface().signed_distance(&ball) {
+                    Some((d, closest)) if d > held + 1e-7 => {
+                        let down = closest.point + (ball - closest.point) * (held / d);
+                        place_ball_from(
+                            ctx.part.surface(),
+                            &DrivePoint {
+                                point: down,
+                                normal: axis,
+                            },
+                            0.0,
+                            held,
+                        )
+                        .unwrap_or(ball)
+                    }
+                    _ => ball,
                 };
                 if (ball - turned_centre).norm() > 0.0 {
                     stats.centres_moved += 1;

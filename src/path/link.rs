@@ -148,8 +148,11 @@ pub fn link(
         let mv = |pose, kind, feed| Move { pose, kind, feed };
         match arriving.take() {
             Some(Link::Across) => {
+                // Across at the cut feed, but an approach: the pass it enters starts here
+                // (its direction may be the other way round, as in a zig-zag).
                 report.links_across += 1;
-                path.moves.push(mv(entry, MoveKind::Cut, options.cut_feed));
+                path.moves
+                    .push(mv(entry, MoveKind::Approach, options.cut_feed));
             }
             Some(Link::Lifted(lift)) => {
                 report.short_links += 1;

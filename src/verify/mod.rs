@@ -18,7 +18,7 @@ mod segment_distance;
 
 pub use posted::{MachineModel, PostedClearance, PostedOptions, check_posted, program_toolpath};
 pub use program::{MotionBlock, ProgramError, read_program};
-pub use scallop::{ScallopReport, measure_scallop, ray_capsule_entry};
+pub use scallop::{AreaSplit, ScallopOptions, ScallopReport, measure_scallop, ray_capsule_entry};
 pub use segment_distance::SegmentDistance;
 
 use rayon::prelude::*;

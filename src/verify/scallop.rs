@@ -1,8 +1,8 @@
 //! The scallop a finishing toolpath leaves, measured on the part (issue 21 item 4), from the
 //! moves alone: nothing of how they were planned.
 //!
-//! The part's surface is sampled evenly (a barycentric grid on every triangle, points about
-//! `spacing` apart). Each cut move sweeps its ball along the straight segment between two ball
+//! The part's surface is sampled evenly (a barycentric grid on every triangle, a cell per
+//! half `spacing`² of area; small triangles pool their area). Each cut move sweeps its ball along the straight segment between two ball
 //! centres: a capsule. At a sample point p with outward normal n, the material left is the
 //! stretch of the ray p + t·n (t ≥ 0) below the first swept capsule it meets: the scallop
 //! height is the least entry t over all capsules (0 where p lies inside one, a touch or a cut
@@ -33,22 +33,54 @@ pub struct ScallopReport {
     pub mean_mm: f64,
     /// Reached area whose scallop is above `target`, mm².
     pub over_target_area_mm2: f64,
+    /// Of the unreached area, what faces down (more than 60° from up): no tool reaches it
+    /// from above whatever the strategy, mm².
+    pub unreached_facing_down_mm2: f64,
     pub target_mm: f64,
+    /// The same split by the labels given per triangle (the impeller's regions).
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub by_region: std::collections::BTreeMap<String, AreaSplit>,
 }
 
-/// Measures the scallop `toolpath`'s cut moves (ball radius `radius`) leave on `part`, target
-/// `target` mm; samples about `spacing` apart; a point is reached when a swept ball comes
-/// within `reach` above it. The part stands on the plane z = `table_z` (samples there facing
-/// down are the table's).
+/// A labelled part of the surface: its area (the table's apart), the reached area over the
+/// target, and the area not reached, mm².
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct AreaSplit {
+    pub area_mm2: f64,
+    pub over_target_mm2: f64,
+    pub unreached_mm2: f64,
+}
+
+/// How the scallop is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScallopOptions {
+    /// Ball radius, mm.
+    pub radius: f64,
+    /// Target scallop height, mm.
+    pub target: f64,
+    /// Distance between samples, mm.
+    pub spacing: f64,
+    /// A sample is reached when a swept ball comes within this far above it, mm.
+    pub reach: f64,
+    /// The part stands on the plane z = `table_z`: samples there facing down are the table's.
+    pub table_z: f64,
+}
+
+/// Measures the scallop `toolpath`'s cut moves leave on `part`; with `labels` (one per
+/// triangle) also split by label.
 pub fn measure_scallop(
     part: &Mesh,
     toolpath: &Toolpath,
-    radius: f64,
-    target: f64,
-    spacing: f64,
-    reach: f64,
-    table_z: f64,
+    options: &ScallopOptions,
+    labels: Option<&[&str]>,
 ) -> ScallopReport {
+    let ScallopOptions {
+        radius,
+        target,
+        spacing,
+        reach,
+        table_z,
+    } = *options;
     let capsules: Vec<(Point3, Point3)> = toolpath
         .moves
         .windows(2)
@@ -60,30 +92,46 @@ pub fn measure_scallop(
         .collect();
     let grid = Grid::new(&capsules, radius, (2.0 * radius).max(reach));
 
-    // Samples: per triangle, a barycentric grid with `k` divisions along its longest edge.
-    let samples: Vec<(Point3, Vector3, f64)> = (0..part.triangles.len())
-        .into_par_iter()
-        .flat_map_iter(|t| {
-            let [a, b, c] = part.corners(t);
-            let n = (b - a).cross(&(c - a));
-            let area = 0.5 * n.norm();
-            let normal = n.try_normalize(1e-300).unwrap_or_else(Vector3::z);
-            let longest = (b - a).norm().max((c - b).norm()).max((a - c).norm());
-            let k = (longest / spacing).ceil().max(1.0) as usize;
-            let count = k * (k + 1) / 2;
-            (0..k).flat_map(move |i| {
-                (0..k - i).map(move |j| {
-                    // Centres of the sub-triangles pointing up: every sample inside.
-                    let u = (i as f64 + 1.0 / 3.0) / k as f64;
-                    let v = (j as f64 + 1.0 / 3.0) / k as f64;
-                    (a + (b - a) * u + (c - a) * v, normal, area / count as f64)
-                })
-            })
-        })
-        .collect();
+    // Samples: on a triangle of more than `quantum` area, a barycentric grid of k² cells of
+    // about that area each; smaller triangles (a finely tessellated STL has
+    // millions) pool their area in order, one sample at the centroid of the triangle that
+    // completes a quantum, standing for the pool.
+    let quantum = 0.5 * spacing * spacing;
+    let mut samples: Vec<(Point3, Vector3, f64, usize)> = Vec::new();
+    let mut pooled = 0.0;
+    for t in 0..part.triangles.len() {
+        let [a, b, c] = part.corners(t);
+        let n = (b - a).cross(&(c - a));
+        let area = 0.5 * n.norm();
+        let normal = n.try_normalize(1e-300).unwrap_or_else(Vector3::z);
+        if area < quantum {
+            pooled += area;
+            if pooled >= quantum {
+                samples.push((
+                    Point3::from((a.coords + b.coords + c.coords) / 3.0),
+                    normal,
+                    pooled,
+                    t,
+                ));
+                pooled = 0.0;
+            }
+            continue;
+        }
+        // By area, not by the longest edge: an STL's long slivers would get thousands.
+        let k = (area / quantum).sqrt().ceil().max(1.0) as usize;
+        let count = (k * (k + 1) / 2) as f64;
+        for i in 0..k {
+            for j in 0..k - i {
+                // Centres of the sub-triangles pointing up: every sample inside.
+                let u = (i as f64 + 1.0 / 3.0) / k as f64;
+                let v = (j as f64 + 1.0 / 3.0) / k as f64;
+                samples.push((a + (b - a) * u + (c - a) * v, normal, area / count, t));
+            }
+        }
+    }
     let heights: Vec<Option<f64>> = samples
         .par_iter()
-        .map(|(p, n, _)| {
+        .map(|(p, n, _, _)| {
             if n.z < -0.99 && (p.z - table_z).abs() < 1e-6 {
                 return Some(f64::NAN);
             }
@@ -104,7 +152,10 @@ pub fn measure_scallop(
     let mut reached = Vec::new();
     let (mut reached_area, mut unreached_area, mut table_area, mut over) = (0.0, 0.0, 0.0, 0.0);
     let mut sum = 0.0;
-    for ((_, _, area), h) in samples.iter().zip(&heights) {
+    let mut facing_down = 0.0;
+    let mut by_label: std::collections::BTreeMap<String, AreaSplit> = Default::default();
+    for ((_, normal, area, t), h) in samples.iter().zip(&heights) {
+        let split = labels.map(|l| by_label.entry(l[*t].to_string()).or_default());
         match h {
             Some(h) if h.is_nan() => table_area += area,
             Some(h) => {
@@ -112,10 +163,26 @@ pub fn measure_scallop(
                 sum += h * area;
                 if *h > target {
                     over += area;
+                    if let Some(split) = split {
+                        split.over_target_mm2 += area;
+                    }
                 }
                 reached.push(*h);
             }
-            None => unreached_area += area,
+            None => {
+                unreached_area += area;
+                if normal.z < -0.5 {
+                    facing_down += area;
+                }
+                if let Some(split) = split {
+                    split.unreached_mm2 += area;
+                }
+            }
+        }
+        if let Some(l) = labels
+            && !h.is_some_and(f64::is_nan)
+        {
+            by_label.entry(l[*t].to_string()).or_default().area_mm2 += area;
         }
     }
     reached.sort_by(f64::total_cmp);
@@ -137,7 +204,9 @@ pub fn measure_scallop(
             0.0
         },
         over_target_area_mm2: over,
+        unreached_facing_down_mm2: facing_down,
         target_mm: target,
+        by_region: by_label,
     }
 }
 
@@ -337,7 +406,17 @@ mod tests {
         let plate = crate::mesh::fixtures::cuboid(20.0, 20.0, 1.0);
         let (r, w) = (2.0, 0.8);
         let path = passes((0..30).map(|k| -2.0 + k as f64 * w));
-        let report = measure_scallop(&plate, &path, r, 0.02, 0.05, 2.0 * r, 0.0);
+        let options = |target| ScallopOptions {
+            radius: r,
+            target,
+            spacing: 0.05,
+            reach: 2.0 * r,
+            table_z: 0.0,
+        };
+        let labels: Vec<&str> = (0..12)
+            .map(|t| if t < 4 { "flat" } else { "sides" })
+            .collect();
+        let report = measure_scallop(&plate, &path, &options(0.02), Some(&labels));
         let cusp = r - (r * r - (w / 2.0) * (w / 2.0)).sqrt();
         assert!((report.max_mm - cusp).abs() < 2e-3, "{report:?} vs {cusp}");
         assert!(report.max_mm <= cusp + 1e-9);
@@ -348,17 +427,18 @@ mod tests {
             (report.unreached_area_mm2 - 80.0).abs() < 1e-6,
             "{report:?}"
         );
+        // The top reached, the sides not (the bottom is the table's).
+        let sides = &report.by_region["sides"];
+        assert!((sides.unreached_mm2 - 80.0).abs() < 1e-6 && sides.over_target_mm2 == 0.0);
+        assert!((report.by_region["flat"].area_mm2 - 400.0).abs() < 1e-6);
 
         // Passes over half the plate: the other half, beyond the last ball's reach, is not
         // reached.
         let half = measure_scallop(
             &plate,
             &passes((0..13).map(|k| k as f64 * w)),
-            r,
-            0.05,
-            0.05,
-            2.0 * r,
-            0.0,
+            &options(0.05),
+            None,
         );
         let last = 12.0 * w + r;
         assert!(
