@@ -418,7 +418,9 @@ mod tests {
             .collect();
         let report = measure_scallop(&plate, &path, &options(0.02), Some(&labels));
         let cusp = r - (r * r - (w / 2.0) * (w / 2.0)).sqrt();
-        assert!((report.max_mm - cusp).abs() < 2e-3, "{report:?} vs {cusp}");
+        // The samples (0.05 mm apart across the passes) fall within 0.025 mm of a cusp, where
+        // the scallop's flank slopes by (w/2)/√(r² − (w/2)²) ≈ 0.2.
+        assert!((report.max_mm - cusp).abs() < 6e-3, "{report:?} vs {cusp}");
         assert!(report.max_mm <= cusp + 1e-9);
         assert!(report.over_target_area_mm2 > 0.0 && report.over_target_area_mm2 < 400.0);
         assert!((report.table_area_mm2 - 400.0).abs() < 1e-6);
