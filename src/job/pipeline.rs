@@ -420,7 +420,19 @@ pub fn plan(
 
     let t = Instant::now();
     observer.stage("drive surface", 0);
-    let (drive, surface) = drive_surface(part, &job.surface).map_err(|reason| Error::Mesh {
+    // An impeller finished by its own strategies leaves the planes only the nose, bore and rim
+    // (surfaces of revolution): they are driven on the part itself, and the hierarchy, a third
+    // of the blower's plan, is not built.
+    let impeller_finishes = job.impeller.finishing
+        && matches!(impeller, Some(Ok(_)))
+        && operations
+            .last()
+            .is_some_and(|op| op.kind == OperationKind::Finish);
+    let settings = SurfaceSection {
+        remesh: job.surface.remesh && !impeller_finishes,
+        ..job.surface.clone()
+    };
+    let (drive, surface) = drive_surface(part, &settings).map_err(|reason| Error::Mesh {
         file: part_name.to_string(),
         reason,
     })?;
