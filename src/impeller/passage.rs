@@ -595,13 +595,6 @@ impl HubPassage {
         )
     }
 
-    /// The angle of passage 0's first wall at the stations' middle, radians: passage k spans
-    /// from there plus k pitches.
-    pub fn start_angle(&self) -> f64 {
-        let j = self.stations.len() / 2;
-        self.stations[j].free.first().map_or(0.0, |f| f[0])
-    }
-
     /// The point of the hub's surface of revolution at station `j` and angle `angle`, with the
     /// surface's unit normal there.
     pub fn point(&self, j: usize, angle: f64) -> DrivePoint {

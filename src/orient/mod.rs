@@ -187,13 +187,6 @@ impl AxisChooser {
         previous: Option<&Vector3>,
         reachable: &dyn Fn(&Vector3) -> bool,
     ) -> Result<Direction, NoAxis> {
-        // The ball's lowest point is the same for every axis: below the table's margin no
-        // axis can help, and trying them all (the part's underside) costs the most.
-        if let Some(table) = part.table()
-            && centre.z - tool.ball_radius < table.top_z + table.margin
-        {
-            return Err(NoAxis::Table);
-        }
         let preferred = preferred_axis(normal, feed, self.options.lead_deg, self.options.tilt_deg);
         self.choose_around(part, rays, tool, centre, &preferred, previous, reachable)
     }
@@ -211,6 +204,8 @@ impl AxisChooser {
         previous: Option<&Vector3>,
         reachable: &dyn Fn(&Vector3) -> bool,
     ) -> Result<Direction, NoAxis> {
+        // The ball's lowest point is the same for every axis: below the table's margin no
+        // axis can help, and trying them all (the part's underside) costs the most.
         if let Some(table) = part.table()
             && centre.z - tool.ball_radius < table.top_z + table.margin
         {

@@ -165,28 +165,12 @@ pub fn turned_copy(
                             .and_then(|c| (ball - c.point).try_normalize(1e-12))
                             .unwrap_or(axis);
                         let previous = run.poses.last().map(|p| p.axis.into_inner());
-                        let chosen = match ctx.axis_field {
-                            Some(field) => ctx.chooser.choose_around(
-                                ctx.part,
-                                ctx.rays,
-                                ctx.tool,
-                                &ball,
-                                &field(&(ball - normal * held), &normal, &feed),
-                                previous.as_ref(),
-                                ctx.reachable,
-                            ),
-                            None => ctx.chooser.choose(
-                                ctx.part,
-                                ctx.rays,
-                                ctx.tool,
-                                &ball,
-                                &normal,
-                                &feed,
-                                previous.as_ref(),
-                                ctx.reachable,
-                            ),
+                        let drive = DrivePoint {
+                            point: ball - normal * held,
+                            normal,
                         };
-                        chosen.ok()
+                        ctx.choose_axis(&ball, &drive, &feed, previous.as_ref())
+                            .ok()
                     };
                 let Some(axis) = axis else {
                     stats.poses_dropped += 1;

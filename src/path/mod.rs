@@ -167,6 +167,41 @@ pub struct FinishingContext<'a> {
     pub region: Option<&'a (dyn Fn(&Point3) -> bool + Sync)>,
 }
 
+impl FinishingContext<'_> {
+    /// The chooser's axis for a ball centred at `centre` on `drive`, moving along `feed`:
+    /// around the strategy's own preferred axis where it has one, else around the lead and
+    /// tilt from the normal.
+    pub fn choose_axis(
+        &self,
+        centre: &Point3,
+        drive: &DrivePoint,
+        feed: &Vector3,
+        previous: Option<&Vector3>,
+    ) -> Result<Direction, NoAxis> {
+        match self.axis_field {
+            Some(field) => self.chooser.choose_around(
+                self.part,
+                self.rays,
+                self.tool,
+                centre,
+                &field(&drive.point, &drive.normal, feed),
+                previous,
+                self.reachable,
+            ),
+            None => self.chooser.choose(
+                self.part,
+                self.rays,
+                self.tool,
+                centre,
+                &drive.normal,
+                feed,
+                previous,
+                self.reachable,
+            ),
+        }
+    }
+}
+
 /// Where a roughing layer has something to cut: `touches(centre, radius)` says
 /// whether a ball of `radius` about `centre` may meet material (it must never answer `false`
 /// for a ball that does). Drive points whose ball meets none are left out, except within
@@ -556,27 +591,7 @@ fn place(
             axis: Direction::new_normalize(*axis),
         });
     }
-    let axis = match ctx.axis_field {
-        Some(field) => ctx.chooser.choose_around(
-            ctx.part,
-            ctx.rays,
-            ctx.tool,
-            &centre,
-            &field(&drive.point, &drive.normal, feed),
-            previous,
-            ctx.reachable,
-        )?,
-        None => ctx.chooser.choose(
-            ctx.part,
-            ctx.rays,
-            ctx.tool,
-            &centre,
-            &drive.normal,
-            feed,
-            previous,
-            ctx.reachable,
-        )?,
-    };
+    let axis = ctx.choose_axis(&centre, drive, feed, previous)?;
     Ok(Placed {
         drive: *drive,
         centre,
