@@ -10,12 +10,21 @@
 //! the strategy left it (unreachable, or a region no pass covers). The face the part stands
 //! on is left out of both (no tool gets there). Capsules are found through a uniform grid;
 //! entries are exact (the ray against the capsule's cylinder and its two end spheres).
+//!
+//! Where the part is concave more tightly than the ball (a blade's root without a fillet as
+//! large as the ball, a channel narrower than it), no placement of the ball touches the
+//! surface: what stands there is the tool's, not the passes'. A sample is *narrow* when the
+//! ball touching it from outside — centred a radius up its normal — would cut into the part
+//! elsewhere by more than the target (an exact distance query on the part); the report keeps
+//! the scallop of the open samples apart, so that over-target area there means passes too
+//! far apart or a region no strategy covered.
 
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::geom::{MoveKind, Point3, Toolpath, Vector3, closest_point_on_segment};
 use crate::mesh::Mesh;
+use crate::mesh::distance::SurfaceDistance;
 
 /// What the measure found.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -36,6 +45,13 @@ pub struct ScallopReport {
     /// Of the unreached area, what faces down (more than 60° from up): no tool reaches it
     /// from above whatever the strategy, mm².
     pub unreached_facing_down_mm2: f64,
+    /// Area where the part is concave more tightly than the ball: no ball touches it, mm².
+    pub narrow_area_mm2: f64,
+    /// The scallop over the reached samples where the ball fits, mm, and the area of them
+    /// above the target, mm².
+    pub open_max_mm: f64,
+    pub open_p99_mm: f64,
+    pub open_over_target_mm2: f64,
     pub target_mm: f64,
     /// The same split by the labels given per triangle (the impeller's regions).
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
@@ -49,6 +65,10 @@ pub struct AreaSplit {
     pub area_mm2: f64,
     pub over_target_mm2: f64,
     pub unreached_mm2: f64,
+    /// Of the area, where the ball does not fit, and of the reached area where it does, the
+    /// part over the target, mm².
+    pub narrow_mm2: f64,
+    pub open_over_target_mm2: f64,
 }
 
 /// How the scallop is measured.
@@ -129,6 +149,11 @@ pub fn measure_scallop(
             }
         }
     }
+    let distance = SurfaceDistance::new(part);
+    let narrow: Vec<bool> = samples
+        .par_iter()
+        .map(|(p, n, _, _)| distance.any_within(&(p + n * radius), radius - target))
+        .collect();
     let heights: Vec<Option<f64>> = samples
         .par_iter()
         .map(|(p, n, _, _)| {
@@ -150,46 +175,61 @@ pub fn measure_scallop(
         })
         .collect();
     let mut reached = Vec::new();
+    let mut open = Vec::new();
     let (mut reached_area, mut unreached_area, mut table_area, mut over) = (0.0, 0.0, 0.0, 0.0);
+    let (mut narrow_area, mut open_over) = (0.0, 0.0);
     let mut sum = 0.0;
     let mut facing_down = 0.0;
     let mut by_label: std::collections::BTreeMap<String, AreaSplit> = Default::default();
-    for ((_, normal, area, t), h) in samples.iter().zip(&heights) {
-        let split = labels.map(|l| by_label.entry(l[*t].to_string()).or_default());
+    let mut scratch = AreaSplit::default();
+    for (((_, normal, area, t), h), narrow) in samples.iter().zip(&heights).zip(&narrow) {
+        if h.is_some_and(f64::is_nan) {
+            table_area += area;
+            continue;
+        }
+        let split = match labels {
+            Some(l) => by_label.entry(l[*t].to_string()).or_default(),
+            None => &mut scratch,
+        };
+        split.area_mm2 += area;
+        if *narrow {
+            narrow_area += area;
+            split.narrow_mm2 += area;
+        }
         match h {
-            Some(h) if h.is_nan() => table_area += area,
             Some(h) => {
                 reached_area += area;
                 sum += h * area;
                 if *h > target {
                     over += area;
-                    if let Some(split) = split {
-                        split.over_target_mm2 += area;
+                    split.over_target_mm2 += area;
+                    if !narrow {
+                        open_over += area;
+                        split.open_over_target_mm2 += area;
                     }
                 }
                 reached.push(*h);
+                if !narrow {
+                    open.push(*h);
+                }
             }
             None => {
                 unreached_area += area;
+                split.unreached_mm2 += area;
                 if normal.z < -0.5 {
                     facing_down += area;
                 }
-                if let Some(split) = split {
-                    split.unreached_mm2 += area;
-                }
             }
-        }
-        if let Some(l) = labels
-            && !h.is_some_and(f64::is_nan)
-        {
-            by_label.entry(l[*t].to_string()).or_default().area_mm2 += area;
         }
     }
     reached.sort_by(f64::total_cmp);
-    let p99 = reached
-        .get(((reached.len() as f64 * 0.99) as usize).min(reached.len().saturating_sub(1)))
-        .copied()
-        .unwrap_or(0.0);
+    open.sort_by(f64::total_cmp);
+    let p99 = |sorted: &[f64]| {
+        sorted
+            .get(((sorted.len() as f64 * 0.99) as usize).min(sorted.len().saturating_sub(1)))
+            .copied()
+            .unwrap_or(0.0)
+    };
     ScallopReport {
         samples: samples.len(),
         sample_spacing_mm: spacing,
@@ -197,7 +237,7 @@ pub fn measure_scallop(
         unreached_area_mm2: unreached_area,
         table_area_mm2: table_area,
         max_mm: reached.last().copied().unwrap_or(0.0),
-        p99_mm: p99,
+        p99_mm: p99(&reached),
         mean_mm: if reached_area > 0.0 {
             sum / reached_area
         } else {
@@ -205,6 +245,10 @@ pub fn measure_scallop(
         },
         over_target_area_mm2: over,
         unreached_facing_down_mm2: facing_down,
+        narrow_area_mm2: narrow_area,
+        open_max_mm: open.last().copied().unwrap_or(0.0),
+        open_p99_mm: p99(&open),
+        open_over_target_mm2: open_over,
         target_mm: target,
         by_region: by_label,
     }
@@ -446,6 +490,110 @@ mod tests {
         assert!(
             (half.unreached_area_mm2 - 80.0 - 20.0 * (20.0 - last)).abs() < 0.5,
             "{half:?}"
+        );
+    }
+
+    /// An L-shaped bar, 20 long in y: a 20 × 5 floor and a 10 × 15 wall standing on it, the
+    /// concave edge along y at x = 10, z = 5.
+    fn step() -> Mesh {
+        let profile = [
+            (0.0, 0.0),
+            (20.0, 0.0),
+            (20.0, 5.0),
+            (10.0, 5.0),
+            (10.0, 15.0),
+            (0.0, 15.0),
+        ];
+        let mut positions = Vec::new();
+        for y in [0.0, 20.0] {
+            positions.extend(profile.iter().map(|&(x, z)| Point3::new(x, y, z)));
+        }
+        // The profile is star-shaped from its first corner: fans close both ends.
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        for k in 1..5u32 {
+            triangles.push([0, k, k + 1]);
+            triangles.push([6, 6 + k + 1, 6 + k]);
+        }
+        for k in 0..6u32 {
+            let next = (k + 1) % 6;
+            triangles.push([k, 6 + next, next]);
+            triangles.push([k, 6 + k, 6 + next]);
+        }
+        Mesh {
+            positions,
+            triangles,
+        }
+    }
+
+    /// On the step, a ball of radius r fits nowhere within r − target of the concave edge:
+    /// a strip that wide on the floor and on the wall, 20 long each; the open scallop leaves
+    /// it out.
+    #[test]
+    fn the_ball_does_not_fit_within_its_radius_of_a_concave_edge() {
+        let part = step();
+        assert!((part.signed_volume() - (20.0 * 5.0 + 10.0 * 10.0) * 20.0).abs() < 1e-9);
+        let (r, target) = (2.0, 0.05);
+        // Passes along y over the floor 0.2 apart, the ball touching it, the first touching
+        // the wall too.
+        let axis = Direction::new_normalize(Vector3::z());
+        let mut moves = Vec::new();
+        for k in 0..50 {
+            let x = 10.0 + r + k as f64 * 0.2;
+            for (y, kind) in [(-3.0, MoveKind::Approach), (23.0, MoveKind::Cut)] {
+                moves.push(Move {
+                    pose: ToolPose {
+                        tip: Point3::new(x, y, 5.0),
+                        axis,
+                    },
+                    kind,
+                    feed: 1000.0,
+                });
+            }
+        }
+        let path = Toolpath { tool_id: 1, moves };
+        let labels: Vec<&str> = (0..part.triangles.len())
+            .map(|t| match t {
+                12 | 13 => "floor",
+                14 | 15 => "wall",
+                _ => "rest",
+            })
+            .collect();
+        let report = measure_scallop(
+            &part,
+            &path,
+            &ScallopOptions {
+                radius: r,
+                target,
+                spacing: 0.05,
+                reach: 2.0 * r,
+                table_z: 0.0,
+            },
+            Some(&labels),
+        );
+        let strip = 2.0 * 20.0 * (r - target);
+        assert!(
+            (report.narrow_area_mm2 - strip).abs() < 2.0 * 20.0 * 0.05,
+            "{} vs {strip}",
+            report.narrow_area_mm2
+        );
+        let (floor, wall) = (&report.by_region["floor"], &report.by_region["wall"]);
+        for split in [floor, wall] {
+            assert!(
+                (split.narrow_mm2 - strip / 2.0).abs() < 20.0 * 0.05,
+                "{split:?}"
+            );
+        }
+        // On the floor, what the passes leave over the target is in the corner: the balls
+        // 0.2 apart leave 0.0025 between them.
+        assert!(floor.over_target_mm2 > 20.0, "{floor:?}");
+        assert_eq!(floor.open_over_target_mm2, 0.0, "{floor:?}");
+        assert_eq!(report.by_region["rest"].narrow_mm2, 0.0);
+        // On the wall the first ball, touching it at its centre's height, leaves more than
+        // the target from 0.44 above that up to 2 (where the rays miss): open, over target.
+        let open_over = 20.0 * (2.0 - (r * r - (r - target).powi(2)).sqrt());
+        assert!(
+            (wall.open_over_target_mm2 - open_over).abs() < 20.0 * 0.1,
+            "{wall:?} vs {open_over}"
         );
     }
 }
