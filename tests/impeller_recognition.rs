@@ -6,7 +6,9 @@
 
 mod common;
 
-use wavemill::impeller::{NotAnImpeller, RecogniseOptions, recognise};
+use wavemill::impeller::{
+    HubPassage, NotAnImpeller, PassageOptions, RecogniseOptions, Region, recognise,
+};
 use wavemill::mesh::io::{Units, read_mesh};
 use wavemill::mesh::{Mesh, PrepareOptions, prepare};
 
@@ -68,4 +70,85 @@ fn the_real_impellers_are_recognised_with_their_blade_counts() {
         recognise(&turbine, &RecogniseOptions::default()),
         Err(NotAnImpeller::NoSymmetry { .. })
     ));
+}
+
+/// The compressor's hub is a coarse CAD tessellation (slivers up to 70 mm bending sharply
+/// across the passages, their chords up to 2 mm inside the surface of revolution): grown
+/// across gentle edges it falls apart and its largest piece is the rim. The passage stands on
+/// the blades' roots instead: recomputed here from the regions, the vertices where blades and
+/// splitters meet the hub lie on the stations' meridian.
+#[test]
+fn the_compressor_passage_stands_on_the_blade_roots() {
+    let Some(dir) = common::testdata() else {
+        return;
+    };
+    let compressor =
+        load(&dir.join("meshes/impeller_compressor_splitter__omorellAUS_Impellor-V3.stl"));
+    let found = recognise(&compressor, &RecogniseOptions::default()).expect("the compressor");
+    let options = PassageOptions {
+        station_step: 0.5,
+        ball_radius: 4.0,
+        scallop_height: 0.02,
+        overlap: 3.0,
+    };
+    let passage = HubPassage::new(&compressor, &found, &options).expect("a passage");
+    assert!(passage.roots_carried >= 0.8, "{}", passage.roots_carried);
+    // The blades run 50 mm along the axis from the inducer to the outlet: the meridian
+    // follows the hub over most of it.
+    let meridian: Vec<[f64; 2]> = passage
+        .stations
+        .iter()
+        .map(|s| [s.height, s.radius])
+        .collect();
+    let (low, high) = meridian
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+            (l.min(p[0]), h.max(p[0]))
+        });
+    assert!(high - low > 35.0, "{low} .. {high}");
+    let standing = |r: &Region| matches!(r, Region::Blade(_) | Region::Splitter(_));
+    let mut on_hub = vec![false; compressor.positions.len()];
+    let mut on_piece = vec![false; compressor.positions.len()];
+    for (tri, region) in compressor.triangles.iter().zip(&found.regions) {
+        for &v in tri {
+            if *region == Region::Hub {
+                on_hub[v as usize] = true;
+            } else if standing(region) {
+                on_piece[v as usize] = true;
+            }
+        }
+    }
+    let axis = nalgebra::Vector3::from(found.axis).normalize();
+    let centre = nalgebra::Point3::from(found.centre);
+    let (mut roots, mut on_meridian) = (0, 0);
+    for (k, p) in compressor.positions.iter().enumerate() {
+        if !(on_hub[k] && on_piece[k]) {
+            continue;
+        }
+        let d = p - centre;
+        let height = d.dot(&axis);
+        let radius = (d - axis * height).norm();
+        let off = meridian
+            .windows(2)
+            .map(|w| segment_distance([height, radius], w[0], w[1]))
+            .fold(f64::INFINITY, f64::min);
+        roots += 1;
+        on_meridian += usize::from(off <= 5.0 * found.tolerance_mm);
+    }
+    assert!(roots > 1000, "{roots}");
+    assert!(
+        on_meridian as f64 >= 0.8 * roots as f64,
+        "{on_meridian} of {roots} root vertices on the meridian"
+    );
+}
+
+fn segment_distance(q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let len2 = d[0] * d[0] + d[1] * d[1];
+    let t = if len2 > 0.0 {
+        (((q[0] - a[0]) * d[0] + (q[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (q[0] - a[0] - t * d[0]).hypot(q[1] - a[1] - t * d[1])
 }

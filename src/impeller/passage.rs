@@ -36,6 +36,9 @@ use super::recognise::{Impeller, Region};
 /// Hub triangles joined across an edge bending less than this belong to one flow surface.
 pub const CREASE_DEG: f64 = 25.0;
 
+/// Share of the blades' and splitters' root vertices that must lie on the hub's meridian.
+const MIN_ROOTS_CARRIED: f64 = 0.8;
+
 /// Deepest recursion of the line insertion: 2^16 lines across a passage.
 const MAX_DEPTH: u32 = 16;
 
@@ -113,6 +116,8 @@ pub struct HubPassage {
     pub flow: Vec<bool>,
     /// The piece (index in [`Impeller::pieces`]) of the blade passage 0 starts at.
     pub first_blade: usize,
+    /// Share of the blades' and splitters' root vertices within the fit of the meridian.
+    pub roots_carried: f64,
 }
 
 /// A polyline in the meridional half-plane, (height, radius), with its arc length.
@@ -281,30 +286,99 @@ impl HubPassage {
                 .map(|(p, _)| meridional(p))
                 .collect()
         };
-        if !flow.iter().any(|&f| f) {
-            return Err("no hub surface touches a blade".into());
-        }
-        let first_fit = meridian_of(&points_of(&flow))?;
-        for (t, f) in flow.iter_mut().enumerate() {
-            if !*f {
-                continue;
+        // `facing`: leave out triangles whose normals stray from the meridian's (a finely
+        // meshed hub's facets follow it; a coarse CAD hub's chords across the passage do not,
+        // and on the meridian by their corners they belong to it all the same).
+        let refine = |mut flow: Vec<bool>, facing: bool| -> Result<(Vec<bool>, Meridian), String> {
+            if !flow.iter().any(|&f| f) {
+                return Err("no hub surface touches a blade".into());
             }
-            let corners = mesh.corners(t);
-            let centre =
-                Point3::from((corners[0].coords + corners[1].coords + corners[2].coords) / 3.0);
-            let (_, angle, _) = frame.cylindrical(&centre);
-            let (m, _) = first_fit.project(meridional(&centre));
-            let (_, tangent) = first_fit.at(m);
-            let n = face_normals[t];
-            let facing =
-                (tangent[1] * n.dot(&frame.axis) - tangent[0] * n.dot(&frame.radial(angle))).abs();
-            *f = facing >= cos_crease
-                && corners
-                    .iter()
-                    .all(|p| first_fit.project(meridional(p)).1 <= fit_limit);
+            let first_fit = meridian_of(&points_of(&flow))?;
+            for (t, f) in flow.iter_mut().enumerate() {
+                if !*f {
+                    continue;
+                }
+                let corners = mesh.corners(t);
+                let centre =
+                    Point3::from((corners[0].coords + corners[1].coords + corners[2].coords) / 3.0);
+                let (_, angle, _) = frame.cylindrical(&centre);
+                let (m, _) = first_fit.project(meridional(&centre));
+                let (_, tangent) = first_fit.at(m);
+                let n = face_normals[t];
+                let faces_along = (tangent[1] * n.dot(&frame.axis)
+                    - tangent[0] * n.dot(&frame.radial(angle)))
+                .abs();
+                *f = (!facing || faces_along >= cos_crease)
+                    && corners
+                        .iter()
+                        .all(|p| first_fit.project(meridional(p)).1 <= fit_limit);
+            }
+            let meridian = meridian_of(&points_of(&flow))?;
+            Ok((flow, meridian))
+        };
+        // Where the blades and splitters stand on the hub: the ends of the edges between their
+        // triangles and the hub's, in the meridional half-plane.
+        let mut on_root = vec![false; mesh.positions.len()];
+        for e in &all_edges {
+            let standing = e.faces.iter().any(|&(f, _)| {
+                matches!(regions[f as usize], Region::Blade(_) | Region::Splitter(_))
+            });
+            if standing && e.faces.iter().any(|&(f, _)| is_hub(f)) {
+                for v in e.vertices {
+                    on_root[v as usize] = true;
+                }
+            }
         }
+        let roots: Vec<[f64; 2]> = mesh
+            .positions
+            .iter()
+            .zip(&on_root)
+            .filter(|(_, on)| **on)
+            .map(|(p, _)| meridional(p))
+            .collect();
+        let carried = |meridian: &Meridian| {
+            let on = roots
+                .iter()
+                .filter(|q| meridian.project(**q).1 <= fit_limit)
+                .count();
+            on as f64 / roots.len().max(1) as f64
+        };
+        // A finely meshed hub grows from the roots across its gentle edges into one piece. A
+        // coarse CAD tessellation (long slivers bending sharply across the passage) breaks it
+        // into pieces, and the largest may be the rim: then the blades' roots, which lie on
+        // the hub whatever its triangles, give the meridian, and the flow surface is the hub
+        // triangles on it.
+        let (flow, meridian) = match refine(flow, true) {
+            Ok((flow, meridian)) if carried(&meridian) >= MIN_ROOTS_CARRIED => (flow, meridian),
+            grown => {
+                let from_roots = meridian_of(&roots)?;
+                let flow: Vec<bool> = (0..mesh.triangles.len())
+                    .map(|t| {
+                        is_hub(t as u32)
+                            && mesh
+                                .corners(t)
+                                .iter()
+                                .all(|p| from_roots.project(meridional(p)).1 <= fit_limit)
+                    })
+                    .collect();
+                let (flow, meridian) = refine(flow, false)?;
+                let share = carried(&meridian);
+                if share < MIN_ROOTS_CARRIED {
+                    return Err(format!(
+                        "the hub the blades stand on is not one surface of revolution: {:.0} % of \
+                         their roots lie on the meridian found ({}), {:.0} % needed",
+                        100.0 * share,
+                        match grown {
+                            Ok(_) => "grown from the roots".to_string(),
+                            Err(e) => e,
+                        },
+                        100.0 * MIN_ROOTS_CARRIED
+                    ));
+                }
+                (flow, meridian)
+            }
+        };
         let flow_points = points_of(&flow);
-        let meridian = meridian_of(&flow_points)?;
         let flow_triangles = flow.iter().filter(|&&f| f).count();
         let flow_area_mm2: f64 = (0..mesh.triangles.len())
             .filter(|&t| flow[t])
@@ -497,6 +571,7 @@ impl HubPassage {
                 }
             })
             .collect();
+        let roots_carried = carried(&meridian);
         Ok(HubPassage {
             meridian,
             frame,
@@ -507,6 +582,7 @@ impl HubPassage {
             flow_area_mm2,
             flow,
             first_blade,
+            roots_carried,
         })
     }
 
