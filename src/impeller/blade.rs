@@ -11,16 +11,24 @@
 //! flank square to the hub, less on a leaning one), taken at its low percentile over the
 //! flanks.
 
-use crate::geom::Vector3;
+use std::collections::HashMap;
+
+use crate::geom::{Point3, Vector3, closest_point_on_segment};
 use crate::mesh::{Mesh, SectionCurve, level_section};
 
 use super::passage::HubPassage;
 use super::recognise::{Impeller, Region};
 
+/// Deepest halving of the level step for partial loops: down to an eighth.
+const MAX_PARTIAL_DEPTH: u32 = 3;
+
 /// What the loops of one blade are.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BladeLoops {
+    /// The full levels' loops, from the tip down.
     pub curves: Vec<SectionCurve>,
+    /// Stretches of levels in between, where the full loops stand too far apart.
+    pub partial: Vec<SectionCurve>,
     pub levels: usize,
     /// Height between levels, mm.
     pub level_step: f64,
@@ -29,13 +37,15 @@ pub struct BladeLoops {
 }
 
 /// The loops around blade `piece` of `impeller` (recognised in `mesh`), neighbouring loops at
-/// most `stepover` apart along the flanks; each loop starts where the one above it ended.
+/// most `stepover` apart along the flanks; each loop starts where the one above it ended. A
+/// partial loop runs on `overlap` past where it is needed.
 pub fn blade_loops(
     mesh: &Mesh,
     impeller: &Impeller,
     passage: &HubPassage,
     piece: usize,
     stepover: f64,
+    overlap: f64,
 ) -> BladeLoops {
     let triangles: Vec<[u32; 3]> = mesh
         .triangles
@@ -85,12 +95,17 @@ pub fn blade_loops(
     }
     let level_step = (stepover * steepness.min(1.0)).max(1e-3);
     let top = height.iter().copied().fold(0.0, f64::max);
-    let mut curves: Vec<SectionCurve> = Vec::new();
-    let mut levels = 0;
-    let mut level = top - 0.5 * level_step;
-    while level > 0.5 * level_step {
+    let section = |level: f64| {
         let shifted: Vec<f64> = height.iter().map(|h| h - level).collect();
-        for mut curve in level_section(&blade, &normals, &shifted) {
+        level_section(&blade, &normals, &shifted)
+    };
+    let mut curves: Vec<SectionCurve> = Vec::new();
+    let mut near = LevelGrid::new(stepover);
+    let mut levels: usize = 0;
+    let first = top - 0.5 * level_step;
+    let mut level = first;
+    while level > 0.5 * level_step {
+        for mut curve in section(level) {
             if let Some(end) = curves.last().and_then(|c| c.points.last()).map(|p| p.point)
                 && curve.closed
                 && let Some(nearest) = (0..curve.points.len()).min_by(|&i, &k| {
@@ -101,15 +116,188 @@ pub fn blade_loops(
             {
                 curve.points.rotate_left(nearest);
             }
+            near.insert(&curve, level);
             curves.push(curve);
         }
         levels += 1;
         level -= level_step;
     }
+
+    // Alg. 5.1 between the full levels.
+    let mut partial = Vec::new();
+    for depth in 1..=MAX_PARTIAL_DEPTH {
+        let half = level_step / f64::from(1u32 << depth);
+        let mut found = Vec::new();
+        for k in 0..(levels.saturating_sub(1) << (depth - 1)) {
+            let level = first - (2 * k + 1) as f64 * half;
+            for curve in section(level) {
+                let needed: Vec<bool> = curve
+                    .points
+                    .iter()
+                    .map(|p| {
+                        let above = near.distance(&p.point, level, true);
+                        above >= stepover
+                            || above + near.distance(&p.point, level, false) > stepover
+                    })
+                    .collect();
+                for piece in needed_stretches(&curve, &needed, overlap) {
+                    found.push((piece, level));
+                }
+            }
+        }
+        for (piece, level) in found {
+            near.insert(&piece, level);
+            partial.push(piece);
+        }
+    }
     BladeLoops {
         curves,
+        partial,
         levels,
         level_step,
         top,
+    }
+}
+
+/// The stretches of `curve` where `needed`, each run on by `overlap` (arc length) both ways, as
+/// open curves; the whole curve when it is needed all round.
+fn needed_stretches(curve: &SectionCurve, needed: &[bool], overlap: f64) -> Vec<SectionCurve> {
+    let n = curve.points.len();
+    if n < 2 || !needed.iter().any(|&k| k) {
+        return Vec::new();
+    }
+    if needed.iter().all(|&k| k) {
+        return vec![curve.clone()];
+    }
+    // A closed curve is cut open in the middle of its longest unneeded stretch.
+    let start = if curve.closed {
+        let mut best = (0, 0);
+        let mut run = 0;
+        for i in 0..2 * n {
+            if needed[i % n] {
+                run = 0;
+            } else {
+                run += 1;
+                if run > best.1 && run <= n {
+                    best = ((i + 1 + n - run / 2) % n, run);
+                }
+            }
+        }
+        best.0
+    } else {
+        0
+    };
+    let order: Vec<usize> = (0..n).map(|i| (start + i) % n).collect();
+    let points: Vec<Point3> = order.iter().map(|&i| curve.points[i].point).collect();
+    let mut along = vec![0.0; n];
+    for i in 1..n {
+        along[i] = along[i - 1] + (points[i] - points[i - 1]).norm();
+    }
+    let mut keep = vec![false; n];
+    for (j, &i) in order.iter().enumerate() {
+        if needed[i] {
+            keep[j] = true;
+        }
+    }
+    // Run on by the overlap: from every needed point, both ways.
+    let mut grown = keep.clone();
+    let mut last: Option<f64> = None;
+    for j in 0..n {
+        if keep[j] {
+            last = Some(along[j]);
+        } else if last.is_some_and(|s| along[j] - s <= overlap) {
+            grown[j] = true;
+        }
+    }
+    let mut next: Option<f64> = None;
+    for j in (0..n).rev() {
+        if keep[j] {
+            next = Some(along[j]);
+        } else if next.is_some_and(|s| s - along[j] <= overlap) {
+            grown[j] = true;
+        }
+    }
+    let mut pieces = Vec::new();
+    let mut j = 0;
+    while j < n {
+        if !grown[j] {
+            j += 1;
+            continue;
+        }
+        let from = j;
+        while j < n && grown[j] {
+            j += 1;
+        }
+        if j - from >= 2 {
+            pieces.push(SectionCurve {
+                points: order[from..j].iter().map(|&i| curve.points[i]).collect(),
+                closed: false,
+            });
+        }
+    }
+    pieces
+}
+
+/// The segments of the loops kept so far, by level, in a uniform grid of cells as large as
+/// the distance asked about.
+struct LevelGrid {
+    cell: f64,
+    segments: Vec<(Point3, Point3, f64)>,
+    cells: HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl LevelGrid {
+    fn new(cell: f64) -> LevelGrid {
+        LevelGrid {
+            cell: cell.max(1e-6),
+            segments: Vec::new(),
+            cells: HashMap::new(),
+        }
+    }
+
+    fn key(&self, p: &Point3) -> [i64; 3] {
+        [p.x, p.y, p.z].map(|c| (c / self.cell).floor() as i64)
+    }
+
+    fn insert(&mut self, curve: &SectionCurve, level: f64) {
+        let n = curve.points.len();
+        let count = if curve.closed { n } else { n.saturating_sub(1) };
+        for i in 0..count {
+            let (a, b) = (curve.points[i].point, curve.points[(i + 1) % n].point);
+            let index = self.segments.len() as u32;
+            self.segments.push((a, b, level));
+            let (lo, hi) = (self.key(&a.inf(&b)), self.key(&a.sup(&b)));
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        self.cells.entry([x, y, z]).or_default().push(index);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Distance from `p` to the nearest segment of a level above `level` (or below), up to
+    /// the cell size: farther is reported as the cell size.
+    fn distance(&self, p: &Point3, level: f64, above: bool) -> f64 {
+        let key = self.key(p);
+        let mut best = self.cell;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(list) = self.cells.get(&[key[0] + dx, key[1] + dy, key[2] + dz])
+                    else {
+                        continue;
+                    };
+                    for &i in list {
+                        let (a, b, l) = self.segments[i as usize];
+                        if (l > level) == above && l != level {
+                            best = best.min((p - closest_point_on_segment(p, &a, &b)).norm());
+                        }
+                    }
+                }
+            }
+        }
+        best
     }
 }

@@ -1018,7 +1018,7 @@ mod tests {
     #[test]
     fn blade_loops_run_at_constant_height_round_the_blade() {
         let (mesh, impeller, passage, _) = sample();
-        let loops = blade_loops(&mesh, &impeller, &passage, passage.first_blade, 0.4);
+        let loops = blade_loops(&mesh, &impeller, &passage, passage.first_blade, 0.4, 1.6);
         assert!(loops.levels > 10 && loops.level_step <= 0.4);
         let mut heights = Vec::new();
         // Round the blade, but where a low level meets the blade's edge on the hub.
@@ -1048,6 +1048,99 @@ mod tests {
             assert!(w[0] - w[1] <= loops.level_step + slack, "{heights:?}");
         }
         assert!(heights.last().is_some_and(|&h| h <= loops.level_step));
+    }
+
+    /// Alg. 5.1 round the blade: where the flank leans, the full levels stand farther apart
+    /// than the stepover (some points on it farther than half a stepover from every loop);
+    /// with the partial loops every point of the flank between the top and bottom loops is
+    /// within half a stepover of one (brute force over the loops' segments).
+    #[test]
+    fn partial_blade_loops_bring_every_point_of_the_flank_within_half_a_stepover() {
+        let (mesh, impeller, passage, _) = sample();
+        let stepover = 0.4;
+        let loops = blade_loops(
+            &mesh,
+            &impeller,
+            &passage,
+            passage.first_blade,
+            stepover,
+            0.4,
+        );
+        assert!(!loops.partial.is_empty());
+        let cell = 1.0;
+        let key = |p: &Point3| [p.x, p.y, p.z].map(|c| (c / cell).floor() as i64);
+        let grid_of = |curves: &[&SectionCurve]| {
+            let mut grid: std::collections::HashMap<[i64; 3], Vec<(Point3, Point3)>> =
+                Default::default();
+            for curve in curves {
+                let n = curve.points.len();
+                let count = if curve.closed { n } else { n - 1 };
+                for i in 0..count {
+                    let (a, b) = (curve.points[i].point, curve.points[(i + 1) % n].point);
+                    // In pieces shorter than a cell, each filed by its start.
+                    let pieces = ((a - b).norm() / (0.5 * cell)).ceil().max(1.0) as usize;
+                    for k in 0..pieces {
+                        let from = a + (b - a) * (k as f64 / pieces as f64);
+                        let to = a + (b - a) * ((k + 1) as f64 / pieces as f64);
+                        grid.entry(key(&from)).or_default().push((from, to));
+                    }
+                }
+            }
+            grid
+        };
+        let nearest = |grid: &std::collections::HashMap<[i64; 3], Vec<(Point3, Point3)>>,
+                       p: &Point3| {
+            let k = key(p);
+            let mut best = f64::INFINITY;
+            for dx in -2..=2 {
+                for dy in -2..=2 {
+                    for dz in -2..=2 {
+                        for (a, b) in grid
+                            .get(&[k[0] + dx, k[1] + dy, k[2] + dz])
+                            .into_iter()
+                            .flatten()
+                        {
+                            best = best
+                                .min((p - crate::geom::closest_point_on_segment(p, a, b)).norm());
+                        }
+                    }
+                }
+            }
+            best
+        };
+        let full: Vec<&SectionCurve> = loops.curves.iter().collect();
+        let all: Vec<&SectionCurve> = loops.curves.iter().chain(&loops.partial).collect();
+        let (full_grid, all_grid) = (grid_of(&full), grid_of(&all));
+        let top = loops.top - 0.5 * loops.level_step;
+        let bottom = top - (loops.levels - 1) as f64 * loops.level_step;
+        let (mut worst_full, mut worst_all, mut samples) = (0.0f64, 0.0f64, 0);
+        for (t, region) in impeller.regions.iter().enumerate() {
+            if *region != Region::Blade(passage.first_blade as u32) {
+                continue;
+            }
+            let [a, b, c] = mesh.corners(t);
+            // Points on the flank (not the tip), well inside the band the loops cover.
+            let normal = mesh.face_normal(t);
+            for p in [
+                Point3::from((a.coords + b.coords + c.coords) / 3.0),
+                Point3::from((a.coords * 4.0 + b.coords + c.coords) / 6.0),
+            ] {
+                let (height, up) = passage.above_hub(&p);
+                let across = up - normal * normal.dot(&up);
+                if across.norm() < 0.3 || height > top - 0.1 || height < bottom + 0.1 {
+                    continue;
+                }
+                samples += 1;
+                worst_full = worst_full.max(nearest(&full_grid, &p));
+                worst_all = worst_all.max(nearest(&all_grid, &p));
+            }
+        }
+        assert!(samples > 1000, "{samples}");
+        assert!(worst_full > 0.6 * stepover, "{worst_full}");
+        assert!(
+            worst_all <= 0.55 * stepover,
+            "{worst_all} (full loops alone {worst_full})"
+        );
     }
 
     #[test]

@@ -34,6 +34,10 @@ const MIN_TILT_FROM_POLE_DEG: f64 = 15.0;
 /// How far a partial flow line runs on past where it is needed, in stepovers.
 const OVERLAP_STEPOVERS: f64 = 4.0;
 
+/// How far a partial loop round a blade runs on past where it is needed, in stepovers: the
+/// ball's end covers its radius beyond the last centre, and every piece costs a link.
+const PARTIAL_LOOP_OVERLAP_STEPOVERS: f64 = 1.0;
+
 /// How the impeller strategies are asked to run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImpellerFinishOptions {
@@ -65,6 +69,9 @@ pub struct HubSummary {
 pub struct BladeSummary {
     pub levels: usize,
     pub loops: usize,
+    /// Stretches of loops between the levels, where the flank leans so that the levels stand
+    /// farther apart than the stepover (alg. 5.1).
+    pub partial_loops: usize,
     /// Height between levels, mm.
     pub level_step_mm: f64,
     /// The blade's height above the hub, mm.
@@ -175,7 +182,14 @@ pub fn finish_impeller(
             );
 
             // The blade passage 0 starts at: loops from the tip down.
-            let loops = blade_loops(part, impeller, &passage, passage.first_blade, stepover);
+            let loops = blade_loops(
+                part,
+                impeller,
+                &passage,
+                passage.first_blade,
+                stepover,
+                PARTIAL_LOOP_OVERLAP_STEPOVERS * stepover,
+            );
             let lean = impeller_options.blade_lean_deg.to_radians();
             let blade_axes = impeller_options.blade_axes;
             let blade_field = |p: &Point3, normal: &Vector3, _feed: &Vector3| {
@@ -210,7 +224,8 @@ pub fn finish_impeller(
                 ..*ctx
             };
             let mut blade = Finishing::default();
-            for result in path::curve_passes(&loops.curves, &blade_ctx, options, advance) {
+            let blade_curves: Vec<_> = loops.curves.iter().chain(&loops.partial).cloned().collect();
+            for result in path::curve_passes(&blade_curves, &blade_ctx, options, advance) {
                 blade.merge(result);
             }
             blade.segments = path::nearest_order(
@@ -256,6 +271,7 @@ pub fn finish_impeller(
             summary.blade = Some(BladeSummary {
                 levels: loops.levels,
                 loops: loops.curves.len(),
+                partial_loops: loops.partial.len(),
                 level_step_mm: loops.level_step,
                 height_mm: loops.top,
                 axes: blade_axes,
