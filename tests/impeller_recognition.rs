@@ -7,7 +7,7 @@
 mod common;
 
 use wavemill::impeller::{
-    HubPassage, NotAnImpeller, PassageOptions, RecogniseOptions, Region, recognise,
+    HubPassage, NotAnImpeller, PassageOptions, RecogniseOptions, Region, blade_loops, recognise,
 };
 use wavemill::mesh::io::{Units, read_mesh};
 use wavemill::mesh::{Mesh, PrepareOptions, prepare};
@@ -140,6 +140,31 @@ fn the_compressor_passage_stands_on_the_blade_roots() {
         on_meridian as f64 >= 0.8 * roots as f64,
         "{on_meridian} of {roots} root vertices on the meridian"
     );
+
+    // One splitter stands in each passage; the loops round it lie on its own triangles.
+    let splitters = passage.splitters(&found);
+    assert_eq!(splitters.len(), 1, "{splitters:?}");
+    let piece = splitters[0];
+    let loops = blade_loops(&compressor, &found, &passage, piece, 0.8, 0.8);
+    assert!(
+        loops.levels >= 5 && !loops.curves.is_empty(),
+        "{}",
+        loops.levels
+    );
+    let own: Vec<[u32; 3]> = compressor
+        .triangles
+        .iter()
+        .zip(&found.regions)
+        .filter(|(_, r)| **r == Region::Splitter(piece as u32))
+        .map(|(t, _)| *t)
+        .collect();
+    let oracle = common::Oracle::new(&compressor.positions, &own, 2.0);
+    for curve in loops.curves.iter().chain(&loops.partial) {
+        for p in &curve.points {
+            let d = oracle.distance_below(&p.point, 1.0);
+            assert!(d < 1e-6, "a loop point {d} mm off the splitter");
+        }
+    }
 }
 
 fn segment_distance(q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {

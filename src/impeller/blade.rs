@@ -36,7 +36,7 @@ pub struct BladeLoops {
     pub top: f64,
 }
 
-/// The loops around blade `piece` of `impeller` (recognised in `mesh`), neighbouring loops at
+/// The loops around blade (or splitter) `piece` of `impeller` (recognised in `mesh`), neighbouring loops at
 /// most `stepover` apart along the flanks; each loop starts where the one above it ended. A
 /// partial loop runs on `overlap` past where it is needed.
 pub fn blade_loops(
@@ -51,7 +51,9 @@ pub fn blade_loops(
         .triangles
         .iter()
         .zip(&impeller.regions)
-        .filter(|(_, r)| **r == Region::Blade(piece as u32))
+        .filter(
+            |(_, r)| matches!(r, Region::Blade(k) | Region::Splitter(k) if *k as usize == piece),
+        )
         .map(|(t, _)| *t)
         .collect();
     let blade = Mesh::compacted(&mesh.positions, triangles);

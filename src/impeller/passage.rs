@@ -586,6 +586,22 @@ impl HubPassage {
         })
     }
 
+    /// The splitters standing in passage 0 (between its first blade and the next), by their
+    /// index in [`Impeller::pieces`].
+    pub fn splitters(&self, impeller: &Impeller) -> Vec<usize> {
+        let blade = impeller.pieces[self.first_blade].angle_deg.to_radians();
+        impeller
+            .pieces
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| {
+                let after = (p.angle_deg.to_radians() - blade).rem_euclid(TAU);
+                p.kind == super::recognise::PieceKind::Splitter && after > 0.0 && after < self.pitch
+            })
+            .map(|(k, _)| k)
+            .collect()
+    }
+
     /// The tool axis the walls suggest at `p` (on or near the hub, in any passage): the span
     /// directions of the two walls interpolated across the passage by the fraction of its free
     /// width `p` stands at ("interpolate vector"), so the tool stands along the blade beside

@@ -85,6 +85,10 @@ pub struct BladeSummary {
 pub struct ImpellerFinishSummary {
     pub hub: Option<HubSummary>,
     pub blade: Option<BladeSummary>,
+    /// Splitters in each passage finished by their own loops, and the loops (full and partial)
+    /// round them in one passage.
+    pub splitters: usize,
+    pub splitter_loops: usize,
     /// Why the hub and blades are finished by the planes instead, when they are.
     pub not_planned: Option<String>,
     /// Passages (each with its blade) planned, and copied from the first.
@@ -123,6 +127,8 @@ pub fn finish_impeller(
     let mut summary = ImpellerFinishSummary {
         hub: None,
         blade: None,
+        splitters: 0,
+        splitter_loops: 0,
         not_planned: None,
         passages: 0,
         first_passage_ms: 0.0,
@@ -192,46 +198,81 @@ pub fn finish_impeller(
             );
             let lean = impeller_options.blade_lean_deg.to_radians();
             let blade_axes = impeller_options.blade_axes;
-            let blade_field = |p: &Point3, normal: &Vector3, _feed: &Vector3| {
-                let axis = match blade_axes {
-                    BladeAxes::Blade => {
-                        // The passages' axis, turned to the blade `p` is on (half a pitch
-                        // before its passage).
-                        let (_, angle, _) = passage.frame.cylindrical(p);
-                        let blade = middle - 0.5 * passage.pitch;
-                        let k = ((angle - blade) / passage.pitch).round();
-                        let radial = passage.frame.radial(blade + k * passage.pitch);
-                        passage.frame.axis * mean[0]
-                            + radial * mean[1]
-                            + passage.frame.axis.cross(&radial) * mean[2]
-                    }
-                    BladeAxes::Lean => {
-                        let (_, up) = passage.above_hub(p);
-                        let across = up - normal * normal.dot(&up);
-                        // On the tip the rising direction is the normal itself.
-                        let rising = if across.norm() > 0.3 {
-                            across.normalize()
-                        } else {
-                            up
-                        };
-                        rising * lean.cos() + normal * lean.sin()
-                    }
-                };
-                off_pole(p, &axis)
+            let (passage_ref, off_pole_ref) = (&passage, &off_pole);
+            // The preferred axis round the blade or splitter standing at angle `reference`
+            // (and its copies a pitch apart).
+            let field_for = |reference: f64| {
+                move |p: &Point3, normal: &Vector3, _feed: &Vector3| {
+                    let axis = match blade_axes {
+                        BladeAxes::Blade => {
+                            // The passages' axis, turned to the piece `p` is on.
+                            let (_, angle, _) = passage_ref.frame.cylindrical(p);
+                            let k = ((angle - reference) / passage_ref.pitch).round();
+                            let radial =
+                                passage_ref.frame.radial(reference + k * passage_ref.pitch);
+                            passage_ref.frame.axis * mean[0]
+                                + radial * mean[1]
+                                + passage_ref.frame.axis.cross(&radial) * mean[2]
+                        }
+                        BladeAxes::Lean => {
+                            let (_, up) = passage_ref.above_hub(p);
+                            let across = up - normal * normal.dot(&up);
+                            // On the tip the rising direction is the normal itself.
+                            let rising = if across.norm() > 0.3 {
+                                across.normalize()
+                            } else {
+                                up
+                            };
+                            rising * lean.cos() + normal * lean.sin()
+                        }
+                    };
+                    off_pole_ref(p, &axis)
+                }
             };
+            // The blade stands half a pitch before the middle of its passage.
+            let blade_field = field_for(middle - 0.5 * passage.pitch);
             let blade_ctx = FinishingContext {
                 axis_field: Some(&blade_field),
                 ..*ctx
             };
-            let mut blade = Finishing::default();
-            let blade_curves: Vec<_> = loops.curves.iter().chain(&loops.partial).cloned().collect();
-            for result in path::curve_passes(&blade_curves, &blade_ctx, options, advance) {
-                blade.merge(result);
+            let plan_loops = |loops: &crate::impeller::BladeLoops, piece_ctx: &FinishingContext| {
+                let mut finishing = Finishing::default();
+                let curves: Vec<_> = loops.curves.iter().chain(&loops.partial).cloned().collect();
+                for result in path::curve_passes(&curves, piece_ctx, options, advance) {
+                    finishing.merge(result);
+                }
+                finishing.segments = path::nearest_order(
+                    std::mem::take(&mut finishing.segments),
+                    blade_axes == BladeAxes::Blade,
+                );
+                finishing
+            };
+            let blade = plan_loops(&loops, &blade_ctx);
+
+            // The splitters in the passage: loops round each, both its sides, like the blade.
+            let splitter_pieces = passage.splitters(impeller);
+            let splitter_fields: Vec<_> = splitter_pieces
+                .iter()
+                .map(|&s| field_for(impeller.pieces[s].angle_deg.to_radians()))
+                .collect();
+            let mut splitters = Vec::new();
+            let mut splitter_loops = 0;
+            for (&piece, field) in splitter_pieces.iter().zip(&splitter_fields) {
+                let piece_loops = blade_loops(
+                    part,
+                    impeller,
+                    &passage,
+                    piece,
+                    stepover,
+                    PARTIAL_LOOP_OVERLAP_STEPOVERS * stepover,
+                );
+                splitter_loops += piece_loops.curves.len() + piece_loops.partial.len();
+                let piece_ctx = FinishingContext {
+                    axis_field: Some(field),
+                    ..*ctx
+                };
+                splitters.push((plan_loops(&piece_loops, &piece_ctx), piece_ctx));
             }
-            blade.segments = path::nearest_order(
-                std::mem::take(&mut blade.segments),
-                blade_axes == BladeAxes::Blade,
-            );
             summary.first_passage_ms = round_ms(t);
 
             let t = Instant::now();
@@ -245,19 +286,34 @@ pub fn finish_impeller(
                     path::turned_copy(&blade, &rotation, &centre, &blade_ctx, options);
                 summary.copies.merge(&hub_stats);
                 summary.copies.merge(&blade_stats);
-                copies.push((hub_copy, blade_copy));
+                copies.push(hub_copy);
+                copies.push(blade_copy);
+                for (splitter, piece_ctx) in &splitters {
+                    let (copy, stats) =
+                        path::turned_copy(splitter, &rotation, &centre, piece_ctx, options);
+                    summary.copies.merge(&stats);
+                    copies.push(copy);
+                }
             }
             summary.copies_ms = round_ms(t);
             summary.passages = impeller.order;
+            summary.splitters = splitter_pieces.len();
+            summary.splitter_loops = splitter_loops;
             finishing.merge(hub);
             finishing.merge(blade);
-            for (hub_copy, blade_copy) in copies {
-                finishing.merge(hub_copy);
-                finishing.merge(blade_copy);
+            for (splitter, _) in splitters {
+                finishing.merge(splitter);
+            }
+            for copy in copies {
+                finishing.merge(copy);
             }
             for (t, h) in handled.iter_mut().enumerate() {
                 *h = passage.flow[t]
-                    || matches!(impeller.regions[t], crate::impeller::Region::Blade(_));
+                    || match impeller.regions[t] {
+                        crate::impeller::Region::Blade(_) => true,
+                        crate::impeller::Region::Splitter(_) => !splitter_pieces.is_empty(),
+                        _ => false,
+                    };
             }
             summary.hub = Some(HubSummary {
                 flow_triangles: passage.flow_triangles,
