@@ -1,5 +1,6 @@
-//! Point-milling loops around a blade (issue 21 item 2, blade finishing): the curves on the
-//! blade where its height above the hub is constant, from the tip down to the root, so that
+//! Point-milling loops around a blade or a splitter (issue 21 item 2, blade finishing): the
+//! curves on the blade where its height above the hub is constant, from the tip down to the
+//! root, so that
 //! the ball goes round the blade — pressure side, trailing edge, suction side, leading edge —
 //! once per level and steps down between levels like a spiral from shroud to hub.
 //!
@@ -36,9 +37,9 @@ pub struct BladeLoops {
     pub top: f64,
 }
 
-/// The loops around blade (or splitter) `piece` of `impeller` (recognised in `mesh`), neighbouring loops at
-/// most `stepover` apart along the flanks; each loop starts where the one above it ended. A
-/// partial loop runs on `overlap` past where it is needed.
+/// The loops around blade (or splitter) `piece` of `impeller` (recognised in `mesh`),
+/// neighbouring loops at most `stepover` apart along the flanks; each loop starts where the
+/// one above it ended. A partial loop runs on `overlap` past where it is needed.
 pub fn blade_loops(
     mesh: &Mesh,
     impeller: &Impeller,

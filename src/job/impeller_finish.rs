@@ -1,9 +1,10 @@
 //! Finishing an impeller with its own strategies (issue 21): flow-line passes over the hub
-//! between two blades ([`crate::impeller::passage`]) and loops around the blade
-//! ([`crate::impeller::blade`]), planned for one passage and its blade and copied to the
-//! others by the symmetry, each copy checked on the part ([`crate::path::turned_copy`]); the
-//! parallel planes finish what the impeller strategies leave (splitters, nose, rim), their
-//! drive points on the hub and blades left out.
+//! between two blades ([`crate::impeller::passage`]; they run past a splitter on either side
+//! of it) and loops around the blade and each splitter in the passage
+//! ([`crate::impeller::blade`]; partial loops where the flank leans), planned for one passage
+//! and copied to the others by the symmetry, each copy checked on the part
+//! ([`crate::path::turned_copy`]); the parallel planes finish what the impeller strategies
+//! leave (nose, bore, rim), their drive points on the hub, blades and splitters left out.
 //!
 //! Axes. On the hub the preferred axis is either one axis per passage (the mean of the walls'
 //! span directions down its middle: the rotary axes stand still along the passes) or the
