@@ -52,7 +52,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 let passage = HubPassage::new(&mesh, &impeller, &options).expect("a passage");
                 let lines = passage.flow_lines(&options);
-                let loops = blade_loops(&mesh, &impeller, &passage, passage.first_blade, 0.4, 1.6);
+                let loops = blade_loops(&mesh, &impeller, &passage, passage.first_blade, 0.4, 0.4);
                 (lines.len(), loops.curves.len())
             })
         });
