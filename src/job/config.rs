@@ -369,8 +369,18 @@ impl ToolSection {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MachineSection {
-    /// The machine's kinematics: `"table-table-ac"` (the only kind so far; any other name is
-    /// refused when the file is read, listing the known ones).
+    /// A machine definition (`data/machines/*.toml`): a shipped machine's name
+    /// (`trunnion-ac`, `trunnion-bc`, `head-table-bc`, `head-table-ac`, `head-head`) or a file
+    /// (relative to the job file). It sets the kinematics, the control's dialect, output mode
+    /// and feed mode, the rapid feed and the rotary speed; `kinematics`, `a_limits`,
+    /// `c_limits`, `rapid_feed` and `max_rotary_speed` here are then not used.
+    pub definition: Option<String>,
+    /// Overrides the definition's output mode: `"joint"` or `"tcp"`.
+    pub output: Option<crate::post::OutputMode>,
+    /// Overrides the definition's feed mode: `"per-minute"` or `"inverse-time"`.
+    pub feed: Option<crate::post::FeedMode>,
+    /// The machine's kinematics without a definition: `"table-table-ac"` (the other kinds
+    /// need a definition; a name the post does not know is refused when the file is read).
     pub kinematics: crate::post::KinematicsKind,
     /// Where the part frame's origin sits relative to the pivot (A and C axes' intersection), mm.
     pub part_origin_in_table: Option<[f64; 3]>,
@@ -395,6 +405,9 @@ pub struct MachineSection {
 impl Default for MachineSection {
     fn default() -> Self {
         Self {
+            definition: None,
+            output: None,
+            feed: None,
             kinematics: crate::post::KinematicsKind::TableTableAc,
             part_origin_in_table: None,
             a_limits: [-120.0, 120.0],
@@ -597,7 +610,52 @@ impl Job {
         {
             job.roughing.library = Some(path.parent().unwrap_or(Path::new(".")).join(p));
         }
+        if let Some(d) = &job.machine.definition
+            && !crate::post::machine_file::is_shipped(d)
+            && Path::new(d).is_relative()
+        {
+            let resolved = path.parent().unwrap_or(Path::new(".")).join(d);
+            job.machine.definition = Some(resolved.display().to_string());
+        }
         Ok(job)
+    }
+
+    /// The machine definition the job names, read (`None` without one).
+    pub fn machine_definition(&self) -> Result<Option<crate::post::MachineDefinition>, JobError> {
+        let Some(d) = &self.machine.definition else {
+            return Ok(None);
+        };
+        let mut definition = crate::post::MachineDefinition::load(d)
+            .map_err(|e| invalid("machine.definition", e.to_string()))?;
+        if let Some(o) = self.machine.output {
+            definition.output = o;
+        }
+        if let Some(f) = self.machine.feed {
+            definition.feed = f;
+        }
+        definition.check_modes().map_err(|reason| {
+            invalid(
+                if self.machine.feed.is_some() {
+                    "machine.feed"
+                } else {
+                    "machine.output"
+                },
+                reason,
+            )
+        })?;
+        Ok(Some(definition))
+    }
+
+    /// Names a machine definition for the job (`--machine`): its kind, rapid feed and rotary
+    /// speed replace `[machine]`'s.
+    pub fn use_machine(&mut self, name_or_file: &str) -> Result<(), JobError> {
+        self.machine.definition = Some(name_or_file.to_string());
+        if let Some(d) = self.machine_definition()? {
+            self.machine.kinematics = d.chain.kind;
+            self.machine.rapid_feed = d.rapid_feed;
+            self.machine.max_rotary_speed = d.max_rotary_speed;
+        }
+        Ok(())
     }
 
     /// Checks every number is usable, naming the key that is not.
@@ -828,10 +886,36 @@ impl Job {
             return Err(invalid(
                 "machine.kinematics",
                 "names a machine that cannot tilt the tool; a job drives 5-axis poses and needs \
-                 one that can (table-table-ac); 2.5D programs for three axes come from \
-                 `wavemill contour`"
+                 one that can (table-table-ac, or a machine definition); 2.5D programs for \
+                 three axes come from `wavemill contour`"
                     .into(),
             ));
+        }
+        match self.machine_definition()? {
+            Some(d)
+                if d.chain.kind != self.machine.kinematics
+                    && self.machine.kinematics != crate::post::KinematicsKind::TableTableAc =>
+            {
+                return Err(invalid(
+                    "machine.kinematics",
+                    format!(
+                        "= {} but the definition describes a {} machine",
+                        self.machine.kinematics.name(),
+                        d.chain.kind.name()
+                    ),
+                ));
+            }
+            None if self.machine.kinematics != crate::post::KinematicsKind::TableTableAc => {
+                return Err(invalid(
+                    "machine.kinematics",
+                    format!(
+                        "= {} needs a machine definition (machine.definition or --machine) \
+                         giving its axes",
+                        self.machine.kinematics.name()
+                    ),
+                ));
+            }
+            _ => {}
         }
         let [lo, hi] = self.machine.a_limits;
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
@@ -1388,16 +1472,46 @@ mod tests {
     }
 
     /// The machine's kinematics is a typed kind: a name the post does not know is refused
-    /// when the file is read, and the known one round-trips.
+    /// when the file is read (listing the known ones), a kind other than the built-in A/C needs
+    /// a definition giving its axes, and a definition's kind must be the one named.
     #[test]
     fn machine_kinematics_is_a_known_kind() {
-        let e = Job::from_toml("[machine]\nkinematics = \"head-head\"\n", "j.toml")
+        let e = Job::from_toml("[machine]\nkinematics = \"five-axis\"\n", "j.toml")
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("head-head") && e.contains("table-table-ac"),
+            e.contains("five-axis") && e.contains("table-table-ac") && e.contains("head-head"),
             "{e}"
         );
+        let e = Job::from_toml("[machine]\nkinematics = \"head-head\"\n", "j.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("machine.kinematics") && e.contains("definition"), "{e}");
+        let e = Job::from_toml(
+            "[machine]\nkinematics = \"head-head\"\ndefinition = \"trunnion-bc\"\n",
+            "j.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("table-table-bc"), "{e}");
+        let e = Job::from_toml("[machine]\ndefinition = \"nowhere.toml\"\n", "j.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("machine.definition") && e.contains("nowhere.toml"), "{e}");
+        let job = Job::from_toml(
+            "[machine]\ndefinition = \"head-head\"\noutput = \"tcp\"\n",
+            "j.toml",
+        )
+        .unwrap();
+        let d = job.machine_definition().unwrap().unwrap();
+        assert_eq!(d.output, crate::post::OutputMode::Tcp);
+        let e = Job::from_toml(
+            "[machine]\ndefinition = \"trunnion-bc\"\nfeed = \"inverse-time\"\n",
+            "j.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("machine.feed") && e.contains("Heidenhain"), "{e}");
         let job = Job::from_toml("[machine]\nkinematics = \"table-table-ac\"\n", "j.toml").unwrap();
         assert_eq!(
             job.machine.kinematics,

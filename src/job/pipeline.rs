@@ -40,9 +40,9 @@ use crate::mesh::{Mesh, set_aside_warning};
 use crate::multires::Hierarchy;
 use crate::offset::OffsetShape;
 use crate::path::{self, Finishing, FinishingOptions, LinkReport};
-use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader, ProgramSink};
+use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::stock::clearance::MaterialClearance;
-use crate::verify::{MachineModel, PostedClearance, PostedOptions, check_posted, verify};
+use crate::verify::{PostedClearance, PostedOptions, check_posted, verify};
 use crate::verify::{ScallopOptions, measure_scallop};
 
 pub use super::observer::{Observer, Quiet};
@@ -749,7 +749,15 @@ pub fn plan(
         );
     }
     let changes = tool_changes(job, &spans, &operations, &tools);
-    let (program, gcode) = post_program_with_tool_changes(&setup, &toolpath, &changes, &header)?;
+    let (program, gcode) = post_program_with_tool_changes(
+        &setup,
+        &toolpath,
+        &changes,
+        &header,
+        tools
+            .first()
+            .map_or(setup.tool.total_length(), |t| t.total_length()),
+    )?;
     let cl_csv = if roughing.is_empty() {
         post::write_cl_csv(&toolpath)
     } else {
@@ -770,9 +778,12 @@ pub fn plan(
     let t = Instant::now();
     observer.stage("back-simulation of the program", 0);
     let rapid_margin = job.safety.shank_margin;
-    let model = MachineModel::TableTableAc {
-        part_origin_in_table: setup.part_origin_in_table,
-    };
+    let gauges: Vec<(u32, f64)> = tools
+        .iter()
+        .map(|t| (t.id, t.total_length()))
+        .chain(std::iter::once((setup.tool.id, setup.tool.total_length())))
+        .collect();
+    let model = setup.verifier_model(&gauges);
     let posted = check_posted(
         &gcode,
         &model,
@@ -815,7 +826,15 @@ pub fn plan(
     let stock_run = super::stock_run::run_operations(part, units, job, &toolpath, &runs, observer)?;
     timings.stock = ms(t);
     let verification_failure = pose_failure
-        .or_else(|| posted_failure(&posted, budget, rapid_margin))
+        .or_else(|| {
+            let fastest = toolpath
+                .moves
+                .iter()
+                .filter(|m| m.kind != MoveKind::Rapid)
+                .map(|m| m.feed)
+                .fold(0.0, f64::max);
+            posted_failure(&posted, budget, rapid_margin, fastest)
+        })
         .or(roughing_failure)
         .or_else(|| planned.iter().find_map(|p| p.failure.clone()))
         .or_else(|| stock_run.as_ref().and_then(|run| run.failure.clone()));
@@ -1012,20 +1031,15 @@ fn recognise_impeller(
 }
 
 /// The post stage: `toolpath` linearised for `setup`'s machine within the budget's
-/// linearisation share (bounding the ball centre, not the tip), and the G-code written with
-/// `header`. Returns the machine blocks and the program text.
+/// linearisation share (bounding the ball centre, not the tip), and the program written with
+/// `header` in the machine's dialect and output mode. Returns the machine blocks and the
+/// program text.
 pub fn post_program(
     setup: &PlanSetup,
     toolpath: &Toolpath,
     header: &ProgramHeader,
 ) -> Result<(Vec<(Move, Joints)>, String)> {
-    let linearise = LineariseOptions::default()
-        .with_tolerance_mm(setup.budget.linearisation_mm)
-        .with_control_point_mm(setup.prepared_tool.ball_radius);
-    let program = post::linearise_opt(&setup.kinematics, toolpath, &linearise)?;
-    let mut writer = post::GcodeWriter::new(&setup.kinematics, setup.gcode_options.clone());
-    post::emit(&program, header, &mut writer);
-    Ok((program, writer.into_string()))
+    post_program_with_tool_changes(setup, toolpath, &[], header, setup.tool.total_length())
 }
 
 /// A tool change within a program: at move `at` of the toolpath, to the tool of `header`.
@@ -1033,6 +1047,9 @@ pub fn post_program(
 pub struct ToolChange {
     pub at: usize,
     pub header: ProgramHeader,
+    /// The new tool's gauge length (tip to the holder's top), mm: machines with head axes carry
+    /// it in joint output.
+    pub gauge_length: f64,
 }
 
 /// Where the plan's program changes tools: at the start of every roughing operation after
@@ -1061,6 +1078,7 @@ fn tool_changes(
                     },
                     ..Default::default()
                 },
+                gauge_length: tool.total_length(),
             });
         }
     }
@@ -1075,14 +1093,24 @@ pub fn post_program_with_tool_changes(
     toolpath: &Toolpath,
     changes: &[ToolChange],
     header: &ProgramHeader,
+    first_gauge_length: f64,
 ) -> Result<(Vec<(Move, Joints)>, String)> {
-    if changes.is_empty() {
-        return post_program(setup, toolpath, header);
-    }
     let linearise = LineariseOptions::default()
         .with_tolerance_mm(setup.budget.linearisation_mm)
         .with_control_point_mm(setup.prepared_tool.ball_radius);
-    let mut writer = post::GcodeWriter::new(&setup.kinematics, setup.gcode_options.clone());
+    let mut options = setup.gcode_options.clone();
+    options.control_point_mm = setup.prepared_tool.ball_radius;
+    let tcp = options.output == post::OutputMode::Tcp;
+    let mut writer: Box<dyn post::ProgramSink> = match options.dialect {
+        post::Dialect::Heidenhain => {
+            Box::new(post::HeidenhainWriter::new(&setup.kinematics, options))
+        }
+        _ if tcp => Box::new(post::GcodeWriter::new(
+            &post::ToolCentrePoint(&setup.kinematics),
+            options,
+        )),
+        _ => Box::new(post::GcodeWriter::new(&setup.kinematics, options)),
+    };
     let mut program = Vec::new();
     let mut starts: Vec<usize> = std::iter::once(0)
         .chain(changes.iter().map(|c| c.at))
@@ -1093,7 +1121,16 @@ pub fn post_program_with_tool_changes(
             tool_id: toolpath.tool_id,
             moves: toolpath.moves[window[0]..window[1]].to_vec(),
         };
-        let blocks = post::linearise_opt(&setup.kinematics, &section, &linearise)?;
+        let gauge = match k {
+            0 => first_gauge_length,
+            k => changes[k - 1].gauge_length,
+        };
+        let kinematics = setup.kinematics.with_gauge_length(gauge);
+        let blocks = if tcp {
+            post::linearise_opt(&post::ToolCentrePoint(&kinematics), &section, &linearise)?
+        } else {
+            post::linearise_opt(&kinematics, &section, &linearise)?
+        };
         match k {
             0 => writer.begin(header),
             k => writer.tool_change(&changes[k - 1].header),
@@ -1104,7 +1141,7 @@ pub fn post_program_with_tool_changes(
         program.extend(blocks);
     }
     writer.end();
-    Ok((program, writer.into_string()))
+    Ok((program, writer.finish()))
 }
 
 /// The program header: what was planned, with which tool, and the tolerance budget.
@@ -1172,6 +1209,7 @@ fn posted_failure(
     posted: &std::result::Result<PostedClearance, crate::verify::ProgramError>,
     budget: &ToleranceBudget,
     rapid_margin: f64,
+    fastest_planned_feed: f64,
 ) -> Option<String> {
     let posted = match posted {
         Ok(p) => p,
@@ -1189,6 +1227,17 @@ fn posted_failure(
             "a rapid passes {:.6} mm from the part at line {} of job.nc (it must keep the shank \
              margin {rapid_margin} mm)",
             posted.min_rapid_clearance_mm, posted.min_rapid_line
+        ));
+    }
+    // Inverse time: the F words, read back, must not drive the ball faster than planned (1 %
+    // for the F word's rounding and the path's length over its chord).
+    if let Some((feed, line)) = posted.fastest_part_feed
+        && feed > 1.01 * fastest_planned_feed
+    {
+        problems.push(format!(
+            "an inverse-time block moves the ball at {feed:.1} mm/min relative to the part at \
+             line {line} of job.nc, faster than the fastest planned feed {fastest_planned_feed} \
+             mm/min"
         ));
     }
     (!problems.is_empty()).then(|| problems.join("; "))

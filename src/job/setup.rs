@@ -112,6 +112,41 @@ pub struct PlanSetup {
 }
 
 impl PlanSetup {
+    /// The machine as the back-simulation models it (plain data for the verifier's own
+    /// kinematics), with the gauge length of every tool the program runs (`(number, mm)`).
+    pub fn verifier_model(&self, gauges: &[(u32, f64)]) -> crate::verify::MachineModel {
+        use crate::verify::{ChainModel, MachineModel, ModelAxis};
+        match &self.kinematics {
+            Machine::Chain(chain) => {
+                let axis = |j: &crate::post::RotaryJoint| ModelAxis {
+                    letter: j.letter.to_string().chars().next().unwrap_or('A'),
+                    on_table: j.side == crate::post::AxisSide::Table,
+                    direction: j.direction.into_inner(),
+                    point: j.point,
+                };
+                let head = chain.has_head_axes();
+                MachineModel::Chain(ChainModel {
+                    axes: [axis(&chain.first), axis(&chain.second)],
+                    part_origin_in_table: chain.part_origin_in_table,
+                    head_lengths: if head {
+                        gauges
+                            .iter()
+                            .map(|&(id, g)| (id, chain.pivot_length + g))
+                            .collect()
+                    } else {
+                        Vec::new()
+                    },
+                    tcp: self.gcode_options.output == crate::post::OutputMode::Tcp,
+                    tcp_in_program: self.gcode_options.dialect != crate::post::Dialect::Linuxcnc,
+                    conversational: self.gcode_options.dialect == crate::post::Dialect::Heidenhain,
+                })
+            }
+            _ => MachineModel::TableTableAc {
+                part_origin_in_table: self.part_origin_in_table,
+            },
+        }
+    }
+
     /// The cell for `part`: collision structures, the job's tool, the machine with the part
     /// clamped (by default centred on the C axis, standing on the table at the pivot height),
     /// the safe plane beyond the part's reach, and the tolerance budget.
@@ -142,7 +177,7 @@ impl PlanSetup {
                 -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z)
             })
             .map(positive_zero);
-        let kinematics = machine(job, part_origin_in_table)?;
+        let kinematics = machine(job, part_origin_in_table, tool.total_length())?;
         let pivot = Point3::from(-part_origin_in_table);
         let reach = part
             .part
@@ -165,11 +200,20 @@ impl PlanSetup {
         }
         // Rounding is charged where the ball centre is farthest from the pivot: on the safe
         // plane.
-        let gcode_options = GcodeOptions::default();
+        let gcode_options = match job.machine_definition()? {
+            Some(d) => GcodeOptions {
+                dialect: d.dialect,
+                output: d.output,
+                feed: d.feed,
+                max_rotary_speed: d.max_rotary_speed,
+                ..GcodeOptions::default()
+            },
+            None => GcodeOptions::default(),
+        };
         let budget = ToleranceBudget::split(
             job.strategy.tolerance,
             &gcode_options,
-            safe_distance + prepared_tool.ball_radius,
+            safe_distance + prepared_tool.ball_radius + kinematics.head_length(),
         )?;
         let chooser = AxisChooser::new(AxisOptions {
             lead_deg: job.strategy.lead_deg,
@@ -300,16 +344,24 @@ pub(crate) fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
     }
 }
 
-/// The machine the job describes, with the part clamped at `part_origin_in_table`.
-pub fn machine(job: &Job, part_origin_in_table: Vector3) -> Result<Machine> {
+/// The machine the job describes, with the part clamped at `part_origin_in_table` and a tool of
+/// gauge length `gauge_mm` in the spindle (used by machines with head axes, whose linear axes
+/// carry the tool's length in joint output).
+pub fn machine(job: &Job, part_origin_in_table: Vector3, gauge_mm: f64) -> Result<Machine> {
     let m = &job.machine;
-    let kin = match m.kinematics {
-        KinematicsKind::TableTableAc => Machine::TableTableAc(
-            TableTableAC::new(part_origin_in_table)
-                .with_a_limits(m.a_limits[0], m.a_limits[1])
-                .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi))),
-        ),
-        KinematicsKind::ThreeAxis => Machine::ThreeAxis(ThreeAxis),
+    let kin = match job.machine_definition()? {
+        Some(definition) => Machine::Chain(Box::new(
+            definition.chain_for(part_origin_in_table, gauge_mm),
+        )),
+        None => match m.kinematics {
+            KinematicsKind::ThreeAxis => Machine::ThreeAxis(ThreeAxis),
+            // Validation lets no other kind through without a definition.
+            _ => Machine::TableTableAc(
+                TableTableAC::new(part_origin_in_table)
+                    .with_a_limits(m.a_limits[0], m.a_limits[1])
+                    .with_c_limits(m.c_limits.map(|[lo, hi]| (lo, hi))),
+            ),
+        },
     };
     kin.validate()?;
     Ok(kin)

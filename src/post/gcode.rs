@@ -1,5 +1,5 @@
-//! G-code output (Fanuc / LinuxCNC style, metric, absolute, feed per minute) through the
-//! [`ProgramSink`] trait.
+//! ISO G-code output (LinuxCNC, Fanuc, Siemens 840D; metric, absolute) through the
+//! [`ProgramSink`] trait. Heidenhain conversational is [`super::heidenhain`]'s.
 //!
 //! Program layout:
 //!
@@ -36,9 +36,27 @@
 //! The first motion switches length compensation on and moves Z alone: the first pose of a
 //! program is on its safe plane, above everything the part can reach from the pivot whatever X,
 //! Y and the rotaries are, so the tool is lifted there before the table turns.
+//!
+//! # Dialects, output and feed modes
+//!
+//! | | LinuxCNC | Fanuc | Siemens 840D |
+//! |---|---|---|---|
+//! | comments | `(…)` | `(…)` | `; …` |
+//! | safe start | `G21 G90 G94 G17 G40 G49 G80` | same | `G71 G90 G94 G17 G40` |
+//! | length compensation | `G43 Hn` | `G43 Hn` | `Dn` (after `Tn M6`) |
+//! | tool centre point on / off | machine's TCP kinematics (header note) | `G43.4 Hn` / `G49` | `TRAORI` / `TRAFOOF` |
+//! | inverse time | `G93`, `F` on every `G1` | same | same |
+//! | program end | `M30`, `%` lines | same | `M30`, no `%` |
+//!
+//! In joint output on a machine with head axes, the post has put the tool's length into X, Y,
+//! Z, so no length compensation is switched on (`G49` / `D0`). With inverse time (`G93`), each
+//! `G1` carries `F` = 1 / its duration in minutes: the longer of the part-frame motion of the
+//! tip and of the control point (the ball centre) at the planned feed, and the largest rotary
+//! move at the machine's rotary speed.
 
 use serde::{Deserialize, Serialize};
 
+use super::dialect::{Dialect, FeedMode, OutputMode};
 use super::format::{comment_text, fixed};
 use super::kinematics::{Joints, MachineKinematics, RotaryAxis};
 use super::{ArcXY, ProgramHeader, ProgramSink};
@@ -53,7 +71,31 @@ pub struct GcodeOptions {
     pub angular_decimals: usize,
     /// Decimals of F (mm/min). Default 1.
     pub feed_decimals: usize,
+    /// The control's language. Default LinuxCNC.
+    #[serde(default)]
+    pub dialect: Dialect,
+    /// Joint-space or tool-centre-point words. Default joint.
+    #[serde(default)]
+    pub output: OutputMode,
+    /// Feed per minute or inverse time. Default per minute.
+    #[serde(default)]
+    pub feed: FeedMode,
+    /// Slowest rotary axis's top speed, degrees/min: the shortest a rotary move can take, for
+    /// inverse-time feeds. Default 7200.
+    #[serde(default = "default_rotary_speed")]
+    pub max_rotary_speed: f64,
+    /// The point up the axis from the tip whose motion, with the tip's, sets an inverse-time
+    /// block's duration (the ball centre), mm. Default 0.
+    #[serde(default)]
+    pub control_point_mm: f64,
 }
+
+fn default_rotary_speed() -> f64 {
+    7200.0
+}
+
+/// Decimals of an inverse-time `F` (1/min).
+pub const INVERSE_TIME_DECIMALS: usize = 4;
 
 impl Default for GcodeOptions {
     fn default() -> Self {
@@ -61,6 +103,11 @@ impl Default for GcodeOptions {
             linear_decimals: 4,
             angular_decimals: 4,
             feed_decimals: 1,
+            dialect: Dialect::default(),
+            output: OutputMode::default(),
+            feed: FeedMode::default(),
+            max_rotary_speed: default_rotary_speed(),
+            control_point_mm: 0.0,
         }
     }
 }
@@ -95,6 +142,10 @@ pub struct GcodeWriter {
     last_f: Option<String>,
     /// The joints of the last block, as commanded (the start of the next arc).
     last_joints: Option<Joints>,
+    /// The part-frame pose of the last block (the start of the next block's motion).
+    last_pose: Option<crate::geom::ToolPose>,
+    /// Whether the machine has head axes (joint output then carries the tool length).
+    head: bool,
     tool_number: u32,
     spindle: bool,
     coolant: bool,
@@ -109,12 +160,14 @@ impl GcodeWriter {
             opts,
             machine: kin.description(),
             work_offset: kin.work_offset().to_string(),
-            rotary: kin.rotary_axes().to_vec(),
+            rotary: kin.rotary_axes(),
             out: String::new(),
             mode: None,
             last: Default::default(),
             last_f: None,
             last_joints: None,
+            last_pose: None,
+            head: kin.has_head_axes(),
             tool_number: 0,
             spindle: false,
             coolant: false,
@@ -143,7 +196,52 @@ impl GcodeWriter {
         } else {
             format!("{label}: {}", comment_text(text))
         };
-        self.line(&format!("({body})"));
+        if self.opts.dialect == Dialect::Siemens {
+            self.line(&format!("; {body}"));
+        } else {
+            self.line(&format!("({body})"));
+        }
+    }
+
+    /// The words that switch length compensation (or tool-centre-point control) on.
+    fn compensation_on(&self) -> Vec<String> {
+        let n = self.tool_number;
+        match (self.opts.dialect, self.opts.output) {
+            (Dialect::Siemens, OutputMode::Tcp) => vec![format!("D{n}"), "TRAORI".into()],
+            (Dialect::Siemens, OutputMode::Joint) if self.head => vec!["D0".into()],
+            (Dialect::Siemens, OutputMode::Joint) => vec![format!("D{n}")],
+            (Dialect::Fanuc, OutputMode::Tcp) => vec![format!("G43.4 H{n}")],
+            (_, OutputMode::Joint) if self.head => vec!["G49".into()],
+            _ => vec![format!("G43 H{n}")],
+        }
+    }
+
+    /// The block that switches tool-centre-point control off again, if any.
+    fn compensation_off(&self) -> Option<&'static str> {
+        match (self.opts.dialect, self.opts.output) {
+            (Dialect::Siemens, OutputMode::Tcp) => Some("TRAFOOF"),
+            (Dialect::Fanuc | Dialect::Linuxcnc, OutputMode::Tcp) => Some("G49"),
+            _ => None,
+        }
+    }
+
+    /// Inverse-time F of a block ending at `m` from the previous pose, 1/min.
+    fn inverse_time(&self, m: &Move, j: &Joints) -> f64 {
+        let r = self.opts.control_point_mm;
+        let (distance, turn) = match (self.last_pose, self.last_joints) {
+            (Some(p), Some(q)) => {
+                let centre = |pose: &crate::geom::ToolPose| pose.tip + pose.axis.into_inner() * r;
+                let d = (m.pose.tip - p.tip)
+                    .norm()
+                    .max((centre(&m.pose) - centre(&p)).norm());
+                (d, (j.a - q.a).abs().max((j.c - q.c).abs()))
+            }
+            _ => (0.0, 0.0),
+        };
+        let minutes = (distance / m.feed.max(1e-9)).max(turn / self.opts.max_rotary_speed);
+        // A block too short to time at the printed resolution is given the fastest F printable
+        // rather than an infinite one.
+        (1.0 / minutes.max(1e-9)).min(1e6)
     }
 
     /// The slots this machine writes: X, Y, Z and one per rotary axis.
@@ -195,7 +293,9 @@ impl ProgramSink for GcodeWriter {
     fn begin(&mut self, h: &ProgramHeader) {
         self.tool_number = h.tool_number;
         self.coolant = h.coolant;
-        self.line("%");
+        if self.opts.dialect != Dialect::Siemens {
+            self.line("%");
+        }
         self.comment("PROGRAM", &h.program_name);
         self.comment("PART", &h.part_name);
         let tool_label = format!("TOOL T{}", h.tool_number);
@@ -210,11 +310,33 @@ impl ProgramSink for GcodeWriter {
         self.comment("MACHINE", &machine);
         let work_offset = self.work_offset.clone();
         self.comment("WORK OFFSET", &work_offset);
+        let mode = format!(
+            "{} output, {} feed{}",
+            self.opts.output.name(),
+            self.opts.feed.name(),
+            match (self.opts.dialect, self.opts.output) {
+                (Dialect::Linuxcnc, OutputMode::Tcp) =>
+                    "; X Y Z are the tool tip in the part frame: run with the machine's TCP kinematics on",
+                (_, OutputMode::Tcp) => "; X Y Z are the tool tip in the part frame",
+                (_, OutputMode::Joint) if self.head =>
+                    "; X Y Z are the head pivot, the tool's gauge length included",
+                _ => "",
+            }
+        );
+        self.comment("MODE", &mode);
         self.comment("GENERATED BY", "wavemill post");
         for c in &h.comments {
             self.comment("", c);
         }
-        self.line("G21 G90 G94 G17 G40 G49 G80");
+        let feed = match self.opts.feed {
+            FeedMode::PerMinute => "G94",
+            FeedMode::InverseTime => "G93",
+        };
+        if self.opts.dialect == Dialect::Siemens {
+            self.line(&format!("G71 G90 {feed} G17 G40"));
+        } else {
+            self.line(&format!("G21 G90 {feed} G17 G40 G49 G80"));
+        }
         self.line(&format!("T{} M6", h.tool_number));
         self.spindle = h.spindle_rpm > 0;
         if self.spindle {
@@ -230,9 +352,17 @@ impl ProgramSink for GcodeWriter {
         let mut words = Vec::new();
         if !self.length_comp_on {
             // Length compensation on and Z up to the first pose's (safe) height before X, Y or
-            // a rotary moves (see the module docs).
+            // a rotary moves (see the module docs). Siemens takes `D` and `TRAORI` in blocks
+            // of their own.
+            let on = self.compensation_on();
             self.mode_word(&mut words, 0);
-            words.push(format!("G43 H{}", self.tool_number));
+            if self.opts.dialect == Dialect::Siemens {
+                for w in on {
+                    self.line(&w);
+                }
+            } else {
+                words.extend(on);
+            }
             self.axis_words(&mut words, j, &[2]);
             self.line(&words.join(" "));
             self.length_comp_on = true;
@@ -241,14 +371,24 @@ impl ProgramSink for GcodeWriter {
         let mut axes = Vec::new();
         let slots: Vec<usize> = self.slots().collect();
         self.axis_words(&mut axes, j, &slots);
+        let inverse_time = self.inverse_time(m, j);
         self.last_joints = Some(*j);
+        self.last_pose = Some(m.pose);
         if axes.is_empty() {
             return; // no motion at the output resolution
         }
         self.mode_word(&mut words, g);
         words.extend(axes);
         if g == 1 {
-            self.feed_word(&mut words, m.feed);
+            match self.opts.feed {
+                FeedMode::PerMinute => self.feed_word(&mut words, m.feed),
+                FeedMode::InverseTime => {
+                    // Every G93 block carries its own F (a control refuses one without).
+                    let f = fixed(inverse_time, INVERSE_TIME_DECIMALS);
+                    words.push(format!("F{f}"));
+                    self.last_f = None;
+                }
+            }
         }
         self.line(&words.join(" "));
     }
@@ -274,9 +414,13 @@ impl ProgramSink for GcodeWriter {
         self.feed_word(&mut words, m.feed);
         self.line(&words.join(" "));
         self.last_joints = Some(*end);
+        self.last_pose = Some(m.pose);
     }
 
     fn tool_change(&mut self, h: &ProgramHeader) {
+        if let Some(off) = self.compensation_off() {
+            self.line(off);
+        }
         if self.spindle {
             self.line("M5");
         }
@@ -296,9 +440,13 @@ impl ProgramSink for GcodeWriter {
         self.last_f = None;
         self.last = Default::default();
         self.last_joints = None;
+        self.last_pose = None;
     }
 
     fn end(&mut self) {
+        if let Some(off) = self.compensation_off() {
+            self.line(off);
+        }
         if self.spindle {
             self.line("M5");
         }
@@ -306,6 +454,12 @@ impl ProgramSink for GcodeWriter {
             self.line("M9");
         }
         self.line("M30");
-        self.line("%");
+        if self.opts.dialect != Dialect::Siemens {
+            self.line("%");
+        }
+    }
+
+    fn finish(self: Box<Self>) -> String {
+        self.out
     }
 }

@@ -60,14 +60,32 @@ pub enum KinematicsKind {
     /// Three linear axes, the tool fixed along machine +Z ([`ThreeAxis`]): 2.5D contour
     /// programs.
     ThreeAxis,
+    /// Tool along machine Z; a trunnion tilts by B about Y, the round table on it turns by C
+    /// ([`super::RotaryChain`]).
+    TableTableBc,
+    /// A head tilting by B about Y over a round table turning by C.
+    HeadTableBc,
+    /// A head tilting by A about X over a round table turning by C.
+    HeadTableAc,
+    /// Both rotary axes in the head: a fork turning about Z carrying a head tilting about X or Y.
+    HeadHead,
 }
 
 impl KinematicsKind {
     /// `true` when the kind can tilt the tool (has rotary axes).
     pub fn is_five_axis(self) -> bool {
+        self != KinematicsKind::ThreeAxis
+    }
+
+    /// The name job and machine files use.
+    pub fn name(self) -> &'static str {
         match self {
-            KinematicsKind::TableTableAc => true,
-            KinematicsKind::ThreeAxis => false,
+            KinematicsKind::TableTableAc => "table-table-ac",
+            KinematicsKind::ThreeAxis => "three-axis",
+            KinematicsKind::TableTableBc => "table-table-bc",
+            KinematicsKind::HeadTableBc => "head-table-bc",
+            KinematicsKind::HeadTableAc => "head-table-ac",
+            KinematicsKind::HeadHead => "head-head",
         }
     }
 }
@@ -131,6 +149,25 @@ pub enum KinematicsError {
     /// The machine description is inconsistent (e.g. limits not ordered, negative tolerance).
     #[error("invalid machine description: {0}")]
     InvalidMachine(String),
+    /// No setting of the rotary axes turns the tool to this axis (axes that are not
+    /// perpendicular reach a cone only).
+    #[error("the machine cannot turn the tool to the axis ({:.6}, {:.6}, {:.6})", axis[0], axis[1], axis[2])]
+    Unreachable {
+        /// The part-frame tool axis asked for.
+        axis: [f64; 3],
+    },
+    /// A linear axis would leave its travel.
+    #[error("axis {axis} would need {value_mm:.4} mm but its travel is [{min_mm}, {max_mm}] mm")]
+    OutOfTravel {
+        /// X, Y or Z.
+        axis: char,
+        /// The position the move needs, mm.
+        value_mm: f64,
+        /// Lower travel limit, mm.
+        min_mm: f64,
+        /// Upper travel limit, mm.
+        max_mm: f64,
+    },
 }
 
 /// Joint values as the controller sees them: linear axes in mm, rotary axes in **degrees**.
@@ -210,12 +247,35 @@ pub trait MachineKinematics {
     /// Checks joint values against the machine's limits.
     fn check_limits(&self, joints: &Joints) -> Result<(), KinematicsError>;
 
+    /// Every joint solution for `pose` inside the limits: both branches, and every turn of a
+    /// limited rotary axis (a continuous one at the turn nearest `previous`). Where a pass
+    /// starts, linearisation tries them in turn when the nearest cannot carry the pass within
+    /// the limits. The default is the exact inverse alone.
+    fn inverse_all(
+        &self,
+        pose: &ToolPose,
+        previous: Option<&Joints>,
+    ) -> Result<Vec<Joints>, KinematicsError> {
+        Ok(vec![self.inverse(pose, previous)?])
+    }
+
     /// Names of the rotary axes, in the order of [`Joints::a`] and [`Joints::c`]: two on a
     /// 5-axis machine, none on a 3-axis one (whose joints keep `a = c = 0`).
-    fn rotary_axes(&self) -> &[RotaryAxis];
+    fn rotary_axes(&self) -> Vec<RotaryAxis>;
+
+    /// The joints that put the tool tip at part point `tip` with the rotary axes at `first`,
+    /// `second` (degrees): what the linear axes must do for a given orientation (the machine
+    /// positions behind a tool-centre-point program).
+    fn joints_for_tip(&self, tip: &Point3<f64>, first: f64, second: f64) -> Joints;
 
     /// One-line human description (for program headers).
     fn description(&self) -> String;
+
+    /// `true` when a rotary axis turns the spindle: joint output then carries the tool length
+    /// in X, Y, Z, and length compensation stays off.
+    fn has_head_axes(&self) -> bool {
+        false
+    }
 
     /// Where the work offset's origin must be for the program's coordinates to mean what the
     /// post assumed (for program headers).
@@ -271,8 +331,18 @@ impl MachineKinematics for ThreeAxis {
         }
     }
 
-    fn rotary_axes(&self) -> &[RotaryAxis] {
-        &[]
+    fn rotary_axes(&self) -> Vec<RotaryAxis> {
+        Vec::new()
+    }
+
+    fn joints_for_tip(&self, tip: &Point3<f64>, _first: f64, _second: f64) -> Joints {
+        Joints {
+            x: tip.x,
+            y: tip.y,
+            z: tip.z,
+            a: 0.0,
+            c: 0.0,
+        }
     }
 
     fn description(&self) -> String {
@@ -611,6 +681,38 @@ impl MachineKinematics for TableTableAC {
         Ok(self.joints_for(pose, a + 0.0, c + 0.0))
     }
 
+    fn inverse_all(
+        &self,
+        pose: &ToolPose,
+        previous: Option<&Joints>,
+    ) -> Result<Vec<Joints>, KinematicsError> {
+        let nearest = self.inverse(pose, previous)?;
+        let k = Self::checked_axis(pose)?;
+        let h = k.x.hypot(k.y);
+        let tilt = h.atan2(k.z).to_degrees();
+        let c0 = if h <= SINGULAR_AXIS_EPS {
+            nearest.c
+        } else {
+            atan2_deg(k.x, k.y)
+        };
+        let mut all = vec![nearest];
+        for (a, c) in [(tilt, c0), (-tilt, c0 + 180.0)] {
+            let Some(a) = Self::within(a, self.a_limits_deg) else {
+                continue;
+            };
+            for c in self.c_wraps(c, previous.map(|p| p.c)) {
+                let j = self.joints_for(pose, a + 0.0, c + 0.0);
+                if !all
+                    .iter()
+                    .any(|o| (o.a - j.a).abs() < 1e-9 && (o.c - j.c).abs() < 1e-9)
+                {
+                    all.push(j);
+                }
+            }
+        }
+        Ok(all)
+    }
+
     fn check_limits(&self, j: &Joints) -> Result<(), KinematicsError> {
         if !j.is_finite() {
             return Err(KinematicsError::NonFinite);
@@ -637,8 +739,19 @@ impl MachineKinematics for TableTableAC {
         Ok(())
     }
 
-    fn rotary_axes(&self) -> &[RotaryAxis] {
-        &[RotaryAxis::A, RotaryAxis::C]
+    fn rotary_axes(&self) -> Vec<RotaryAxis> {
+        vec![RotaryAxis::A, RotaryAxis::C]
+    }
+
+    fn joints_for_tip(&self, tip: &Point3<f64>, first: f64, second: f64) -> Joints {
+        self.joints_for(
+            &ToolPose {
+                tip: *tip,
+                axis: Unit::new_unchecked(Vector3::z()),
+            },
+            first,
+            second,
+        )
     }
 
     fn work_offset(&self) -> &str {

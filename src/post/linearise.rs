@@ -26,9 +26,20 @@
 //!
 //! Joints use half the angle tolerance as the relaxed inverse's axis-error budget: near the C
 //! singularity C stays calm (tip exact, axis within half the angle tolerance), leaving the
-//! other half for interpolation. Rapid moves are positioning moves above the safe height: they
-//! get the nearest joints (C continuity kept) and are not subdivided. C is unwrapped
-//! continuously across the whole program.
+//! other half for interpolation. Rapid moves are positioning moves above the safe height: on a
+//! machine that turns only the table they get the nearest joints (C continuity kept) and are
+//! not subdivided, the table turning under a tool that stays on its safe plane; on a machine
+//! with head axes, whose rapids swing the tool about the head's pivot, they follow their
+//! planned motion like feed moves. C is unwrapped continuously across the whole program.
+//!
+//! # Limits
+//!
+//! The program is linearised pass by pass (a rapid and the feed moves up to the next). Where a
+//! pass starts, the rotaries may take either branch and any turn inside the limits; the one
+//! nearest the previous joints is tried first, and when the pass then cannot stay within the
+//! limits (a limited C running out of travel, a tilt limit on one branch) the others are tried
+//! in turn ([`MachineKinematics::inverse_all`]). When none carries the pass, the error says so
+//! ([`LineariseError::NoStart`]): the post does not insert an unwind in the middle of a cut.
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -115,6 +126,26 @@ pub enum LineariseError {
     AntipodalAxes {
         /// Index of the move in the original toolpath.
         move_index: usize,
+    },
+    /// No branch or turn of the rotary axes at a pass's start carries the whole pass within the
+    /// limits: the pass needs an unwind (retract, turn, re-plunge) partway, which the post does
+    /// not insert.
+    #[error(
+        "moves {first_move}..={last_move}: from none of the {tried} branches and turns of the \
+         rotary axes at the pass's start can the pass be followed within the machine's limits and \
+         the tolerance; where a limit stops it, it would need an unwind partway (retract, turn, \
+         re-plunge). From the nearest: {source}"
+    )]
+    NoStart {
+        /// The pass's first move (a rapid, or the program's first).
+        first_move: usize,
+        /// The pass's last move.
+        last_move: usize,
+        /// How many starts were tried.
+        tried: usize,
+        /// What went wrong from the nearest start.
+        #[source]
+        source: Box<LineariseError>,
     },
     /// A pose or feed is not finite.
     #[error("move {move_index}: non-finite pose or feed")]
@@ -244,8 +275,8 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
         ));
     }
     let budget = 0.5 * opts.angle_tolerance_deg;
-    let mut out: Vec<(Move, Joints)> = Vec::with_capacity(toolpath.moves.len());
-    for (i, mv) in toolpath.moves.iter().enumerate() {
+    let moves = &toolpath.moves;
+    for (i, mv) in moves.iter().enumerate() {
         let finite = mv.feed.is_finite()
             && mv
                 .pose
@@ -256,27 +287,161 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
         if !finite {
             return Err(LineariseError::NonFinite { move_index: i });
         }
+    }
+    let mut out: Vec<(Move, Joints)> = Vec::with_capacity(moves.len());
+    let mut start = 0;
+    while start < moves.len() {
+        // A pass: a rapid (or the program's first move) and the feed moves up to the next
+        // rapid. Where it starts the rotaries may take any branch or turn; the nearest is
+        // tried first, the others when the pass cannot be held within the limits from it.
+        let end = (start + 1..moves.len())
+            .find(|&k| moves[k].kind == MoveKind::Rapid)
+            .unwrap_or(moves.len());
         let kin_err = |source| LineariseError::Kinematics {
-            move_index: i,
+            move_index: start,
             source,
         };
-        let Some(&(prev_move, prev_j)) = out.last() else {
-            let j = kin.inverse(&mv.pose, None).map_err(kin_err)?;
-            out.push((*mv, j));
-            continue;
+        let previous = out.last().map(|&(_, j)| j);
+        // The alternatives are taken where the rotaries may turn freely: on a table machine at
+        // the pass's start; with head axes at the end of the move before it (on the safe plane,
+        // where turning in place keeps the tip outside the part's reach), so that the rapid
+        // itself has room to follow its motion.
+        let free_pose = match out.last() {
+            Some((m, _)) if kin.has_head_axes() => m.pose,
+            _ => moves[start].pose,
         };
-        if mv.kind == MoveKind::Rapid {
-            // Positioning: the nearest joints, whatever the joint path.
-            let j = kin
-                .inverse_relaxed(&mv.pose, &prev_j, budget)
-                .map_err(kin_err)?;
-            out.push((*mv, j));
-        } else {
-            let j = march(kin, &prev_move.pose, &prev_j, mv, i, opts, budget, &mut out)?;
-            out.push((*mv, j));
+        // `None`: where the nearest joints (or, with head axes, the planned motion) lead.
+        let mut candidates: Vec<Option<Joints>> = vec![None];
+        let mut first_error = None;
+        let kept = out.len();
+        let mut done = false;
+        let mut tried = 0;
+        while tried < candidates.len() {
+            let candidate = candidates[tried];
+            tried += 1;
+            out.truncate(kept);
+            match run_pass(
+                kin,
+                moves,
+                start,
+                end,
+                candidate.as_ref(),
+                opts,
+                budget,
+                &mut out,
+            ) {
+                Ok(()) => {
+                    done = true;
+                    break;
+                }
+                // Not a matter of where the rotaries start: no other start can help.
+                Err(
+                    e @ (LineariseError::AntipodalAxes { .. } | LineariseError::NonFinite { .. }),
+                ) => {
+                    return Err(e);
+                }
+                Err(e) => {
+                    if first_error.is_none() {
+                        first_error = Some(e);
+                        // Only now are the alternatives worth computing; the one the nearest
+                        // start already stood on is left out.
+                        let tried_joints = if kin.has_head_axes() {
+                            previous
+                        } else {
+                            out.get(kept).map(|&(_, j)| j)
+                        };
+                        for j in kin
+                            .inverse_all(&free_pose, previous.as_ref())
+                            .map_err(kin_err)?
+                        {
+                            let same = tried_joints.is_some_and(|t| {
+                                (t.a - j.a).abs() < 1e-9 && (t.c - j.c).abs() < 1e-9
+                            });
+                            if !same {
+                                candidates.push(Some(j));
+                            }
+                        }
+                    }
+                }
+            }
         }
+        if !done {
+            let source = first_error
+                .map(Box::new)
+                .ok_or(LineariseError::NonFinite { move_index: start })?;
+            return Err(LineariseError::NoStart {
+                first_move: start,
+                last_move: end - 1,
+                tried: candidates.len(),
+                source,
+            });
+        }
+        start = end;
     }
     Ok(out)
+}
+
+/// Linearises the pass `moves[start..end]` into `out`: the pass's first move placed, then each
+/// feed move walked ([`march`]). On a table machine the first move is a rapid straight to the
+/// joints `first` (`None`: the nearest); with head axes the machine first turns in place to
+/// `first`, another branch or turn of the previous pose, if given, then follows the rapid's
+/// planned motion. Every block is checked against the limits and travel.
+#[allow(clippy::too_many_arguments)]
+fn run_pass<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    moves: &[Move],
+    start: usize,
+    end: usize,
+    first: Option<&Joints>,
+    opts: &LineariseOptions,
+    budget: f64,
+    out: &mut Vec<(Move, Joints)>,
+) -> Result<(), LineariseError> {
+    let kept = out.len();
+    let mv = &moves[start];
+    let kin_err = |source| LineariseError::Kinematics {
+        move_index: start,
+        source,
+    };
+    match (out.last().copied(), first) {
+        (Some((prev_move, prev_j)), first) if kin.has_head_axes() => {
+            // A head swings the tool about its pivot: the joint path of a rapid is not safe by
+            // itself, so the rapid follows its planned motion like a feed move, after turning
+            // in place to the other branch or turn `first` of the previous pose, if given.
+            let from = match first {
+                Some(j) => {
+                    out.push((prev_move, *j));
+                    *j
+                }
+                None => prev_j,
+            };
+            let arrived = march(kin, &prev_move.pose, &from, mv, start, opts, budget, out)?;
+            out.push((*mv, arrived));
+        }
+        (_, Some(first)) => out.push((*mv, *first)),
+        (None, None) => out.push((*mv, kin.inverse(&mv.pose, None).map_err(kin_err)?)),
+        (Some((_, prev_j)), None) => out.push((
+            *mv,
+            kin.inverse_relaxed(&mv.pose, &prev_j, budget)
+                .map_err(kin_err)?,
+        )),
+    }
+    for (i, mv) in moves.iter().enumerate().take(end).skip(start + 1) {
+        let &(prev_move, prev_j) = out
+            .last()
+            .ok_or(LineariseError::NonFinite { move_index: i })?;
+        let j = march(kin, &prev_move.pose, &prev_j, mv, i, opts, budget, out)?;
+        out.push((*mv, j));
+    }
+    // Every block inside the rotary limits and the linear travel.
+    for (k, (_, j)) in out[kept..].iter().enumerate() {
+        kin.check_limits(j)
+            .map_err(|source| LineariseError::Kinematics {
+                move_index: (start + k).min(end - 1),
+                source,
+            })?;
+    }
+    Ok(())
 }
 
 /// Walks the feed move `p0 → mv.pose` from joints `j0` in adaptive steps (see the module

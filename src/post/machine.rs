@@ -3,6 +3,7 @@
 //! [`MachineKinematics`] trait dispatched to it. Planners hold a `Machine` and stay unaware of
 //! which kind it is; a new kind is a new variant here.
 
+use super::chain::RotaryChain;
 use super::kinematics::{
     Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, TableTableAC, ThreeAxis,
 };
@@ -15,6 +16,9 @@ pub enum Machine {
     TableTableAc(TableTableAC),
     /// 3-axis machine, tool along +Z.
     ThreeAxis(ThreeAxis),
+    /// Any of the 5-axis kinds as two rotary axes on the table or head side (a machine file's
+    /// machine).
+    Chain(Box<RotaryChain>),
 }
 
 impl Machine {
@@ -23,6 +27,7 @@ impl Machine {
         match self {
             Machine::TableTableAc(_) => KinematicsKind::TableTableAc,
             Machine::ThreeAxis(_) => KinematicsKind::ThreeAxis,
+            Machine::Chain(m) => m.kind,
         }
     }
 
@@ -31,6 +36,26 @@ impl Machine {
         match self {
             Machine::TableTableAc(m) => m.validate(),
             Machine::ThreeAxis(_) => Ok(()),
+            Machine::Chain(m) => m.validate(),
+        }
+    }
+
+    /// The same machine with a tool of gauge length `gauge_mm` (changes only machines with head
+    /// axes, whose joint output carries the tool's length).
+    pub fn with_gauge_length(&self, gauge_mm: f64) -> Machine {
+        match self {
+            Machine::Chain(m) => {
+                Machine::Chain(Box::new((**m).clone().with_gauge_length(gauge_mm)))
+            }
+            other => other.clone(),
+        }
+    }
+
+    /// Head reference point to tool tip, mm (0 without head axes).
+    pub fn head_length(&self) -> f64 {
+        match self {
+            Machine::Chain(m) => m.head_length,
+            _ => 0.0,
         }
     }
 
@@ -38,6 +63,7 @@ impl Machine {
         match self {
             Machine::TableTableAc(m) => m,
             Machine::ThreeAxis(m) => m,
+            Machine::Chain(m) => m.as_ref(),
         }
     }
 }
@@ -69,12 +95,28 @@ impl MachineKinematics for Machine {
         self.kinematics().check_limits(joints)
     }
 
-    fn rotary_axes(&self) -> &[RotaryAxis] {
+    fn inverse_all(
+        &self,
+        pose: &ToolPose,
+        previous: Option<&Joints>,
+    ) -> Result<Vec<Joints>, KinematicsError> {
+        self.kinematics().inverse_all(pose, previous)
+    }
+
+    fn rotary_axes(&self) -> Vec<RotaryAxis> {
         self.kinematics().rotary_axes()
+    }
+
+    fn joints_for_tip(&self, tip: &nalgebra::Point3<f64>, first: f64, second: f64) -> Joints {
+        self.kinematics().joints_for_tip(tip, first, second)
     }
 
     fn description(&self) -> String {
         self.kinematics().description()
+    }
+
+    fn has_head_axes(&self) -> bool {
+        self.kinematics().has_head_axes()
     }
 
     fn work_offset(&self) -> &str {

@@ -19,31 +19,41 @@
 //! the part-frame feed exact when rotaries move, is not implemented yet.
 #![warn(missing_docs)]
 
+pub mod chain;
 pub mod cl;
 pub mod contour;
+pub mod dialect;
 pub mod estimate;
 mod format;
 pub mod gcode;
+pub mod heidenhain;
 pub mod kinematics;
 pub mod linearise;
 pub mod machine;
+pub mod machine_file;
 pub mod planar;
+pub mod tcp;
 
 #[cfg(test)]
 mod tests;
 
 use serde::{Deserialize, Serialize};
 
+pub use chain::{AxisSide, RotaryChain, RotaryJoint};
 pub use cl::{CL_CSV_HEADER, ClError, read_cl_csv, write_cl_csv};
 pub use contour::{BlockRole, ContourPostError, ContourProgram, PlanarParams, ProgramStats};
+pub use dialect::{Dialect, FeedMode, OutputMode};
 pub use estimate::{TimeEstimate, TimeModel, estimate_blocks, estimate_time};
 pub use gcode::{GcodeOptions, GcodeWriter};
+pub use heidenhain::HeidenhainWriter;
 pub use kinematics::{
     Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, TableTableAC, ThreeAxis,
 };
 pub use linearise::{LineariseError, LineariseOptions, linearise, linearise_opt};
 pub use machine::Machine;
+pub use machine_file::{MachineDefinition, MachineFileError};
 pub use planar::{PlanarBlock, PlanarError, PlanarProgram};
+pub use tcp::ToolCentrePoint;
 
 use crate::geom::{Move, Toolpath};
 
@@ -92,6 +102,9 @@ pub trait ProgramSink {
     fn tool_change(&mut self, header: &ProgramHeader);
     /// Ends the program.
     fn end(&mut self);
+
+    /// The program text, once ended.
+    fn finish(self: Box<Self>) -> String;
 }
 
 /// Feeds a linearised program through a sink.

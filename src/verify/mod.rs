@@ -16,8 +16,11 @@ mod program;
 mod scallop;
 mod segment_distance;
 
-pub use posted::{MachineModel, PostedClearance, PostedOptions, check_posted, program_toolpath};
-pub use program::{MotionBlock, ProgramError, read_program};
+pub use posted::{
+    ChainModel, MachineModel, ModelAxis, PostedClearance, PostedOptions, check_posted,
+    program_toolpath,
+};
+pub use program::{MotionBlock, ProgramError, read_conversational, read_program};
 pub use scallop::{AreaSplit, ScallopOptions, ScallopReport, measure_scallop, ray_capsule_entry};
 pub use segment_distance::SegmentDistance;
 

@@ -28,13 +28,13 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::program::{MotionBlock, ProgramError, read_program};
+use super::program::{MotionBlock, ProgramError, read_conversational, read_program};
 use super::segment_distance::SegmentDistance;
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 
 /// The machine as the verifier models it: plain data, independent of the post's code.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum MachineModel {
     /// Tool along machine +Z; the cradle turns by A about machine X, the round table on it by
     /// C about its own axis. A part point `p` sits at machine `R_x(A)·R_z(C)·(p + o)`.
@@ -45,14 +45,161 @@ pub enum MachineModel {
     /// Three linear axes, the tool along +Z, the work offset at the part's origin: machine X, Y,
     /// Z are the part's.
     ThreeAxis,
+    /// Two rotary axes on the table or head side, as a machine file describes them.
+    Chain(ChainModel),
+}
+
+/// One rotary axis of a [`ChainModel`]: the line it turns about at home (all rotaries at 0),
+/// machine frame for a table axis, from the head's reference point for a head axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelAxis {
+    /// Its address letter.
+    pub letter: char,
+    /// `true`: it turns the part; `false`: the spindle.
+    pub on_table: bool,
+    /// Unit direction (right-handed positive rotation).
+    pub direction: Vector3,
+    /// A point on it, mm.
+    pub point: Vector3,
+}
+
+/// A 5-axis machine of two rotary axes as the verifier reads its programs.
+///
+/// The first axis is the one nearer the machine's base on its side (the cradle, the head of a
+/// head-table machine, the ram-side head axis); a table axis carries the part at `o` from the
+/// program origin, a head axis carries the tool tip `head_length` below the head's reference
+/// point, which X, Y, Z command. In TCP programs X, Y, Z are the tip in the part frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainModel {
+    /// First and second rotary axis.
+    pub axes: [ModelAxis; 2],
+    /// Where the part frame's origin sits in the table frame, mm.
+    pub part_origin_in_table: Vector3,
+    /// Head reference point to tool tip per tool number (joint programs of machines with head
+    /// axes), mm; empty otherwise.
+    pub head_lengths: Vec<(u32, f64)>,
+    /// X, Y, Z are the tool tip in the part frame (tool-centre-point control).
+    pub tcp: bool,
+    /// The program switches TCP control on and off itself (`G43.4`, `TRAORI`, `FUNCTION
+    /// TCPM`); `false` where it is a mode of the machine's configuration (LinuxCNC), and the
+    /// program cannot be checked for it.
+    pub tcp_in_program: bool,
+    /// The program is Heidenhain conversational.
+    pub conversational: bool,
+}
+
+/// Rodrigues' rotation of `v` by `angle` (radians) about unit `k`.
+fn rodrigues(k: &Vector3, angle: f64, v: &Vector3) -> Vector3 {
+    let (s, c) = angle.sin_cos();
+    v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c))
+}
+
+impl ChainModel {
+    fn has_head_axes(&self) -> bool {
+        self.axes.iter().any(|a| !a.on_table)
+    }
+
+    fn head_length(&self, tool: Option<u32>) -> f64 {
+        if self.tcp {
+            return 0.0;
+        }
+        tool.and_then(|t| self.head_lengths.iter().find(|(n, _)| *n == t))
+            .or(self.head_lengths.first())
+            .map_or(0.0, |(_, l)| *l)
+    }
+
+    /// The tool axis and a machine point brought into the part frame at rotary angles
+    /// `angles` (radians): the head's axes turn the tool (the one nearer the spindle first), the
+    /// table's are undone (the one nearer the base first).
+    fn to_part_frame(&self, angles: [f64; 2], machine_point: &Vector3) -> (Vector3, Vector3) {
+        let mut axis = Vector3::z();
+        for i in [1, 0] {
+            let a = &self.axes[i];
+            if !a.on_table {
+                axis = rodrigues(&a.direction, angles[i], &axis);
+            }
+        }
+        let mut point = *machine_point;
+        for i in [0, 1] {
+            let a = &self.axes[i];
+            if a.on_table {
+                point = a.point + rodrigues(&a.direction, -angles[i], &(point - a.point));
+                axis = rodrigues(&a.direction, -angles[i], &axis);
+            }
+        }
+        (point - self.part_origin_in_table, axis)
+    }
+
+    /// The tip in the machine frame for joints `[x, y, z, …]` (joint programs): X, Y, Z plus
+    /// the head's turn of the vector to the tip.
+    fn tip_in_machine(&self, joints: &[f64; 5], angles: [f64; 2], tool: Option<u32>) -> Vector3 {
+        let mut tip = Vector3::new(0.0, 0.0, -self.head_length(tool));
+        for i in [1, 0] {
+            let a = &self.axes[i];
+            if !a.on_table {
+                tip = a.point + rodrigues(&a.direction, angles[i], &(tip - a.point));
+            }
+        }
+        Vector3::new(joints[0], joints[1], joints[2]) + tip
+    }
+
+    /// Tip and axis in the part frame.
+    fn pose(&self, joints: &[f64; 5], tool: Option<u32>) -> (Point3, Vector3) {
+        let angles = [joints[3].to_radians(), joints[4].to_radians()];
+        if self.tcp {
+            let (_, axis) = self.to_part_frame(angles, &Vector3::zeros());
+            return (Point3::new(joints[0], joints[1], joints[2]), axis);
+        }
+        let (tip, axis) = self.to_part_frame(angles, &self.tip_in_machine(joints, angles, tool));
+        (Point3::from(tip), axis)
+    }
 }
 
 impl MachineModel {
+    /// The block's joints once all five are known (a 3-axis machine's rotaries stand at 0).
+    fn joints(&self, b: &MotionBlock) -> Option<[f64; 5]> {
+        let [x, y, z, a, c] = b.axes;
+        match self {
+            MachineModel::ThreeAxis => Some([x?, y?, z?, 0.0, 0.0]),
+            _ => Some([x?, y?, z?, a?, c?]),
+        }
+    }
+
     fn axis_letters(&self) -> [char; 5] {
         match self {
             MachineModel::TableTableAc { .. } | MachineModel::ThreeAxis => {
                 ['X', 'Y', 'Z', 'A', 'C']
             }
+            MachineModel::Chain(m) => ['X', 'Y', 'Z', m.axes[0].letter, m.axes[1].letter],
+        }
+    }
+
+    /// Reads `program` in the machine's language.
+    fn read(&self, program: &str) -> Result<Vec<MotionBlock>, ProgramError> {
+        match self {
+            MachineModel::Chain(m) if m.conversational => {
+                read_conversational(program, self.axis_letters())
+            }
+            _ => read_program(program, self.axis_letters()),
+        }
+    }
+
+    /// Whether the program's motion blocks must run with length compensation on: off only for
+    /// joint programs of machines with head axes, whose X, Y, Z carry the tool length.
+    fn expects_compensation(&self) -> bool {
+        match self {
+            MachineModel::Chain(m) => m.tcp || !m.has_head_axes(),
+            _ => true,
+        }
+    }
+
+    /// Whether the program's motion blocks must have TCP control on (`Some(true)`), off, or
+    /// cannot say (`None`: LinuxCNC, where it is the machine configuration's mode).
+    fn expects_tcp(&self) -> Option<bool> {
+        match self {
+            MachineModel::Chain(m) if m.tcp && !m.tcp_in_program => None,
+            MachineModel::Chain(m) => Some(m.tcp),
+            _ => Some(false),
         }
     }
 
@@ -63,40 +210,66 @@ impl MachineModel {
                 part_origin_in_table,
             } => Point3::from(-part_origin_in_table),
             MachineModel::ThreeAxis => Point3::origin(),
+            MachineModel::Chain(m) => Point3::from(-m.part_origin_in_table),
         }
     }
 
-    /// The ball centre in the part frame for machine-frame centre `u` (relative to the pivot)
-    /// and rotary angles `a`, `c` in radians.
-    fn centre_in_part(&self, u: &Vector3, a: f64, c: f64) -> Point3 {
-        match self {
-            MachineModel::TableTableAc {
-                part_origin_in_table,
-            } => Point3::from(self.rotate_into_part(u, a, c) - part_origin_in_table),
-            MachineModel::ThreeAxis => Point3::from(*u),
-        }
+    /// The ball centre (radius `r`) in the part frame at joints `[x, y, z, a°, c°]`.
+    fn ball_centre(&self, joints: &[f64; 5], r: f64, tool: Option<u32>) -> Point3 {
+        let pose = self.pose(joints, tool);
+        pose.tip + pose.axis.into_inner() * r
     }
 
-    /// A machine-frame direction in the part frame at rotary angles `a`, `c` (radians).
-    fn rotate_into_part(&self, u: &Vector3, a: f64, c: f64) -> Vector3 {
+    /// A bound on the second derivative (in the block parameter) of the ball centre along the
+    /// joint interpolation `j0 → j1` (see the module docs).
+    fn curvature_bound(&self, j0: &[f64; 5], j1: &[f64; 5], r: f64, tool: Option<u32>) -> f64 {
+        let u0 = Vector3::new(j0[0], j0[1], j0[2]);
+        let u1 = Vector3::new(j1[0], j1[1], j1[2]);
+        let omega = (j1[3] - j0[3]).to_radians().abs() + (j1[4] - j0[4]).to_radians().abs();
         match self {
+            MachineModel::ThreeAxis => 0.0,
             MachineModel::TableTableAc { .. } => {
-                // R_x(a)ᵀ, then R_z(c)ᵀ: undo the cradle, then the table.
-                let (sa, ca) = a.sin_cos();
-                let w = Vector3::new(u.x, ca * u.y + sa * u.z, -sa * u.y + ca * u.z);
-                let (sc, cc) = c.sin_cos();
-                Vector3::new(cc * w.x + sc * w.y, -sc * w.x + cc * w.y, w.z)
+                let lift = Vector3::new(0.0, 0.0, r);
+                omega * omega * (u0 + lift).norm().max((u1 + lift).norm())
+                    + 2.0 * omega * (u1 - u0).norm()
             }
-            MachineModel::ThreeAxis => *u,
+            // TCP: the tip moves on its line; only the ball centre's swing about it curves.
+            MachineModel::Chain(m) if m.tcp => omega * omega * r,
+            // Every point that turns is within `reach` of every axis line's point: the
+            // composition of turns at rates summing to ω bends it by at most ω²·reach, and the
+            // linear motion adds 2ω|Δu| (the cross term).
+            MachineModel::Chain(m) => {
+                let points: f64 = m.axes.iter().map(|a| a.point.norm()).sum();
+                let reach = u0.norm().max(u1.norm()) + points + m.head_length(tool) + r;
+                omega * omega * 2.0 * reach + 2.0 * omega * (u1 - u0).norm()
+            }
         }
     }
 
     /// The tool's pose in the part frame at joints `[x, y, z, a°, c°]` (the tip at machine
     /// X, Y, Z with length compensation on, the tool along machine +Z).
-    fn pose(&self, joints: &[f64; 5]) -> crate::geom::ToolPose {
-        let (a, c) = (joints[3].to_radians(), joints[4].to_radians());
-        let tip = self.centre_in_part(&Vector3::new(joints[0], joints[1], joints[2]), a, c);
-        let axis = self.rotate_into_part(&Vector3::z(), a, c);
+    fn pose(&self, joints: &[f64; 5], tool: Option<u32>) -> crate::geom::ToolPose {
+        let (tip, axis) = match self {
+            MachineModel::ThreeAxis => (Point3::new(joints[0], joints[1], joints[2]), Vector3::z()),
+            MachineModel::TableTableAc {
+                part_origin_in_table,
+            } => {
+                // R_x(a)ᵀ, then R_z(c)ᵀ: undo the cradle, then the table.
+                let (a, c) = (joints[3].to_radians(), joints[4].to_radians());
+                let undo = |u: &Vector3| {
+                    let (sa, ca) = a.sin_cos();
+                    let w = Vector3::new(u.x, ca * u.y + sa * u.z, -sa * u.y + ca * u.z);
+                    let (sc, cc) = c.sin_cos();
+                    Vector3::new(cc * w.x + sc * w.y, -sc * w.x + cc * w.y, w.z)
+                };
+                let u = Vector3::new(joints[0], joints[1], joints[2]);
+                (
+                    Point3::from(undo(&u) - part_origin_in_table),
+                    undo(&Vector3::z()),
+                )
+            }
+            MachineModel::Chain(m) => m.pose(joints, tool),
+        };
         crate::geom::ToolPose {
             tip,
             axis: nalgebra::Unit::new_normalize(axis),
@@ -118,20 +291,12 @@ pub fn program_toolpath(
     max_error: f64,
 ) -> Result<(crate::geom::Toolpath, Vec<usize>), ProgramError> {
     use crate::geom::{Move, MoveKind, Toolpath};
-    let blocks = read_program(program, machine.axis_letters())?;
-    let joints = |b: &MotionBlock| -> Option<[f64; 5]> {
-        let [x, y, z, a, c] = b.axes;
-        match machine {
-            // No rotary words on a 3-axis machine: its rotaries stand at zero.
-            MachineModel::ThreeAxis => Some([x?, y?, z?, 0.0, 0.0]),
-            MachineModel::TableTableAc { .. } => Some([x?, y?, z?, a?, c?]),
-        }
-    };
+    let blocks = machine.read(program)?;
     let mut moves = Vec::new();
     let mut lines = Vec::new();
     let mut previous: Option<[f64; 5]> = None;
     for block in &blocks {
-        let Some(j1) = joints(block) else {
+        let Some(j1) = machine.joints(block) else {
             continue;
         };
         let kind = if block.rapid {
@@ -141,7 +306,7 @@ pub fn program_toolpath(
         };
         let Some(j0) = previous else {
             moves.push(Move {
-                pose: machine.pose(&j1),
+                pose: machine.pose(&j1, block.tool),
                 kind: MoveKind::Rapid,
                 feed: 0.0,
             });
@@ -149,17 +314,14 @@ pub fn program_toolpath(
             previous = Some(j1);
             continue;
         };
-        let u0 = Vector3::new(j0[0], j0[1], j0[2]);
-        let u1 = Vector3::new(j1[0], j1[1], j1[2]);
-        let omega = (j1[3] - j0[3]).to_radians().abs() + (j1[4] - j0[4]).to_radians().abs();
-        let curvature = omega * omega * u0.norm().max(u1.norm()) + 2.0 * omega * (u1 - u0).norm();
+        let curvature = machine.curvature_bound(&j0, &j1, 0.0, block.tool);
         let n =
             ((curvature / (8.0 * max_error.max(1e-9))).sqrt().ceil() as usize).clamp(1, MAX_PIECES);
         for k in 1..=n {
             let t = k as f64 / n as f64;
             let j: [f64; 5] = std::array::from_fn(|i| j0[i] + (j1[i] - j0[i]) * t);
             moves.push(Move {
-                pose: machine.pose(&j),
+                pose: machine.pose(&j, block.tool),
                 kind,
                 feed: 0.0,
             });
@@ -210,6 +372,10 @@ pub struct PostedClearance {
     pub feed_error_bound_mm: f64,
     pub rapid_error_bound_mm: f64,
     pub search_distance_mm: f64,
+    /// In an inverse-time program: the fastest the ball centre moves relative to the part
+    /// along a G1 block (its interpolated path's length times the block's F), mm/min, and the
+    /// line. `None` for feed per minute.
+    pub fastest_part_feed: Option<(f64, usize)>,
     /// What is wrong with the program's structure (motion before tool length compensation, a
     /// start that cannot be shown to be outside the part).
     pub problems: Vec<String>,
@@ -226,20 +392,36 @@ pub fn check_posted(
     part: &Mesh,
     options: &PostedOptions,
 ) -> Result<PostedClearance, ProgramError> {
-    let blocks = read_program(program, machine.axis_letters())?;
+    let blocks = machine.read(program)?;
     let tree = SegmentDistance::new(part);
     let r = options.ball_radius;
     let mut problems = Vec::new();
-    if let Some(b) = blocks.iter().find(|b| !b.length_compensation) {
+    let expected = machine.expects_compensation();
+    if let Some(b) = blocks.iter().find(|b| b.length_compensation != expected) {
+        problems.push(if expected {
+            format!(
+                "line {}: moves before tool length compensation is on",
+                b.line
+            )
+        } else {
+            format!(
+                "line {}: moves with tool length compensation on, but X Y Z already carry the \
+                 tool's length",
+                b.line
+            )
+        });
+    }
+    if let Some(tcp) = machine.expects_tcp()
+        && let Some(b) = blocks.iter().find(|b| b.tcp != tcp)
+    {
         problems.push(format!(
-            "line {}: moves before tool length compensation (G43) is on",
-            b.line
+            "line {}: moves with tool-centre-point control {} in a {} program",
+            b.line,
+            if b.tcp { "on" } else { "off" },
+            if tcp { "TCP" } else { "joint" }
         ));
     }
-    let joints = |b: &MotionBlock| -> Option<[f64; 5]> {
-        let [x, y, z, a, c] = b.axes;
-        Some([x?, y?, z?, a?, c?])
-    };
+    let joints = |b: &MotionBlock| machine.joints(b);
     let first = blocks.iter().position(|b| joints(b).is_some());
     let pivot = machine.pivot();
     let reach = part
@@ -248,9 +430,8 @@ pub fn check_posted(
         .map(|p| (p - pivot).norm())
         .fold(0.0, f64::max);
     if let Some(i) = first {
-        let [x, y, z, a, c] = joints(&blocks[i]).unwrap_or_default();
-        let start =
-            machine.centre_in_part(&Vector3::new(x, y, z + r), a.to_radians(), c.to_radians());
+        let j = joints(&blocks[i]).unwrap_or_default();
+        let start = machine.ball_centre(&j, r, blocks[i].tool);
         if (start - pivot).norm() <= reach + r {
             problems.push(format!(
                 "line {}: the first position is within the part's reach from the pivot; it \
@@ -279,10 +460,13 @@ pub fn check_posted(
                 } else {
                     options.feed_error_mm
                 };
-                let (clearance, pieces) =
-                    block_clearance(machine, &tree, &j0, &j1, r, error, limit);
+                let (clearance, pieces, length) =
+                    block_clearance(machine, &tree, &j0, &j1, r, error, limit, block.tool);
                 m.pieces += pieces;
                 m.note(block.rapid, clearance, block.line);
+                if let (false, true, Some(f)) = (block.rapid, block.inverse_time, block.feed) {
+                    m.note_feed(length * f, block.line);
+                }
             }
             m
         })
@@ -292,6 +476,9 @@ pub fn check_posted(
         total.pieces += m.pieces;
         total.note(false, m.feed.0, m.feed.1);
         total.note(true, m.rapid.0, m.rapid.1);
+        if let Some((f, line)) = m.fastest {
+            total.note_feed(f, line);
+        }
     }
     Ok(PostedClearance {
         motion_blocks: blocks.len(),
@@ -303,6 +490,7 @@ pub fn check_posted(
         feed_error_bound_mm: options.feed_error_mm,
         rapid_error_bound_mm: options.rapid_error_mm,
         search_distance_mm: options.search_mm,
+        fastest_part_feed: total.fastest,
         problems,
     })
 }
@@ -312,6 +500,8 @@ struct Minima {
     feed: (f64, usize),
     rapid: (f64, usize),
     pieces: usize,
+    /// Fastest inverse-time part feed (mm/min) and its line.
+    fastest: Option<(f64, usize)>,
 }
 
 impl Minima {
@@ -320,6 +510,15 @@ impl Minima {
             feed: (search, 0),
             rapid: (search, 0),
             pieces: 0,
+            fastest: None,
+        }
+    }
+
+    /// Keeps the faster feed, the earlier line on a tie.
+    fn note_feed(&mut self, feed: f64, line: usize) {
+        match self.fastest {
+            Some((f, l)) if f > feed || (f == feed && l <= line) => {}
+            _ => self.fastest = Some((feed, line)),
         }
     }
 
@@ -338,8 +537,10 @@ impl Minima {
     }
 }
 
-/// The certified least clearance of the ball along the joint interpolation `j0 → j1`, and how
-/// many pieces were measured (see the module docs).
+/// The certified least clearance of the ball along the joint interpolation `j0 → j1`, how
+/// many pieces were measured, and the length of the ball centre's path (the pieces' chords;
+/// see the module docs).
+#[allow(clippy::too_many_arguments)]
 fn block_clearance(
     machine: &MachineModel,
     tree: &SegmentDistance,
@@ -348,27 +549,26 @@ fn block_clearance(
     r: f64,
     error: f64,
     limit: f64,
-) -> (f64, usize) {
-    let u0 = Vector3::new(j0[0], j0[1], j0[2] + r);
-    let u1 = Vector3::new(j1[0], j1[1], j1[2] + r);
-    let (a0, c0) = (j0[3].to_radians(), j0[4].to_radians());
-    let (a1, c1) = (j1[3].to_radians(), j1[4].to_radians());
-    let omega = (a1 - a0).abs() + (c1 - c0).abs();
-    let curvature = omega * omega * u0.norm().max(u1.norm()) + 2.0 * omega * (u1 - u0).norm();
+    tool: Option<u32>,
+) -> (f64, usize, f64) {
+    let curvature = machine.curvature_bound(j0, j1, r, tool);
     let n = ((curvature / (8.0 * error)).sqrt().ceil() as usize).clamp(1, MAX_PIECES);
     let piece_error = curvature / (8.0 * (n * n) as f64);
     let at = |k: usize| {
         let t = k as f64 / n as f64;
-        machine.centre_in_part(&u0.lerp(&u1, t), a0 + (a1 - a0) * t, c0 + (c1 - c0) * t)
+        let j: [f64; 5] = std::array::from_fn(|i| j0[i] + (j1[i] - j0[i]) * t);
+        machine.ball_centre(&j, r, tool)
     };
     let mut least = limit;
+    let mut length = 0.0;
     let mut previous = at(0);
     for k in 1..=n {
         let next = at(k);
         least = least.min(tree.distance(&previous, &next, least + piece_error) - piece_error);
+        length += (next - previous).norm();
         previous = next;
     }
-    ((least - r).min(limit - r), n)
+    ((least - r).min(limit - r), n, length)
 }
 
 #[cfg(test)]
@@ -402,16 +602,70 @@ mod tests {
         let o = Vector3::new(-15.0, -15.0, 0.0);
         for (a, c) in [(0.0f64, 0.0f64), (30.0, 0.0), (90.0, 90.0), (-45.0, 200.0)] {
             let u = Vector3::new(3.0, -4.0, 25.0);
-            let p = m.centre_in_part(&u, a.to_radians(), c.to_radians());
+            let p = m.pose(&[u.x, u.y, u.z, a, c], None).tip;
             let rz = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), c.to_radians());
             let rx = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), a.to_radians());
             let back = rx * rz * (p.coords + o);
             assert!((back - u).norm() < 1e-12, "{a} {c}: {back}");
         }
         // A = 90°: the tool along machine Z is the part's −Y... turned by C = 90° to +X.
-        let axis = m.centre_in_part(&Vector3::z(), 90f64.to_radians(), 90f64.to_radians())
-            - m.centre_in_part(&Vector3::zeros(), 90f64.to_radians(), 90f64.to_radians());
-        assert!((axis - Vector3::x()).norm() < 1e-12, "{axis}");
+        let axis = m.pose(&[0.0, 0.0, 0.0, 90.0, 90.0], None).axis;
+        assert!(
+            (axis.into_inner() - Vector3::x()).norm() < 1e-12,
+            "{axis:?}"
+        );
+    }
+
+    /// The verifier's own forward kinematics of every shipped machine (Rodrigues' formula over
+    /// the file's axes) and the post's (nalgebra rotations in `post::chain`) agree on joints
+    /// all over the travel, in joint and in TCP programs: two implementations, one answer.
+    #[test]
+    fn the_verifier_and_the_post_agree_on_every_shipped_machine() {
+        use crate::post::machine_file::{MachineDefinition, SHIPPED};
+        use crate::post::{MachineKinematics, ToolCentrePoint};
+        for (name, text) in SHIPPED {
+            let d = MachineDefinition::parse(text, name).unwrap();
+            let chain = d.chain_for(Vector3::new(-4.0, 6.0, 35.0), 90.0);
+            for tcp in [false, true] {
+                let axis = |j: &crate::post::RotaryJoint| ModelAxis {
+                    letter: j.letter.to_string().chars().next().unwrap(),
+                    on_table: j.side == crate::post::AxisSide::Table,
+                    direction: j.direction.into_inner(),
+                    point: j.point,
+                };
+                let model = MachineModel::Chain(ChainModel {
+                    axes: [axis(&chain.first), axis(&chain.second)],
+                    part_origin_in_table: chain.part_origin_in_table,
+                    head_lengths: vec![(5, chain.head_length)],
+                    tcp,
+                    tcp_in_program: true,
+                    conversational: false,
+                });
+                for k in 0..40 {
+                    let t = k as f64;
+                    let j = crate::post::Joints {
+                        x: 30.0 * (0.7 * t).sin(),
+                        y: -20.0 + t,
+                        z: 50.0 * (0.3 * t).cos(),
+                        a: -100.0 + 5.0 * t,
+                        c: 400.0 - 19.0 * t,
+                    };
+                    let ours = model.pose(&[j.x, j.y, j.z, j.a, j.c], Some(5));
+                    let theirs = if tcp {
+                        ToolCentrePoint(&chain).forward(&j)
+                    } else {
+                        chain.forward(&j)
+                    };
+                    assert!(
+                        (ours.tip - theirs.tip).norm() < 1e-9,
+                        "{name} tcp {tcp}: {:?} vs {:?}",
+                        ours.tip,
+                        theirs.tip
+                    );
+                    assert!((ours.axis.into_inner() - theirs.axis.into_inner()).norm() < 1e-12);
+                }
+            }
+        }
     }
 
     /// The block's top face is z = 10 (a 30 × 30 × 10 cuboid from the origin, pivot at its

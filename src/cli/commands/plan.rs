@@ -42,6 +42,18 @@ pub struct PlanArgs {
     /// the ball, 5-axis, in offset layers (`channel-rough`; `[roughing] channel = true`).
     #[arg(long)]
     pub channel: bool,
+    /// The machine: a shipped one (trunnion-ac, trunnion-bc, head-table-bc, head-table-ac,
+    /// head-head) or a machine definition file (TOML, see data/machines/); overrides the job
+    /// file's machine.definition. Without one, the job's table-table A/C machine.
+    #[arg(long)]
+    pub machine: Option<String>,
+    /// Output mode: `joint` (machine axes, linearised) or `tcp` (tool tip in the part frame,
+    /// the control's tool-centre-point mode on); overrides the machine's.
+    #[arg(long, value_parser = ["joint", "tcp"])]
+    pub output: Option<String>,
+    /// Feed mode: `per-minute` (G94) or `inverse-time` (G93); overrides the machine's.
+    #[arg(long, value_parser = ["per-minute", "inverse-time"])]
+    pub feed: Option<String>,
     /// Worker threads, 1 to 256 (default: all cores). Outputs are identical for any count.
     #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
@@ -90,6 +102,27 @@ pub fn run(args: &PlanArgs) -> Result<()> {
     }
     if args.channel {
         job.roughing.channel = true;
+    }
+    if let Some(o) = &args.output {
+        job.machine.output = Some(if o == "tcp" {
+            crate::post::OutputMode::Tcp
+        } else {
+            crate::post::OutputMode::Joint
+        });
+        flags.push(("machine.output", "--output"));
+    }
+    if let Some(f) = &args.feed {
+        job.machine.feed = Some(if f == "inverse-time" {
+            crate::post::FeedMode::InverseTime
+        } else {
+            crate::post::FeedMode::PerMinute
+        });
+        flags.push(("machine.feed", "--feed"));
+    }
+    if let Some(m) = &args.machine {
+        flags.push(("machine.definition", "--machine"));
+        job.use_machine(m)
+            .map_err(|e| crate::cli::name_flags(Error::from(e), &flags))?;
     }
     if let Some(n) = args.max_drive_points {
         job.limits.max_drive_points = n;

@@ -199,9 +199,14 @@ fn depth_bound_is_an_error() {
         (Rapid, 5000.0, [50.0, 0.0, 5.0], dir(30.0, 0.0)),
         (Cut, 1000.0, [50.0, 0.0, 5.0], dir(30.0, 90.0)),
     ]);
+    // Every start of the pass (both branches) is tried; the nearest one's failure is kept.
     let err = linearise_opt(&kin, &tp, &LineariseOptions::default().with_max_depth(2)).unwrap_err();
+    let LineariseError::NoStart { source, tried, .. } = err else {
+        panic!("{err}");
+    };
+    assert_eq!(tried, 2, "both branches");
     assert_eq!(
-        err,
+        *source,
         LineariseError::DepthLimit {
             move_index: 1,
             depth: 2
@@ -231,10 +236,14 @@ fn bad_inputs_are_errors() {
         (Rapid, 5000.0, [0.0, 0.0, 5.0], [0.0, 0.0, 1.0]),
         (Cut, 1000.0, [0.0, 0.0, 5.0], dir(125.0, 0.0)),
     ]);
-    assert!(matches!(
-        linearise(&machine(), &tp, 0.01, 0.1),
-        Err(LineariseError::Kinematics { move_index: 1, .. })
-    ));
+    let e = linearise(&machine(), &tp, 0.01, 0.1).unwrap_err();
+    let LineariseError::NoStart { source, .. } = e else {
+        panic!("{e}");
+    };
+    assert!(
+        matches!(*source, LineariseError::Kinematics { move_index: 1, .. }),
+        "{source}"
+    );
 }
 
 proptest! {

@@ -1,10 +1,12 @@
 //! Tests of the post-processor: kinematics, linearisation, G-code, CL data, time estimate.
 
+mod chain;
 mod cl;
 mod estimate;
 mod gcode;
 mod kinematics;
 mod linearise;
+mod machines;
 mod planar;
 
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
