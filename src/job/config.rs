@@ -909,8 +909,7 @@ impl Job {
                 return Err(invalid(
                     "machine.kinematics",
                     format!(
-                        "= {} needs a machine definition (machine.definition or --machine) \
-                         giving its axes",
+                        "= {} needs a machine definition (machine.definition) giving its axes",
                         self.machine.kinematics.name()
                     ),
                 ));
@@ -1486,7 +1485,10 @@ mod tests {
         let e = Job::from_toml("[machine]\nkinematics = \"head-head\"\n", "j.toml")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("machine.kinematics") && e.contains("definition"), "{e}");
+        assert!(
+            e.contains("machine.kinematics") && e.contains("definition"),
+            "{e}"
+        );
         let e = Job::from_toml(
             "[machine]\nkinematics = \"head-head\"\ndefinition = \"trunnion-bc\"\n",
             "j.toml",
@@ -1497,7 +1499,10 @@ mod tests {
         let e = Job::from_toml("[machine]\ndefinition = \"nowhere.toml\"\n", "j.toml")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("machine.definition") && e.contains("nowhere.toml"), "{e}");
+        assert!(
+            e.contains("machine.definition") && e.contains("nowhere.toml"),
+            "{e}"
+        );
         let job = Job::from_toml(
             "[machine]\ndefinition = \"head-head\"\noutput = \"tcp\"\n",
             "j.toml",
@@ -1511,7 +1516,10 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.contains("machine.feed") && e.contains("Heidenhain"), "{e}");
+        assert!(
+            e.contains("machine.feed") && e.contains("Heidenhain"),
+            "{e}"
+        );
         let job = Job::from_toml("[machine]\nkinematics = \"table-table-ac\"\n", "j.toml").unwrap();
         assert_eq!(
             job.machine.kinematics,

@@ -63,8 +63,10 @@ impl OutputKind {
     pub const PLAN: OutputKind = OutputKind {
         command: "plan",
         owns: |n| {
-            matches!(n, "job.nc" | "cl.csv" | "report.json" | "paths.glb")
-                || numbered(n, "stock-", ".glb")
+            matches!(
+                n,
+                "job.nc" | "cl.csv" | "cl.apt" | "report.json" | "paths.glb"
+            ) || numbered(n, "stock-", ".glb")
         },
     };
     pub const LEVELS: OutputKind = OutputKind {
@@ -285,7 +287,7 @@ pub(crate) fn json_bytes(name: &str, value: &impl serde::Serialize) -> Result<Ve
         .into_bytes())
 }
 
-/// Writes `job.nc`, `cl.csv`, `report.json`, `paths.glb` and, with a `[stock]` blank, the
+/// Writes `job.nc`, `cl.csv`, `cl.apt`, `report.json`, `paths.glb` and, with a `[stock]` blank, the
 /// `stock-N.glb` after each operation into `dir` as one set (see the module docs). With `timings = false` the report leaves out the per-stage timings, the only
 /// part of the outputs that differs between runs. A path that failed verification gets only
 /// its report (for diagnosis; the folder then holds nothing else) and an
@@ -305,6 +307,7 @@ pub fn write_outputs(dir: &Path, output: &PlanOutput, timings: bool) -> Result<(
     let mut files = vec![
         ("job.nc".into(), output.gcode.clone().into_bytes()),
         ("cl.csv".into(), output.cl_csv.clone().into_bytes()),
+        ("cl.apt".into(), output.cl_apt.clone().into_bytes()),
         ("paths.glb".into(), output.preview_glb.clone()),
         report,
     ];

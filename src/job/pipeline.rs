@@ -57,6 +57,8 @@ pub struct PlanOutput {
     pub operations: Vec<OperationSpan>,
     pub gcode: String,
     pub cl_csv: String,
+    /// The same poses as APT CL data (`cl.apt`).
+    pub cl_apt: String,
     pub report: PlanReport,
     pub preview_glb: Vec<u8>,
     /// `stock-N.glb`: the stock after each operation, with a `[stock]` blank.
@@ -772,6 +774,21 @@ pub fn plan(
             .collect();
         super::rough_stages::cl_csv_of(&rows)
     };
+    let apt_rows: Vec<(post::AptTool, Move)> = spans
+        .iter()
+        .zip(&tools)
+        .flat_map(|(span, tool)| {
+            let apt = post::AptTool {
+                number: tool.id,
+                diameter: tool.cutter.diameter(),
+                corner_radius: tool.cutter.corner_radius(),
+            };
+            toolpath.moves[span.moves.clone()]
+                .iter()
+                .map(move |m| (apt, *m))
+        })
+        .collect();
+    let cl_apt = post::write_apt(&prepared.name, &apt_rows);
     let time = post::estimate_time(&program, job.machine.max_rotary_speed);
     timings.post = ms(t);
 
@@ -998,6 +1015,7 @@ pub fn plan(
         operations: spans,
         gcode,
         cl_csv,
+        cl_apt,
         report,
         preview_glb,
         stock_models: stock_run.map(|run| run.models).unwrap_or_default(),

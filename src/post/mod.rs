@@ -13,12 +13,15 @@
 //!   `k = (sin a · sin c, sin a · cos c, cos a)` is documented there.
 //! * [`linearise`](mod@linearise): inserts part-frame points until the controller's joint-space
 //!   interpolation stays within the tip and axis tolerances.
-//! * [`gcode`]: the [`GcodeWriter`] sink; [`cl`]: CL CSV; [`estimate`]: time estimate.
-//!
-//! Feeds are posted in G94 (mm/min along machine X, Y, Z). Inverse-time feed (G93), which keeps
-//! the part-frame feed exact when rotaries move, is not implemented yet.
+//! * [`chain`]: the other 5-axis kinds (table-table B/C, head-table, head-head, offset axes) as
+//!   two rotary axes on the table or head side, from the machine files of [`machine_file`];
+//!   [`tcp`]: tool-centre-point output as kinematics.
+//! * [`gcode`]: the [`GcodeWriter`] sink (LinuxCNC, Fanuc, Siemens; joint or TCP output; feed
+//!   per minute or inverse time, [`dialect`]); [`heidenhain`]: conversational; [`cl`]: CL CSV;
+//!   [`apt`]: APT CL data; [`estimate`]: time estimate. `docs/machines.md` has the pictures.
 #![warn(missing_docs)]
 
+pub mod apt;
 pub mod chain;
 pub mod cl;
 pub mod contour;
@@ -39,6 +42,7 @@ mod tests;
 
 use serde::{Deserialize, Serialize};
 
+pub use apt::{AptTool, write_apt};
 pub use chain::{AxisSide, RotaryChain, RotaryJoint};
 pub use cl::{CL_CSV_HEADER, ClError, read_cl_csv, write_cl_csv};
 pub use contour::{BlockRole, ContourPostError, ContourProgram, PlanarParams, ProgramStats};

@@ -246,6 +246,12 @@ impl MachineModel {
         }
     }
 
+    /// The tool's pose in the part frame at a program's joints `[x, y, z, first°, second°]`
+    /// for the tool numbered `tool` (what the verifier reads the program as).
+    pub fn program_pose(&self, joints: &[f64; 5], tool: Option<u32>) -> crate::geom::ToolPose {
+        self.pose(joints, tool)
+    }
+
     /// The tool's pose in the part frame at joints `[x, y, z, a°, c°]` (the tip at machine
     /// X, Y, Z with length compensation on, the tool along machine +Z).
     fn pose(&self, joints: &[f64; 5], tool: Option<u32>) -> crate::geom::ToolPose {
@@ -614,58 +620,6 @@ mod tests {
             (axis.into_inner() - Vector3::x()).norm() < 1e-12,
             "{axis:?}"
         );
-    }
-
-    /// The verifier's own forward kinematics of every shipped machine (Rodrigues' formula over
-    /// the file's axes) and the post's (nalgebra rotations in `post::chain`) agree on joints
-    /// all over the travel, in joint and in TCP programs: two implementations, one answer.
-    #[test]
-    fn the_verifier_and_the_post_agree_on_every_shipped_machine() {
-        use crate::post::machine_file::{MachineDefinition, SHIPPED};
-        use crate::post::{MachineKinematics, ToolCentrePoint};
-        for (name, text) in SHIPPED {
-            let d = MachineDefinition::parse(text, name).unwrap();
-            let chain = d.chain_for(Vector3::new(-4.0, 6.0, 35.0), 90.0);
-            for tcp in [false, true] {
-                let axis = |j: &crate::post::RotaryJoint| ModelAxis {
-                    letter: j.letter.to_string().chars().next().unwrap(),
-                    on_table: j.side == crate::post::AxisSide::Table,
-                    direction: j.direction.into_inner(),
-                    point: j.point,
-                };
-                let model = MachineModel::Chain(ChainModel {
-                    axes: [axis(&chain.first), axis(&chain.second)],
-                    part_origin_in_table: chain.part_origin_in_table,
-                    head_lengths: vec![(5, chain.head_length)],
-                    tcp,
-                    tcp_in_program: true,
-                    conversational: false,
-                });
-                for k in 0..40 {
-                    let t = k as f64;
-                    let j = crate::post::Joints {
-                        x: 30.0 * (0.7 * t).sin(),
-                        y: -20.0 + t,
-                        z: 50.0 * (0.3 * t).cos(),
-                        a: -100.0 + 5.0 * t,
-                        c: 400.0 - 19.0 * t,
-                    };
-                    let ours = model.pose(&[j.x, j.y, j.z, j.a, j.c], Some(5));
-                    let theirs = if tcp {
-                        ToolCentrePoint(&chain).forward(&j)
-                    } else {
-                        chain.forward(&j)
-                    };
-                    assert!(
-                        (ours.tip - theirs.tip).norm() < 1e-9,
-                        "{name} tcp {tcp}: {:?} vs {:?}",
-                        ours.tip,
-                        theirs.tip
-                    );
-                    assert!((ours.axis.into_inner() - theirs.axis.into_inner()).norm() < 1e-12);
-                }
-            }
-        }
     }
 
     /// The block's top face is z = 10 (a 30 × 30 × 10 cuboid from the origin, pivot at its
