@@ -6,7 +6,7 @@
 
 use wavemill::geom::MoveKind;
 use wavemill::job::{self, InProcessStock, Job, OperationKind, OperationTarget, PlanSetup, Quiet};
-use wavemill::verify::{MachineModel, PostedOptions, check_posted, verify};
+use wavemill::verify::{PostedOptions, check_posted, verify};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let part_file = std::env::args()
@@ -105,9 +105,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (blocks, gcode) = job::post_program(&setup, &toolpath, &header)?;
     let posted = check_posted(
         &gcode,
-        &MachineModel::TableTableAc {
-            part_origin_in_table: setup.part_origin_in_table,
-        },
+        &setup.verifier_model(&[(setup.tool.id, setup.tool.total_length())]),
         &prepared.part,
         &PostedOptions {
             ball_radius: setup.prepared_tool.ball_radius,
@@ -118,6 +116,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .max(0.1 * job.safety.shank_margin),
             search_mm: setup.search,
             tool: None,
+            rounding_mm: setup.budget.rounding_mm,
         },
     )?;
     println!(

@@ -154,7 +154,7 @@ fn plan_writes_four_identical_outputs_for_any_thread_count() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let files: Vec<Vec<u8>> = ["job.nc", "cl.csv", "report.json", "paths.glb"]
+        let files: Vec<Vec<u8>> = ["job.nc", "cl.csv", "report.json", "paths.glb", "cl.apt"]
             .iter()
             .map(|f| std::fs::read(dir.join(f)).unwrap())
             .collect();
@@ -169,7 +169,7 @@ fn plan_writes_four_identical_outputs_for_any_thread_count() {
         outputs.push(files);
         std::fs::remove_dir_all(&dir).unwrap();
     }
-    for (k, name) in ["job.nc", "cl.csv", "report.json", "paths.glb"]
+    for (k, name) in ["job.nc", "cl.csv", "report.json", "paths.glb", "cl.apt"]
         .iter()
         .enumerate()
     {
@@ -720,4 +720,42 @@ fn a_stated_impeller_that_does_not_match_is_refused() {
     assert!(err.contains("[impeller]") && err.contains("order"), "{err}");
     assert!(!dir.join("out").join("job.nc").exists());
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--machine` names a shipped machine or a file; one that is neither is a usage error naming
+/// the flag and listing the shipped ones, and an output mode the control cannot run is refused
+/// naming `--output`.
+#[test]
+fn plan_refuses_an_unknown_machine_and_an_impossible_mode_by_flag() {
+    let part = env!("CARGO_MANIFEST_DIR").to_string() + "/data/impeller.glb";
+    let out = wavemill(&[
+        "plan",
+        &part,
+        "--machine",
+        "no-such-mill",
+        "--out",
+        "/nonexistent/x",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--machine") && err.contains("no-such-mill") && err.contains("head-head"),
+        "{err}"
+    );
+    let out = wavemill(&[
+        "plan",
+        &part,
+        "--machine",
+        "trunnion-bc",
+        "--feed",
+        "inverse-time",
+        "--out",
+        "/nonexistent/x",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--feed") && err.contains("Heidenhain"),
+        "{err}"
+    );
 }

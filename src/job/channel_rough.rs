@@ -243,7 +243,7 @@ pub fn channel_rough(
             split_turning_rapids(
                 &mut layer_path,
                 last.as_ref(),
-                &setup.kinematics,
+                setup.program_kinematics().as_ref(),
                 super::rapids::MAX_RAPID_TURN_DEG,
             );
         }

@@ -510,7 +510,7 @@ pub fn plan(
                 split_turning_rapids(
                     &mut rough.toolpath,
                     before.as_ref(),
-                    &setup.kinematics,
+                    setup.program_kinematics().as_ref(),
                     MAX_RAPID_TURN_DEG,
                 );
             }
@@ -628,7 +628,7 @@ pub fn plan(
             split_turning_rapids(
                 &mut operation_planned.toolpath,
                 before.as_ref(),
-                &setup.kinematics,
+                setup.program_kinematics().as_ref(),
                 MAX_RAPID_TURN_DEG,
             );
         }
@@ -811,6 +811,7 @@ pub fn plan(
             rapid_error_mm: (0.1 * rapid_margin).max(budget.verification_mm),
             search_mm: setup.search,
             tool: Some(setup.tool.id),
+            rounding_mm: budget.rounding_mm,
         },
     );
     let roughing_failure = check_posted_roughing(
@@ -1247,10 +1248,10 @@ fn posted_failure(
             posted.min_rapid_clearance_mm, posted.min_rapid_line
         ));
     }
-    // Inverse time: the F words, read back, must not drive the ball faster than planned (1 %
-    // for the F word's rounding and the path's length over its chord).
+    // Inverse time: the F words, read back, must not drive the ball faster than planned (0.1 %
+    // for the F word's rounding).
     if let Some((feed, line)) = posted.fastest_part_feed
-        && feed > 1.01 * fastest_planned_feed
+        && feed > 1.001 * fastest_planned_feed
     {
         problems.push(format!(
             "an inverse-time block moves the ball at {feed:.1} mm/min relative to the part at \

@@ -35,6 +35,9 @@ pub fn split_turning_rapids(
     max_turn_deg: f64,
 ) -> usize {
     let step = max_turn_deg.max(1e-3);
+    if kinematics.has_head_axes() {
+        return split_along_plan(path, from, step);
+    }
     let mut out = Vec::with_capacity(path.moves.len());
     let mut previous: Option<(Move, Joints)> = from.and_then(|m| {
         kinematics
@@ -61,6 +64,39 @@ pub fn split_turning_rapids(
         }
         out.push(*m);
         previous = joints.map(|j| (*m, j));
+    }
+    path.moves = out;
+    split
+}
+
+/// [`split_turning_rapids`] on a machine with head axes, whose post drives every rapid along
+/// its planned motion (a head would swing the tool about its pivot): the turning rapids are
+/// split along that motion (control point straight, axis by slerp) into steps of at most `step`
+/// degrees of axis turn.
+fn split_along_plan(path: &mut Toolpath, from: Option<&Move>, step: f64) -> usize {
+    let mut out = Vec::with_capacity(path.moves.len());
+    let mut previous = from.copied();
+    let mut split = 0;
+    for m in &path.moves {
+        if let Some(p) = previous
+            && m.kind == MoveKind::Rapid
+        {
+            let turn =
+                angle_between(&p.pose.axis.into_inner(), &m.pose.axis.into_inner()).to_degrees();
+            let steps = (turn / step).ceil().max(1.0) as usize;
+            for s in 1..steps {
+                if let Some(pose) = crate::post::linearise::interpolate_pose(
+                    &p.pose,
+                    &m.pose,
+                    s as f64 / steps as f64,
+                ) {
+                    out.push(Move { pose, ..*m });
+                }
+            }
+            split += usize::from(steps > 1);
+        }
+        out.push(*m);
+        previous = Some(*m);
     }
     path.moves = out;
     split

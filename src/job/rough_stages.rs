@@ -193,7 +193,12 @@ pub(super) fn split_at_tool_changes(
     let changes: Vec<usize> = gcode
         .lines()
         .enumerate()
-        .filter(|(_, l)| l.starts_with('T') && l.ends_with(" M6"))
+        // ISO `Tn M6`; Heidenhain conversational `<block> TOOL CALL n Z …`.
+        .filter(|(_, l)| {
+            (l.starts_with('T') && l.ends_with(" M6"))
+                || l.split_once(' ')
+                    .is_some_and(|(_, rest)| rest.starts_with("TOOL CALL "))
+        })
         .map(|(k, _)| k + 1)
         .collect();
     if changes.len() != tools {

@@ -112,6 +112,16 @@ pub struct PlanSetup {
 }
 
 impl PlanSetup {
+    /// The kinematics the program's words are written in: the machine's, or seen through
+    /// tool-centre-point control in TCP output (how the control moves between blocks).
+    pub fn program_kinematics(&self) -> Box<dyn crate::post::MachineKinematics + '_> {
+        if self.gcode_options.output == crate::post::OutputMode::Tcp {
+            Box::new(crate::post::ToolCentrePoint(&self.kinematics))
+        } else {
+            Box::new(self.kinematics.clone())
+        }
+    }
+
     /// The machine as the back-simulation models it (plain data for the verifier's own
     /// kinematics), with the gauge length of every tool the program runs (`(number, mm)`).
     pub fn verifier_model(&self, gauges: &[(u32, f64)]) -> crate::verify::MachineModel {

@@ -66,7 +66,8 @@ use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::kinematics::{
-    Joints, KinematicsError, KinematicsKind, LIMIT_SLACK_DEG, MachineKinematics, RotaryAxis,
+    Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, checked_axis,
+    turns_within, within_limits,
 };
 use crate::geom::ToolPose;
 
@@ -419,33 +420,13 @@ impl RotaryChain {
         }
     }
 
-    /// Snaps `v` onto `[lo, hi]` within [`LIMIT_SLACK_DEG`]; `None` outside.
     fn within(v: f64, limits: Option<(f64, f64)>) -> Option<f64> {
-        match limits {
-            None => Some(v),
-            Some((lo, hi)) if v >= lo - LIMIT_SLACK_DEG && v <= hi + LIMIT_SLACK_DEG => {
-                Some(v.clamp(lo, hi))
-            }
-            Some(_) => None,
-        }
+        within_limits(v, limits)
     }
 
-    /// The 360° wraps of `v` to consider on `joint`: continuous, the one nearest `reference`
-    /// (or in (−180°, 180°]); limited, every wrap inside the limits.
+    /// The 360° turns of `v` to consider on `joint` ([`turns_within`]).
     fn wraps(joint: &RotaryJoint, v: f64, reference: Option<f64>) -> Vec<f64> {
-        match joint.limits_deg {
-            None => vec![match reference {
-                Some(r) => v + 360.0 * ((r - v) / 360.0).round(),
-                None => normalize_deg(v),
-            }],
-            Some((lo, hi)) => {
-                let k0 = ((lo - LIMIT_SLACK_DEG - v) / 360.0).ceil() as i64;
-                let k1 = ((hi + LIMIT_SLACK_DEG - v) / 360.0).floor() as i64;
-                (k0..=k1)
-                    .filter_map(|k| Self::within(v + 360.0 * k as f64, joint.limits_deg))
-                    .collect()
-            }
-        }
+        turns_within(v, joint.limits_deg, reference)
     }
 
     /// Picks, among the branches and wraps inside the limits, the joints nearest `previous`
@@ -514,15 +495,7 @@ impl RotaryChain {
     }
 
     fn checked(pose: &ToolPose) -> Result<Vector3<f64>, KinematicsError> {
-        let k = pose.axis.into_inner();
-        if k.iter()
-            .chain(pose.tip.coords.iter())
-            .all(|v| v.is_finite())
-        {
-            Ok(k)
-        } else {
-            Err(KinematicsError::NonFinite)
-        }
+        checked_axis(pose)
     }
 
     /// The part-frame tool axis at joint angles `(first, second)`.
@@ -561,12 +534,6 @@ fn turn_angle(w: &Vector3<f64>, u: &Vector3<f64>, v: &Vector3<f64>) -> Option<f6
         return None;
     }
     Some(w.dot(&u1.cross(&v1)).atan2(u1.dot(&v1)).to_degrees())
-}
-
-/// An angle (degrees) wrapped into (−180°, 180°], without negative zero.
-fn normalize_deg(d: f64) -> f64 {
-    let w = d - 360.0 * (d / 360.0).round();
-    if w <= -180.0 { w + 360.0 } else { w + 0.0 }
 }
 
 impl MachineKinematics for RotaryChain {

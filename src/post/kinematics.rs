@@ -474,29 +474,12 @@ impl TableTableAC {
 
     /// Snaps `v` onto `[lo, hi]` if within [`LIMIT_SLACK_DEG`]; `None` if outside.
     fn within(v: f64, (lo, hi): (f64, f64)) -> Option<f64> {
-        if v < lo - LIMIT_SLACK_DEG || v > hi + LIMIT_SLACK_DEG {
-            None
-        } else {
-            Some(v.clamp(lo, hi))
-        }
+        within_limits(v, Some((lo, hi)))
     }
 
-    /// The 360° wraps of `c` to consider: for continuous C the one nearest `reference` (or, without
-    /// reference, the one in `(−180°, 180°]`); for limited C every wrap inside the limits.
+    /// The 360° wraps of `c` to consider ([`turns_within`] of the C limits).
     fn c_wraps(&self, c: f64, reference: Option<f64>) -> Vec<f64> {
-        match self.c_limits_deg {
-            None => vec![match reference {
-                Some(r) => c + 360.0 * ((r - c) / 360.0).round(),
-                None => normalize_deg(c),
-            }],
-            Some((lo, hi)) => {
-                let k0 = ((lo - LIMIT_SLACK_DEG - c) / 360.0).ceil() as i64;
-                let k1 = ((hi + LIMIT_SLACK_DEG - c) / 360.0).floor() as i64;
-                (k0..=k1)
-                    .filter_map(|k| Self::within(c + 360.0 * k as f64, (lo, hi)))
-                    .collect()
-            }
-        }
+        turns_within(c, self.c_limits_deg, reference)
     }
 
     /// Picks the best candidate among `branches` (values before C wrapping).
@@ -558,20 +541,56 @@ impl TableTableAC {
 
     /// Validates a pose and returns its axis as a plain vector.
     fn checked_axis(pose: &ToolPose) -> Result<Vector3<f64>, KinematicsError> {
-        let k = pose.axis.into_inner();
-        if k.iter()
-            .chain(pose.tip.coords.iter())
-            .all(|v| v.is_finite())
-        {
-            Ok(k)
-        } else {
-            Err(KinematicsError::NonFinite)
+        checked_axis(pose)
+    }
+}
+
+/// A pose's axis as a plain vector, once tip and axis are known finite.
+pub(super) fn checked_axis(pose: &ToolPose) -> Result<Vector3<f64>, KinematicsError> {
+    let k = pose.axis.into_inner();
+    if k.iter()
+        .chain(pose.tip.coords.iter())
+        .all(|v| v.is_finite())
+    {
+        Ok(k)
+    } else {
+        Err(KinematicsError::NonFinite)
+    }
+}
+
+/// `v` snapped onto `limits` (degrees) when within [`LIMIT_SLACK_DEG`] of them, `None` outside;
+/// `v` itself for a continuous axis (`None` limits).
+pub(super) fn within_limits(v: f64, limits: Option<(f64, f64)>) -> Option<f64> {
+    match limits {
+        None => Some(v),
+        Some((lo, hi)) if v >= lo - LIMIT_SLACK_DEG && v <= hi + LIMIT_SLACK_DEG => {
+            Some(v.clamp(lo, hi))
+        }
+        Some(_) => None,
+    }
+}
+
+/// The 360° turns of angle `v` (degrees) an axis with `limits` may take: for a continuous axis
+/// the one nearest `reference` (or, without one, the one in (−180°, 180°]); for a limited one
+/// every turn inside the limits.
+pub(super) fn turns_within(v: f64, limits: Option<(f64, f64)>, reference: Option<f64>) -> Vec<f64> {
+    match limits {
+        None => vec![match reference {
+            Some(r) => v + 360.0 * ((r - v) / 360.0).round(),
+            None => normalize_deg(v),
+        }],
+        Some((lo, hi)) => {
+            let k0 = ((lo - LIMIT_SLACK_DEG - v) / 360.0).ceil() as i64;
+            let k1 = ((hi + LIMIT_SLACK_DEG - v) / 360.0).floor() as i64;
+            (k0..=k1)
+                .filter_map(|k| within_limits(v + 360.0 * k as f64, limits))
+                .collect()
         }
     }
 }
 
 /// An angle (degrees) wrapped into `(−180°, 180°]`, without negative zero.
-fn normalize_deg(d: f64) -> f64 {
+pub(super) fn normalize_deg(d: f64) -> f64 {
     let w = d - 360.0 * (d / 360.0).round(); // in [−180, 180]
     if w <= -180.0 { w + 360.0 } else { w + 0.0 }
 }

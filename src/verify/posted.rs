@@ -359,6 +359,10 @@ pub struct PostedOptions {
     /// Measure only the blocks this tool runs (the ball's, in a program whose roughing tools
     /// are checked by [`crate::rough::check`]); `None`: every block.
     pub tool: Option<u32>,
+    /// How far the printed words' rounding can move a block's end (mm, ball centre): an
+    /// inverse-time block's distance is taken this much shorter at each end before it is
+    /// timed by its F, so a short block's rounding does not read as speed.
+    pub rounding_mm: f64,
 }
 
 /// What the back-simulation found.
@@ -379,8 +383,8 @@ pub struct PostedClearance {
     pub rapid_error_bound_mm: f64,
     pub search_distance_mm: f64,
     /// In an inverse-time program: the fastest the ball centre moves relative to the part
-    /// along a G1 block (its interpolated path's length times the block's F), mm/min, and the
-    /// line. `None` for feed per minute.
+    /// along a G1 block (the straight distance it makes good, less the rounding at both ends,
+    /// times the block's F), mm/min, and the line. `None` for feed per minute.
     pub fastest_part_feed: Option<(f64, usize)>,
     /// What is wrong with the program's structure (motion before tool length compensation, a
     /// start that cannot be shown to be outside the part).
@@ -471,7 +475,10 @@ pub fn check_posted(
                 m.pieces += pieces;
                 m.note(block.rapid, clearance, block.line);
                 if let (false, true, Some(f)) = (block.rapid, block.inverse_time, block.feed) {
-                    m.note_feed(length * f, block.line);
+                    m.note_feed(
+                        (length - 2.0 * options.rounding_mm).max(0.0) * f,
+                        block.line,
+                    );
                 }
             }
             m
@@ -544,8 +551,9 @@ impl Minima {
 }
 
 /// The certified least clearance of the ball along the joint interpolation `j0 → j1`, how
-/// many pieces were measured, and the length of the ball centre's path (the pieces' chords;
-/// see the module docs).
+/// many pieces were measured, and the straight distance the ball centre makes good over the
+/// block (the planned motion the block interpolates; its path may bulge from it within the
+/// tolerance, and be that much longer).
 #[allow(clippy::too_many_arguments)]
 fn block_clearance(
     machine: &MachineModel,
@@ -566,15 +574,14 @@ fn block_clearance(
         machine.ball_centre(&j, r, tool)
     };
     let mut least = limit;
-    let mut length = 0.0;
-    let mut previous = at(0);
+    let start = at(0);
+    let mut previous = start;
     for k in 1..=n {
         let next = at(k);
         least = least.min(tree.distance(&previous, &next, least + piece_error) - piece_error);
-        length += (next - previous).norm();
         previous = next;
     }
-    ((least - r).min(limit - r), n, length)
+    ((least - r).min(limit - r), n, (previous - start).norm())
 }
 
 #[cfg(test)]
@@ -594,6 +601,7 @@ mod tests {
             feed_error_mm: 1e-4,
             rapid_error_mm: 1e-2,
             search_mm: 5.0,
+            rounding_mm: 0.0,
             tool: None,
         }
     }

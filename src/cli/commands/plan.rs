@@ -199,7 +199,7 @@ pub(crate) fn summarise(r: &job::PlanReport, out: &Path) {
             format!(" ({})", reasons.join(", "))
         }
     );
-    let mut outputs = "job.nc, cl.csv, report.json, paths.glb".to_string();
+    let mut outputs = "job.nc, cl.csv, cl.apt, report.json, paths.glb".to_string();
     if let Some(stock) = &r.stock {
         say!(
             "  stock            {} blank, {:.0} mm³ (dexels {:.3} mm apart)",
