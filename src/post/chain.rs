@@ -360,40 +360,37 @@ impl RotaryChain {
     }
 
     /// The side's rigid motion applied to point `x` (turns about each axis line in turn, the
-    /// axis nearest the part or tool first).
+    /// axis nearest the part or tool first), or with `undo` its inverse (the other order, the
+    /// opposite angles).
     fn side_motion(
         &self,
         side: AxisSide,
         first: f64,
         second: f64,
         x: &Vector3<f64>,
+        undo: bool,
     ) -> Vector3<f64> {
+        let mut turns = [(&self.second, second), (&self.first, first)];
+        let sign = if undo {
+            turns.reverse();
+            -1.0
+        } else {
+            1.0
+        };
         let mut v = *x;
-        for (joint, angle) in [(&self.second, second), (&self.first, first)] {
+        for (joint, angle) in turns {
             if joint.side == side {
-                let r = Rotation3::from_axis_angle(&joint.direction, angle.to_radians());
+                let r = Rotation3::from_axis_angle(&joint.direction, sign * angle.to_radians());
                 v = joint.point + r * (v - joint.point);
             }
         }
         v
     }
 
-    /// The inverse of [`Self::side_motion`].
-    fn side_motion_inverse(
-        &self,
-        side: AxisSide,
-        first: f64,
-        second: f64,
-        x: &Vector3<f64>,
-    ) -> Vector3<f64> {
-        let mut v = *x;
-        for (joint, angle) in [(&self.first, first), (&self.second, second)] {
-            if joint.side == side {
-                let r = Rotation3::from_axis_angle(&joint.direction, -angle.to_radians());
-                v = joint.point + r * (v - joint.point);
-            }
-        }
-        v
+    /// The tool tip relative to the head's reference point at the given angles.
+    fn tip_from_head(&self, first: f64, second: f64) -> Vector3<f64> {
+        let home = Vector3::new(0.0, 0.0, -self.head_length);
+        self.side_motion(AxisSide::Head, first, second, &home, false)
     }
 
     /// The joints that put the tip at part point `tip` with rotary angles `(first, second)`.
@@ -403,14 +400,9 @@ impl RotaryChain {
             first,
             second,
             &(tip.coords + self.part_origin_in_table),
+            false,
         );
-        let tool = self.side_motion(
-            AxisSide::Head,
-            first,
-            second,
-            &Vector3::new(0.0, 0.0, -self.head_length),
-        );
-        let m = on_table - tool;
+        let m = on_table - self.tip_from_head(first, second);
         Joints {
             x: m.x + 0.0,
             y: m.y + 0.0,
@@ -418,10 +410,6 @@ impl RotaryChain {
             a: first + 0.0,
             c: second + 0.0,
         }
-    }
-
-    fn within(v: f64, limits: Option<(f64, f64)>) -> Option<f64> {
-        within_limits(v, limits)
     }
 
     /// The 360° turns of `v` to consider on `joint` ([`turns_within`]).
@@ -494,10 +482,6 @@ impl RotaryChain {
         }
     }
 
-    fn checked(pose: &ToolPose) -> Result<Vector3<f64>, KinematicsError> {
-        checked_axis(pose)
-    }
-
     /// The part-frame tool axis at joint angles `(first, second)`.
     pub fn axis_at(&self, first: f64, second: f64) -> Vector3<f64> {
         let table = self.side_rotation(AxisSide::Table, first, second);
@@ -543,7 +527,7 @@ impl MachineKinematics for RotaryChain {
         previous: Option<&Joints>,
     ) -> Result<Joints, KinematicsError> {
         self.validate()?;
-        let k = Self::checked(pose)?;
+        let k = checked_axis(pose)?;
         if previous.is_some_and(|p| !p.is_finite()) {
             return Err(KinematicsError::NonFinite);
         }
@@ -561,14 +545,8 @@ impl MachineKinematics for RotaryChain {
     }
 
     fn forward(&self, j: &Joints) -> ToolPose {
-        let tool = self.side_motion(
-            AxisSide::Head,
-            j.a,
-            j.c,
-            &Vector3::new(0.0, 0.0, -self.head_length),
-        );
-        let tip_machine = j.xyz() + tool;
-        let tip = self.side_motion_inverse(AxisSide::Table, j.a, j.c, &tip_machine)
+        let tip_machine = j.xyz() + self.tip_from_head(j.a, j.c);
+        let tip = self.side_motion(AxisSide::Table, j.a, j.c, &tip_machine, true)
             - self.part_origin_in_table;
         ToolPose {
             tip: Point3::from(tip),
@@ -590,7 +568,7 @@ impl MachineKinematics for RotaryChain {
         max_axis_error_deg: f64,
     ) -> Result<Joints, KinematicsError> {
         self.validate()?;
-        let k = Self::checked(pose)?;
+        let k = checked_axis(pose)?;
         if !preferred.is_finite() || !max_axis_error_deg.is_finite() {
             return Err(KinematicsError::NonFinite);
         }
@@ -641,8 +619,8 @@ impl MachineKinematics for RotaryChain {
         let j2 = j2 + 360.0 * ((preferred.c - j2) / 360.0).round();
         let error = crate::geom::angle_between(&self.axis_at(j1, j2), &k).to_degrees();
         let (Some(j1), Some(j2)) = (
-            Self::within(j1, self.first.limits_deg),
-            Self::within(j2, self.second.limits_deg),
+            within_limits(j1, self.first.limits_deg),
+            within_limits(j2, self.second.limits_deg),
         ) else {
             return self.inverse(pose, Some(preferred));
         };
@@ -658,7 +636,7 @@ impl MachineKinematics for RotaryChain {
         previous: Option<&Joints>,
     ) -> Result<Vec<Joints>, KinematicsError> {
         let nearest = self.inverse(pose, previous)?;
-        let k = Self::checked(pose)?;
+        let k = checked_axis(pose)?;
         let free = {
             let a = self.angles_of(nearest.a, nearest.c);
             if self.free_is_second() {
@@ -690,7 +668,7 @@ impl MachineKinematics for RotaryChain {
         }
         for (joint, v) in [(&self.first, j.a), (&self.second, j.c)] {
             if let Some((lo, hi)) = joint.limits_deg
-                && Self::within(v, joint.limits_deg).is_none()
+                && within_limits(v, joint.limits_deg).is_none()
             {
                 return Err(KinematicsError::OutOfLimits {
                     axis: joint.letter,
