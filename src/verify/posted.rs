@@ -235,13 +235,25 @@ impl MachineModel {
             }
             // TCP: the tip moves on its line; only the ball centre's swing about it curves.
             MachineModel::Chain(m) if m.tcp => omega * omega * r,
-            // Every point that turns is within `reach` of every axis line's point: the
-            // composition of turns at rates summing to ω bends it by at most ω²·reach, and the
-            // linear motion adds 2ω|Δu| (the cross term).
+            // The ball centre is c = T⁻¹(u + H·w): w the ball centre from the head's
+            // reference point (|w| ≤ head length + r), H the head's turns, T the table's, each
+            // a turn R about a line through a point b, x ↦ b + R(x − b). Two turns at rates
+            // ω₁, ω₂ bend a point x by |(R₁R₂x)″| ≤ (ω₁ + ω₂)²(|x| + |b₁| + 2|b₂|) (expand the
+            // product; |x − b| ≤ |x| + |b|). So the head's turns alone bend c by at most
+            // ω²(|w| + 2Σ|b|): the linear axes only carry the head along. With table axes the
+            // turned point is u + H·w, and the cross term of the table's turn with the linear
+            // motion adds 2ω|Δu|.
             MachineModel::Chain(m) => {
                 let points: f64 = m.axes.iter().map(|a| a.point.norm()).sum();
-                let reach = u0.norm().max(u1.norm()) + points + m.head_length(tool) + r;
-                omega * omega * 2.0 * reach + 2.0 * omega * (u1 - u0).norm()
+                let w = m.head_length(tool) + r;
+                let table = m.axes.iter().any(|a| a.on_table);
+                let u = if table { u0.norm().max(u1.norm()) } else { 0.0 };
+                let cross = if table {
+                    2.0 * omega * (u1 - u0).norm()
+                } else {
+                    0.0
+                };
+                omega * omega * (u + w + 2.0 * points) + cross
             }
         }
     }
@@ -711,5 +723,83 @@ mod tests {
         assert!(c.problems[0].contains("line 1"));
         let c = check_posted("G0 G43 H1 X0 Y0 Z20 A0 C0\n", &machine(), &part, &options()).unwrap();
         assert!(c.problems[0].contains("outside"), "{:?}", c.problems);
+    }
+
+    /// The curvature bound of every chain kind holds against the second differences of the
+    /// ball centre along random blocks: offset axis lines, long heads, big turns.
+    #[test]
+    fn the_chain_curvature_bound_holds_on_random_blocks() {
+        let axis = |letter, on_table, d: [f64; 3], p: [f64; 3]| ModelAxis {
+            letter,
+            on_table,
+            direction: Vector3::from(d).normalize(),
+            point: Vector3::from(p),
+        };
+        let kinds = [
+            // table-table B/C with offsets, head-table B/C, head-head C/A with a fork offset.
+            [
+                axis('B', true, [0.0, 1.0, 0.0], [0.8, 0.0, -60.0]),
+                axis('C', true, [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]),
+            ],
+            [
+                axis('B', false, [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]),
+                axis('C', true, [0.0, 0.0, 1.0], [5.0, -3.0, 0.0]),
+            ],
+            [
+                axis('C', false, [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]),
+                axis('A', false, [1.0, 0.0, 0.0], [0.0, 12.0, -40.0]),
+            ],
+        ];
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut random = |lo: f64, hi: f64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            lo + (hi - lo) * (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let r = 3.0;
+        for axes in kinds {
+            let head = axes.iter().any(|a| !a.on_table);
+            let m = MachineModel::Chain(ChainModel {
+                axes,
+                part_origin_in_table: Vector3::new(-10.0, 20.0, 5.0),
+                head_lengths: if head { vec![(1, 280.0)] } else { Vec::new() },
+                tcp: false,
+                tcp_in_program: false,
+                conversational: false,
+            });
+            for _ in 0..200 {
+                let mut joints = || {
+                    [
+                        random(-300.0, 300.0),
+                        random(-300.0, 300.0),
+                        random(-200.0, 400.0),
+                        random(-120.0, 120.0),
+                        random(-360.0, 360.0),
+                    ]
+                };
+                let (j0, j1) = (joints(), joints());
+                let bound = m.curvature_bound(&j0, &j1, r, Some(1));
+                let at = |t: f64| {
+                    let mut j = [0.0; 5];
+                    for k in 0..5 {
+                        j[k] = j0[k] + (j1[k] - j0[k]) * t;
+                    }
+                    m.ball_centre(&j, r, Some(1))
+                };
+                let h = 1e-3;
+                for k in 1..1000 {
+                    let t = k as f64 * h;
+                    let second =
+                        (at(t + h) - 2.0 * at(t).coords + at(t - h).coords).coords / (h * h);
+                    assert!(
+                        second.norm() <= bound * (1.0 + 1e-3) + 1e-3,
+                        "{:?}: |c''| = {} above the bound {bound}",
+                        axes.map(|a| a.letter),
+                        second.norm()
+                    );
+                }
+            }
+        }
     }
 }
