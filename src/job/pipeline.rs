@@ -661,6 +661,76 @@ pub fn plan(
     let (toolpath, spans) = join_operations(&planned);
     timings.linking += ms(t);
 
+    // The machine's limits: the program linearised as the post writes it, unwinding in the
+    // ball's sections where a limit stops a pass, so that every check below sees those moves.
+    let t = Instant::now();
+    observer.stage("machine motion", 0);
+    let mut header = program_header(&prepared, job, &setup, &operations);
+    if let Some(first) = roughing.first() {
+        header.program_name = format!("wavemill roughing and finishing of {}", prepared.name);
+        header.tool_description = vec![first.tool.describe()];
+        header.tool_number = first.tool.id;
+        header.spindle_rpm = job.roughing.spindle_rpm;
+        header.comments.insert(
+            0,
+            format!(
+                "layer roughing from {} with {}, 3-axis (A0){}, to the part + {} mm",
+                job.stock.blank.as_deref().unwrap_or("the blank"),
+                roughing
+                    .iter()
+                    .map(|r| format!("T{}", r.tool.id))
+                    .collect::<Vec<_>>()
+                    .join(", then "),
+                if roughing.iter().any(|r| r.summary.indexed.is_some()) {
+                    " and in indexed 3+2 setups"
+                } else {
+                    ""
+                },
+                first.summary.stock_to_leave_mm
+            ),
+        );
+    }
+    let changes = tool_changes(job, &spans, &operations, &tools);
+    let section_starts: Vec<usize> = std::iter::once(0)
+        .chain(changes.iter().map(|c| c.at))
+        .collect();
+    let unwind_sections: Vec<bool> = section_starts
+        .iter()
+        .map(|&at| {
+            spans
+                .iter()
+                .zip(&operations)
+                .find(|(span, _)| span.moves.contains(&at))
+                .is_some_and(|(_, op)| !op.kind.is_roughing())
+        })
+        .collect();
+    let linearised = linearise_program(
+        &setup,
+        &toolpath,
+        &changes,
+        tools
+            .first()
+            .map_or(setup.tool.total_length(), |t| t.total_length()),
+        &unwind_sections,
+    )?;
+    let new_index = linearised.new_index();
+    let spans: Vec<OperationSpan> = spans
+        .into_iter()
+        .map(|span| OperationSpan {
+            moves: new_index[span.moves.start]..new_index[span.moves.end],
+            ..span
+        })
+        .collect();
+    let changes: Vec<ToolChange> = changes
+        .into_iter()
+        .map(|change| ToolChange {
+            at: new_index[change.at],
+            ..change
+        })
+        .collect();
+    let toolpath = linearised.toolpath.clone();
+    timings.post += ms(t);
+
     let t = Instant::now();
     observer.stage("verification", 0);
     let budget = &setup.budget;
@@ -725,41 +795,7 @@ pub fn plan(
 
     let t = Instant::now();
     observer.stage("post-processing", 0);
-    let mut header = program_header(&prepared, job, &setup, &operations);
-    if let Some(first) = roughing.first() {
-        header.program_name = format!("wavemill roughing and finishing of {}", prepared.name);
-        header.tool_description = vec![first.tool.describe()];
-        header.tool_number = first.tool.id;
-        header.spindle_rpm = job.roughing.spindle_rpm;
-        header.comments.insert(
-            0,
-            format!(
-                "layer roughing from {} with {}, 3-axis (A0){}, to the part + {} mm",
-                job.stock.blank.as_deref().unwrap_or("the blank"),
-                roughing
-                    .iter()
-                    .map(|r| format!("T{}", r.tool.id))
-                    .collect::<Vec<_>>()
-                    .join(", then "),
-                if roughing.iter().any(|r| r.summary.indexed.is_some()) {
-                    " and in indexed 3+2 setups"
-                } else {
-                    ""
-                },
-                first.summary.stock_to_leave_mm
-            ),
-        );
-    }
-    let changes = tool_changes(job, &spans, &operations, &tools);
-    let (program, gcode) = post_program_with_tool_changes(
-        &setup,
-        &toolpath,
-        &changes,
-        &header,
-        tools
-            .first()
-            .map_or(setup.tool.total_length(), |t| t.total_length()),
-    )?;
+    let (program, gcode) = write_program(&setup, &linearised, &changes, &header);
     let cl_csv = if roughing.is_empty() {
         post::write_cl_csv(&toolpath)
     } else {
@@ -790,7 +826,7 @@ pub fn plan(
         .collect();
     let cl_apt = post::write_apt(&prepared.name, &apt_rows);
     let time = post::estimate_time(&program, job.machine.max_rotary_speed);
-    timings.post = ms(t);
+    timings.post += ms(t);
 
     let t = Instant::now();
     observer.stage("back-simulation of the program", 0);
@@ -947,6 +983,8 @@ pub fn plan(
             safe_distance_mm: setup.safe_distance,
             table_z_mm: prepared.table_z,
             table_margin_mm: job.safety.table_margin,
+            unwinds: linearised.unwinds.clone(),
+            rapid_stops: linearised.rapid_stops.clone(),
         },
         surface,
         strategy: StrategySummary {
@@ -1114,9 +1152,193 @@ pub fn post_program_with_tool_changes(
     header: &ProgramHeader,
     first_gauge_length: f64,
 ) -> Result<(Vec<(Move, Joints)>, String)> {
+    let linearised = linearise_program(setup, toolpath, changes, first_gauge_length, &[])?;
+    Ok(write_program(setup, &linearised, changes, header))
+}
+
+/// A program's moves as the machine runs them: the toolpath (with the unwinds the machine's
+/// limits needed) and its machine blocks, section by section between tool changes.
+#[derive(Clone, Debug)]
+pub struct LinearisedProgram {
+    /// The toolpath with the unwinds inserted; the input's where there were none.
+    pub toolpath: Toolpath,
+    /// For each move of `toolpath`, its index in the input; `None` for an unwind's moves.
+    pub origin: Vec<Option<usize>>,
+    /// The poses the program unwinds at (retract, turn on the safe plane, re-plunge), as
+    /// indices in `toolpath`.
+    pub unwinds: Vec<usize>,
+    /// Stops on the safe plane inserted partway along rapids for the rotaries to turn in
+    /// place, as indices in `toolpath`.
+    pub rapid_stops: Vec<usize>,
+    /// How many moves the input had.
+    inputs: usize,
+    /// The machine blocks of each section (the moves before the first tool change, then
+    /// after each).
+    sections: Vec<Vec<(Move, Joints)>>,
+}
+
+impl LinearisedProgram {
+    /// Where each move of the input toolpath went (and, last, the input's length: the new
+    /// length). A move an unwind replaced maps to the next that is still there.
+    pub fn new_index(&self) -> Vec<usize> {
+        let mut new = vec![None; self.inputs + 1];
+        new[self.inputs] = Some(self.toolpath.moves.len());
+        for (n, o) in self.origin.iter().enumerate() {
+            if let Some(o) = o {
+                new[*o] = Some(n);
+            }
+        }
+        let mut next = self.toolpath.moves.len();
+        let mut out = vec![0; self.inputs + 1];
+        for (o, n) in new.iter().enumerate().rev() {
+            next = n.unwrap_or(next);
+            out[o] = next;
+        }
+        out
+    }
+}
+
+/// Most cut poses walked back from where a limit stopped a pass, looking for one the tool can
+/// leave along its axis (each a swept-body check).
+const UNWIND_SEARCH_POSES: usize = 400;
+
+/// The post's first half: `toolpath` linearised for `setup`'s machine, each section between
+/// tool changes on its own with its tool's gauge length, in the output mode's kinematics.
+/// In the sections `unwind[k]` marks (cut by the job's ball), where no branch or turn of the
+/// rotary axes carries a pass within the machine's limits, the program unwinds: the tool
+/// leaves along its axis from the last cut pose before the limit that it can leave without
+/// touching the part (the link's exact swept-body check, [`path::relink`]), the rotaries
+/// turn in place on the safe plane, and the tool comes back down to that pose (or to the next
+/// segment's entry, where a short link was to take it there); a rapid on the safe plane that a
+/// limit stops gets a stop halfway ([`path::safe_midpoint`]).
+pub fn linearise_program(
+    setup: &PlanSetup,
+    toolpath: &Toolpath,
+    changes: &[ToolChange],
+    first_gauge_length: f64,
+    unwind: &[bool],
+) -> Result<LinearisedProgram> {
     let linearise = LineariseOptions::default()
         .with_tolerance_mm(setup.budget.linearisation_mm)
         .with_control_point_mm(setup.prepared_tool.ball_radius);
+    let tcp = setup.gcode_options.output == post::OutputMode::Tcp;
+    let mut starts: Vec<usize> = std::iter::once(0)
+        .chain(changes.iter().map(|c| c.at))
+        .collect();
+    starts.push(toolpath.moves.len());
+    let mut out = LinearisedProgram {
+        toolpath: Toolpath {
+            tool_id: toolpath.tool_id,
+            moves: Vec::with_capacity(toolpath.moves.len()),
+        },
+        origin: Vec::with_capacity(toolpath.moves.len()),
+        unwinds: Vec::new(),
+        rapid_stops: Vec::new(),
+        inputs: 0,
+        sections: Vec::with_capacity(starts.len() - 1),
+    };
+    for (k, window) in starts.windows(2).enumerate() {
+        let section = Toolpath {
+            tool_id: toolpath.tool_id,
+            moves: toolpath.moves[window[0]..window[1]].to_vec(),
+        };
+        let gauge = match k {
+            0 => first_gauge_length,
+            k => changes[k - 1].gauge_length,
+        };
+        let kinematics = setup.kinematics.with_gauge_length(gauge);
+        let mut hook = |moves: &[Move], start: usize, stop: usize| {
+            if !unwind.get(k).copied().unwrap_or(false) {
+                return None;
+            }
+            // A rapid between two poses on the safe plane: a stop halfway, where the rotaries
+            // turn in place (halved again while the limit still stops one of the halves).
+            if stop >= 1
+                && moves[stop].kind == MoveKind::Rapid
+                && moves[stop - 1].kind == MoveKind::Rapid
+            {
+                return path::safe_midpoint(&setup.link, &moves[stop - 1], &moves[stop]).map(
+                    |stop_move| post::Splice {
+                        after: stop - 1,
+                        replacing: 0,
+                        moves: vec![stop_move],
+                    },
+                );
+            }
+            // An unwind from the last cut pose before the stop that the tool can leave along
+            // its axis: back down to the same pose when the cut goes on from there, or to the
+            // next segment's entry when a short link (lifted or across) was to take it there.
+            let splice = |at: usize| {
+                let next = (at + 1..moves.len()).find(|&i| {
+                    matches!(
+                        moves[i].kind,
+                        MoveKind::Cut | MoveKind::Approach | MoveKind::Rapid
+                    )
+                })?;
+                let entry = match moves[next].kind {
+                    MoveKind::Cut if next == at + 1 => &moves[at].pose,
+                    MoveKind::Approach => &moves[next].pose,
+                    _ => return None,
+                };
+                let replacing = if entry == &moves[at].pose {
+                    0
+                } else {
+                    next - at
+                };
+                path::relink(
+                    &setup.collider,
+                    &setup.prepared_tool,
+                    &setup.link,
+                    &moves[at].pose,
+                    entry,
+                )
+                .map(|moves| post::Splice {
+                    after: at,
+                    replacing,
+                    moves,
+                })
+            };
+            (start + 1..stop)
+                .rev()
+                .filter(|&at| moves[at].kind == MoveKind::Cut)
+                .take(UNWIND_SEARCH_POSES)
+                .find_map(splice)
+        };
+        let unwound = if tcp {
+            post::linearise_unwinding(
+                &post::ToolCentrePoint(&kinematics),
+                &section,
+                &linearise,
+                &mut hook,
+            )?
+        } else {
+            post::linearise_unwinding(&kinematics, &section, &linearise, &mut hook)?
+        };
+        let offset = out.toolpath.moves.len();
+        for &at in &unwound.inserted_after {
+            match unwound.moves.get(at + 1).map(|m| m.kind) {
+                Some(MoveKind::Retract) => out.unwinds.push(offset + at),
+                _ => out.rapid_stops.push(offset + at + 1),
+            }
+        }
+        out.inputs += section.moves.len();
+        out.origin
+            .extend(unwound.origin.iter().map(|o| o.map(|o| window[0] + o)));
+        out.toolpath.moves.extend(unwound.moves);
+        out.sections.push(unwound.blocks);
+    }
+    Ok(out)
+}
+
+/// The post's second half: the blocks of `linearised` written with `header` in the machine's
+/// dialect and output mode, a tool change before each section after the first. Returns the
+/// machine blocks and the program text.
+pub fn write_program(
+    setup: &PlanSetup,
+    linearised: &LinearisedProgram,
+    changes: &[ToolChange],
+    header: &ProgramHeader,
+) -> (Vec<(Move, Joints)>, String) {
     let mut options = setup.gcode_options.clone();
     options.control_point_mm = setup.prepared_tool.ball_radius;
     let tcp = options.output == post::OutputMode::Tcp;
@@ -1131,36 +1353,18 @@ pub fn post_program_with_tool_changes(
         _ => Box::new(post::GcodeWriter::new(&setup.kinematics, options)),
     };
     let mut program = Vec::new();
-    let mut starts: Vec<usize> = std::iter::once(0)
-        .chain(changes.iter().map(|c| c.at))
-        .collect();
-    starts.push(toolpath.moves.len());
-    for (k, window) in starts.windows(2).enumerate() {
-        let section = Toolpath {
-            tool_id: toolpath.tool_id,
-            moves: toolpath.moves[window[0]..window[1]].to_vec(),
-        };
-        let gauge = match k {
-            0 => first_gauge_length,
-            k => changes[k - 1].gauge_length,
-        };
-        let kinematics = setup.kinematics.with_gauge_length(gauge);
-        let blocks = if tcp {
-            post::linearise_opt(&post::ToolCentrePoint(&kinematics), &section, &linearise)?
-        } else {
-            post::linearise_opt(&kinematics, &section, &linearise)?
-        };
+    for (k, blocks) in linearised.sections.iter().enumerate() {
         match k {
             0 => writer.begin(header),
             k => writer.tool_change(&changes[k - 1].header),
         }
-        for (m, j) in &blocks {
+        for (m, j) in blocks {
             writer.motion(m, j);
         }
-        program.extend(blocks);
+        program.extend_from_slice(blocks);
     }
     writer.end();
-    Ok((program, writer.finish()))
+    (program, writer.finish())
 }
 
 /// The program header: what was planned, with which tool, and the tolerance budget.

@@ -135,6 +135,13 @@ pub struct MachineSummary {
     pub safe_distance_mm: f64,
     pub table_z_mm: f64,
     pub table_margin_mm: f64,
+    /// Where the program unwinds because a rotary limit stops a pass from every branch and
+    /// turn (retract along the axis, turn on the safe plane, re-plunge): the pose's move
+    /// index (`cl.csv`'s rows from 0).
+    pub unwinds: Vec<usize>,
+    /// Stops on the safe plane inserted partway along rapids, where a rotary limit needs the
+    /// axes to turn in place: their move indices.
+    pub rapid_stops: Vec<usize>,
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -84,29 +84,13 @@ pub fn link(
         moves: Vec::new(),
     };
     let mut report = LinkReport::default();
-    let along = |pose: &ToolPose, distance: f64| ToolPose {
-        tip: pose.tip + pose.axis.into_inner() * distance,
-        axis: pose.axis,
+    let safe = SafePlane {
+        part,
+        tool,
+        options,
     };
-    let to_safe = |pose: &ToolPose| {
-        (options.safe_distance - (pose.tip - options.pivot).dot(&pose.axis)).max(0.0)
-    };
-    let can_leave = |pose: &ToolPose| {
-        let sweep = to_safe(pose);
-        part.check_ball_sweep(tool, pose, sweep).is_ok()
-            && part.check_bodies_swept(tool, pose, sweep).is_ok()
-    };
-    let feed_length = |pose: &ToolPose| {
-        feed_lift(
-            part,
-            pose,
-            tool.ball_radius,
-            to_safe(pose),
-            options.rapid_margin,
-        )
-        .max(options.clearance)
-        .min(to_safe(pose))
-    };
+    let along = SafePlane::along;
+    let can_leave = |pose: &ToolPose| safe.can_leave(pose);
     // Trimming is the expensive part (long swept bodies); segments are independent.
     let kept: Vec<(usize, usize)> = segments
         .par_iter()
@@ -166,18 +150,7 @@ pub fn link(
             }
             None => {
                 report.safe_plane_retracts += 1;
-                path.moves.push(mv(
-                    along(&entry, to_safe(&entry)),
-                    MoveKind::Rapid,
-                    options.rapid_feed,
-                ));
-                path.moves.push(mv(
-                    along(&entry, feed_length(&entry)),
-                    MoveKind::Rapid,
-                    options.rapid_feed,
-                ));
-                path.moves
-                    .push(mv(entry, MoveKind::Approach, options.approach_feed));
+                path.moves.extend(safe.entry(&entry));
             }
         }
         for pose in &poses[start + 1..end] {
@@ -193,22 +166,155 @@ pub fn link(
                 ));
                 arriving = Some(Link::Lifted(lift));
             }
-            None => {
-                path.moves.push(mv(
-                    along(&exit, feed_length(&exit)),
-                    MoveKind::Retract,
-                    options.retract_feed,
-                ));
-                path.moves.push(mv(
-                    along(&exit, to_safe(&exit)),
-                    MoveKind::Rapid,
-                    options.rapid_feed,
-                ));
-            }
+            None => path.moves.extend(safe.exit(&exit)),
         }
         k += 1;
     }
     (path, report)
+}
+
+/// Leaving a cut pose along its axis for the safe plane, and coming back down to one: the
+/// links between segments that are not short, and the unwinds a machine's limits need.
+struct SafePlane<'a> {
+    part: &'a PartCollider,
+    tool: &'a PreparedTool,
+    options: &'a LinkOptions,
+}
+
+impl SafePlane<'_> {
+    fn along(pose: &ToolPose, distance: f64) -> ToolPose {
+        ToolPose {
+            tip: pose.tip + pose.axis.into_inner() * distance,
+            axis: pose.axis,
+        }
+    }
+
+    /// How far up its axis from `pose` the safe plane is.
+    fn to_safe(&self, pose: &ToolPose) -> f64 {
+        (self.options.safe_distance - (pose.tip - self.options.pivot).dot(&pose.axis)).max(0.0)
+    }
+
+    /// Whether the tool's bodies, swept along the axis from `pose` to the safe plane, clear
+    /// the part.
+    fn can_leave(&self, pose: &ToolPose) -> bool {
+        let sweep = self.to_safe(pose);
+        self.part.check_ball_sweep(self.tool, pose, sweep).is_ok()
+            && self.part.check_bodies_swept(self.tool, pose, sweep).is_ok()
+    }
+
+    /// The fed part of the way up from `pose` (see [`feed_lift`]).
+    fn feed_length(&self, pose: &ToolPose) -> f64 {
+        feed_lift(
+            self.part,
+            pose,
+            self.tool.ball_radius,
+            self.to_safe(pose),
+            self.options.rapid_margin,
+        )
+        .max(self.options.clearance)
+        .min(self.to_safe(pose))
+    }
+
+    /// Up from `pose`: fed, then rapid to the safe plane.
+    fn exit(&self, pose: &ToolPose) -> [Move; 2] {
+        [
+            Move {
+                pose: Self::along(pose, self.feed_length(pose)),
+                kind: MoveKind::Retract,
+                feed: self.options.retract_feed,
+            },
+            Move {
+                pose: Self::along(pose, self.to_safe(pose)),
+                kind: MoveKind::Rapid,
+                feed: self.options.rapid_feed,
+            },
+        ]
+    }
+
+    /// Down to `pose` from the safe plane: rapid, then fed.
+    fn entry(&self, pose: &ToolPose) -> [Move; 3] {
+        [
+            Move {
+                pose: Self::along(pose, self.to_safe(pose)),
+                kind: MoveKind::Rapid,
+                feed: self.options.rapid_feed,
+            },
+            Move {
+                pose: Self::along(pose, self.feed_length(pose)),
+                kind: MoveKind::Rapid,
+                feed: self.options.rapid_feed,
+            },
+            Move {
+                pose: *pose,
+                kind: MoveKind::Approach,
+                feed: self.options.approach_feed,
+            },
+        ]
+    }
+}
+
+/// A link by way of the safe plane from the cut pose `exit` to the cut pose `entry`: up the
+/// exit's axis to the safe plane (fed, then rapid), across on it, down the entry's axis (rapid,
+/// then fed), the rotary axes free to turn in place on the safe plane; `None` when the tool's
+/// bodies swept up either axis would touch the part. With `exit = entry`, an unwind: the tool
+/// leaves and comes back to the same pose. The moves are those [`link`] makes between
+/// segments.
+pub fn relink(
+    part: &PartCollider,
+    tool: &PreparedTool,
+    options: &LinkOptions,
+    exit: &ToolPose,
+    entry: &ToolPose,
+) -> Option<Vec<Move>> {
+    let safe = SafePlane {
+        part,
+        tool,
+        options,
+    };
+    if !safe.can_leave(exit) || (entry != exit && !safe.can_leave(entry)) {
+        return None;
+    }
+    let [retract, up] = safe.exit(exit);
+    let [over, down, approach] = safe.entry(entry);
+    let mut moves = vec![retract, up];
+    if over.pose != up.pose {
+        moves.push(over);
+    }
+    moves.extend([down, approach]);
+    Some(moves)
+}
+
+/// Least axis turn (degrees) or tip travel (mm) of a rapid that [`safe_midpoint`] still
+/// splits: below both, another stop would not give the rotaries any more room.
+const SMALLEST_SPLIT: (f64, f64) = (0.01, 0.01);
+
+/// A stop on the safe plane halfway along the rapid `from → to` between two poses on it: the
+/// axis halfway round (slerp), the tip halfway along and then out along that axis to the safe
+/// plane, where the tool is beyond the part's reach and the rotary axes may turn in place.
+/// `None` when either end is not on the safe plane, the axes are opposite, or the rapid is too
+/// short to split.
+pub fn safe_midpoint(options: &LinkOptions, from: &Move, to: &Move) -> Option<Move> {
+    let to_safe =
+        |pose: &ToolPose| options.safe_distance - (pose.tip - options.pivot).dot(&pose.axis);
+    let on_plane = |pose: &ToolPose| to_safe(pose) <= 1e-6 * options.safe_distance.max(1.0);
+    let (a, b) = (&from.pose, &to.pose);
+    let turn = angle_between(&a.axis, &b.axis).to_degrees();
+    let travel = (b.tip - a.tip).norm();
+    if !on_plane(a) || !on_plane(b) || (turn < SMALLEST_SPLIT.0 && travel < SMALLEST_SPLIT.1) {
+        return None;
+    }
+    let axis = Direction::new_normalize(slerp(&a.axis, &b.axis, 0.5));
+    if !axis.iter().all(|v| v.is_finite()) || turn > 179.999 {
+        return None;
+    }
+    let tip = a.tip + (b.tip - a.tip) * 0.5;
+    let halfway = ToolPose { tip, axis };
+    let lift = to_safe(&halfway).max(0.0);
+    Some(Move {
+        pose: SafePlane::along(&halfway, lift),
+        kind: MoveKind::Rapid,
+        feed: to.feed,
+    })
 }
 
 /// How a segment is reached from the one before.

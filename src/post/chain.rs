@@ -685,6 +685,10 @@ impl MachineKinematics for RotaryChain {
         vec![self.first.letter, self.second.letter]
     }
 
+    fn rotary_limits(&self) -> Vec<Option<(f64, f64)>> {
+        vec![self.first.limits_deg, self.second.limits_deg]
+    }
+
     fn description(&self) -> String {
         let axis = |j: &RotaryJoint| {
             let side = match j.side {

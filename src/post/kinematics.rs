@@ -263,6 +263,12 @@ pub trait MachineKinematics {
     /// 5-axis machine, none on a 3-axis one (whose joints keep `a = c = 0`).
     fn rotary_axes(&self) -> Vec<RotaryAxis>;
 
+    /// The limits (degrees) of the rotary axes, in the order of [`Self::rotary_axes`];
+    /// `None` for a continuous axis.
+    fn rotary_limits(&self) -> Vec<Option<(f64, f64)>> {
+        vec![None; self.rotary_axes().len()]
+    }
+
     /// The joints that put the tool tip at part point `tip` with the rotary axes at `first`,
     /// `second` (degrees): what the linear axes must do for a given orientation (the machine
     /// positions behind a tool-centre-point program).
@@ -760,6 +766,10 @@ impl MachineKinematics for TableTableAC {
 
     fn rotary_axes(&self) -> Vec<RotaryAxis> {
         vec![RotaryAxis::A, RotaryAxis::C]
+    }
+
+    fn rotary_limits(&self) -> Vec<Option<(f64, f64)>> {
+        vec![Some(self.a_limits_deg), self.c_limits_deg]
     }
 
     fn joints_for_tip(&self, tip: &Point3<f64>, first: f64, second: f64) -> Joints {

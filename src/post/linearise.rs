@@ -38,14 +38,22 @@
 //! pass starts, the rotaries may take either branch and any turn inside the limits; the one
 //! nearest the previous joints is tried first, and when the pass then cannot stay within the
 //! limits (a limited C running out of travel, a tilt limit on one branch) the others are tried
-//! in turn ([`MachineKinematics::inverse_all`]). When none carries the pass, the error says so
-//! ([`LineariseError::NoStart`]): the post does not insert an unwind in the middle of a cut.
+//! in turn ([`MachineKinematics::inverse_all`]). The turn to another start is made in place on
+//! the safe plane: at the end of the move before the pass when that is a rapid (or always, on
+//! a machine with head axes), the rapid then leaving from the turned joints. When none carries
+//! the pass, [`linearise_unwinding`] asks its hook for an unwind where the furthest start was
+//! stopped (retract, turn on the safe plane, re-plunge; the planner builds and checks those
+//! moves), and [`linearise_opt`] reports [`LineariseError::NoStart`]: the post itself never
+//! inserts a move the planner has not checked.
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use super::kinematics::{Joints, KinematicsError, MachineKinematics};
 use crate::geom::{Move, MoveKind, ToolPose, Toolpath};
+
+/// A rotary jump (degrees) within the shortest step that only another branch or turn explains.
+const LIMIT_JUMP_DEG: f64 = 90.0;
 
 /// Interpolation parameters at which joint-space and part-frame motion are compared.
 pub const CHECK_PARAMETERS: [f64; 7] = [0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875];
@@ -121,6 +129,24 @@ pub enum LineariseError {
         /// The depth bound.
         depth: u32,
     },
+    /// The motion needs a limited rotary axis to go on past its limit (the inverse can only
+    /// stay inside by jumping to another branch or turn).
+    #[error(
+        "move {move_index}: axis {axis} reaches {at_deg:.4}° and the motion needs it to go on, \
+         but its limits are [{min_deg}°, {max_deg}°]"
+    )]
+    LimitReached {
+        /// Index of the move in the original toolpath.
+        move_index: usize,
+        /// The limited axis nearest its limit.
+        axis: super::kinematics::RotaryAxis,
+        /// Where it stands at the last step that kept the tolerance, degrees.
+        at_deg: f64,
+        /// Its lower limit, degrees.
+        min_deg: f64,
+        /// Its upper limit, degrees.
+        max_deg: f64,
+    },
     /// The tool axis turns by 180° within one move: the planned interpolation is undefined.
     #[error("move {move_index}: tool axis reverses within the move")]
     AntipodalAxes {
@@ -128,13 +154,13 @@ pub enum LineariseError {
         move_index: usize,
     },
     /// No branch or turn of the rotary axes at a pass's start carries the whole pass within the
-    /// limits: the pass needs an unwind (retract, turn, re-plunge) partway, which the post does
-    /// not insert.
+    /// limits, and no unwind (retract, turn, re-plunge) partway was made.
     #[error(
         "moves {first_move}..={last_move}: from none of the {tried} branches and turns of the \
          rotary axes at the pass's start can the pass be followed within the machine's limits and \
-         the tolerance; where a limit stops it, it would need an unwind partway (retract, turn, \
-         re-plunge). From the nearest: {source}"
+         the tolerance, and no unwind partway (retract along the axis, turn on the safe plane, \
+         re-plunge) could be made before the stop: no cut pose there that the tool leaves clear \
+         of the part, or this tool's moves are not unwound. From the nearest: {source}"
     )]
     NoStart {
         /// The pass's first move (a rapid, or the program's first).
@@ -259,6 +285,54 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
     toolpath: &Toolpath,
     opts: &LineariseOptions,
 ) -> Result<Vec<(Move, Joints)>, LineariseError> {
+    Ok(linearise_unwinding(kin, toolpath, opts, &mut |_: &[Move], _, _| None)?.blocks)
+}
+
+/// Where a pass cannot be followed within the limits from any start, a hook may splice in
+/// moves that give the rotaries a place to turn: given the moves, the pass's first move and
+/// the furthest move any start reached before a limit stopped it, it returns a [`Splice`].
+/// `None` leaves the pass to fail.
+pub type UnwindHook<'a> = dyn FnMut(&[Move], usize, usize) -> Option<Splice> + 'a;
+
+/// Moves an [`UnwindHook`] puts in: after move `after` (`pass start − 1 ≤ after < stopped`),
+/// in place of the `replacing` moves that follow it (all inside the pass), with a rapid among
+/// them (where a pass starts, so where the rotaries may turn in place). An unwind from a cut
+/// (a retract to the safe plane, the rapids there and the re-plunge), a short link made a link
+/// by way of the safe plane, or a stop on the safe plane partway along a rapid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Splice {
+    /// The move the new ones follow.
+    pub after: usize,
+    /// How many of the moves after it they take the place of.
+    pub replacing: usize,
+    /// The new moves.
+    pub moves: Vec<Move>,
+}
+
+/// What [`linearise_unwinding`] made of a toolpath.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unwound {
+    /// The machine blocks, as [`linearise_opt`] returns them.
+    pub blocks: Vec<(Move, Joints)>,
+    /// The toolpath with the hook's moves inserted.
+    pub moves: Vec<Move>,
+    /// For each of `moves`, its index in the input toolpath; `None` for the hook's moves (the
+    /// input's moves they replaced are not there).
+    pub origin: Vec<Option<usize>>,
+    /// Where the hook's moves went: after these moves (indices in `moves`), in order.
+    pub inserted_after: Vec<usize>,
+}
+
+/// [`linearise_opt`] that asks `unwind` for moves to insert where a limit stops a pass from
+/// every start, inserts them and goes on (see [`UnwindHook`]). An unwind from a cut starts a
+/// new pass after the last; moves inserted before a pass split a rapid, and the hook bounds
+/// how often it splits one.
+pub fn linearise_unwinding<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    toolpath: &Toolpath,
+    opts: &LineariseOptions,
+    unwind: &mut UnwindHook<'_>,
+) -> Result<Unwound, LineariseError> {
     if !(opts.tolerance_mm.is_finite() && opts.tolerance_mm > 0.0) {
         return Err(LineariseError::InvalidOptions(
             "tolerance_mm must be finite and > 0".into(),
@@ -275,8 +349,7 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
         ));
     }
     let budget = 0.5 * opts.angle_tolerance_deg;
-    let moves = &toolpath.moves;
-    for (i, mv) in moves.iter().enumerate() {
+    for (i, mv) in toolpath.moves.iter().enumerate() {
         let finite = mv.feed.is_finite()
             && mv
                 .pose
@@ -288,9 +361,12 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
             return Err(LineariseError::NonFinite { move_index: i });
         }
     }
+    let mut moves = toolpath.moves.clone();
+    let mut origin: Vec<Option<usize>> = (0..moves.len()).map(Some).collect();
+    let mut inserted_after = Vec::new();
     let mut out: Vec<(Move, Joints)> = Vec::with_capacity(moves.len());
     let mut start = 0;
-    while start < moves.len() {
+    'passes: while start < moves.len() {
         // A pass: a rapid (or the program's first move) and the feed moves up to the next
         // rapid. Where it starts the rotaries may take any branch or turn; the nearest is
         // tried first, the others when the pass cannot be held within the limits from it.
@@ -301,38 +377,49 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
             move_index: start,
             source,
         };
-        let previous = out.last().map(|&(_, j)| j);
-        // The alternatives are taken where the rotaries may turn freely: on a table machine at
-        // the pass's start; with head axes at the end of the move before it (on the safe plane,
-        // where turning in place keeps the tip outside the part's reach), so that the rapid
-        // itself has room to follow its motion.
-        let free_pose = match out.last() {
-            Some((m, _)) if kin.has_head_axes() => m.pose,
+        let previous = out.last().copied();
+        // The alternatives are taken where the rotaries may turn freely. With head axes that
+        // is the end of the move before the pass (on the safe plane, where turning in place
+        // keeps the tip outside the part's reach), so that the rapid itself has room to
+        // follow its motion; on a table machine the same where that move was a rapid (on the
+        // safe plane too), else the pass's start.
+        let turn_before =
+            previous.is_some_and(|(m, _)| kin.has_head_axes() || m.kind == MoveKind::Rapid);
+        let free_pose = match previous {
+            Some((m, _)) if turn_before => m.pose,
             _ => moves[start].pose,
         };
         // `None`: where the nearest joints (or, with head axes, the planned motion) lead.
         let mut candidates: Vec<Option<Joints>> = vec![None];
         let mut first_error = None;
+        // The furthest move any start reached before a limit stopped it, and that start's
+        // blocks with where each move's blocks end (relative to the pass's first block): an
+        // unwind before the stop keeps them up to its pose.
+        let mut limit_stop: Option<usize> = None;
+        let mut furthest: (Vec<(Move, Joints)>, Vec<usize>) = (Vec::new(), Vec::new());
+        let mut ends = Vec::new();
         let kept = out.len();
-        let mut done = false;
         let mut tried = 0;
         while tried < candidates.len() {
             let candidate = candidates[tried];
             tried += 1;
             out.truncate(kept);
-            match run_pass(
+            let result = run_pass(
                 kin,
-                moves,
+                &moves,
                 start,
                 end,
                 candidate.as_ref(),
+                turn_before,
                 opts,
                 budget,
                 &mut out,
-            ) {
+                &mut ends,
+            );
+            let error = match result {
                 Ok(()) => {
-                    done = true;
-                    break;
+                    start = end;
+                    continue 'passes;
                 }
                 // Not a matter of where the rotaries start: no other start can help.
                 Err(
@@ -340,52 +427,140 @@ pub fn linearise_opt<K: MachineKinematics + ?Sized>(
                 ) => {
                     return Err(e);
                 }
-                Err(e) => {
-                    if first_error.is_none() {
-                        first_error = Some(e);
-                        // Only now are the alternatives worth computing; the one the nearest
-                        // start already stood on is left out.
-                        let tried_joints = if kin.has_head_axes() {
-                            previous
-                        } else {
-                            out.get(kept).map(|&(_, j)| j)
-                        };
-                        for j in kin
-                            .inverse_all(&free_pose, previous.as_ref())
-                            .map_err(kin_err)?
-                        {
-                            let same = tried_joints.is_some_and(|t| {
-                                (t.a - j.a).abs() < 1e-9 && (t.c - j.c).abs() < 1e-9
-                            });
-                            if !same {
-                                candidates.push(Some(j));
-                            }
-                        }
+                Err(e) => e,
+            };
+            if let LineariseError::Kinematics {
+                move_index,
+                source: KinematicsError::OutOfLimits { .. } | KinematicsError::OutOfTravel { .. },
+            }
+            | LineariseError::LimitReached { move_index, .. } = error
+                && limit_stop.is_none_or(|stop| move_index > stop)
+            {
+                limit_stop = Some(move_index);
+                furthest = (
+                    out[kept..].to_vec(),
+                    ends.iter().map(|e| e - kept).collect(),
+                );
+            }
+            if first_error.is_none() {
+                first_error = Some(error);
+                // Only now are the alternatives worth computing; the one the nearest start
+                // already stood on is left out.
+                let tried_joints = if turn_before {
+                    previous.map(|(_, j)| j)
+                } else {
+                    out.get(kept).map(|&(_, j)| j)
+                };
+                let near = previous.map(|(_, j)| j);
+                for j in kin
+                    .inverse_all(&free_pose, near.as_ref())
+                    .map_err(kin_err)?
+                {
+                    let same = tried_joints
+                        .is_some_and(|t| (t.a - j.a).abs() < 1e-9 && (t.c - j.c).abs() < 1e-9);
+                    if !same {
+                        candidates.push(Some(j));
                     }
                 }
             }
         }
-        if !done {
-            let source = first_error
-                .map(Box::new)
-                .ok_or(LineariseError::NonFinite { move_index: start })?;
-            return Err(LineariseError::NoStart {
-                first_move: start,
-                last_move: end - 1,
-                tried: candidates.len(),
-                source,
-            });
+        out.truncate(kept);
+        if let Some(Splice {
+            after: at,
+            replacing,
+            moves: inserted,
+        }) = limit_stop.and_then(|stop| unwind(&moves, start, stop))
+        {
+            let valid = at + 1 >= start
+                && limit_stop.is_some_and(|stop| at < stop)
+                && at + replacing < end
+                && inserted.iter().any(|m| m.kind == MoveKind::Rapid);
+            if !valid {
+                return Err(LineariseError::InvalidOptions(format!(
+                    "moves inserted after move {at} do not lie inside the pass of moves \
+                     {start}..{end} or have no rapid to turn on"
+                )));
+            }
+            let count = inserted.len();
+            moves.splice(at + 1..at + 1 + replacing, inserted);
+            origin.splice(at + 1..at + 1 + replacing, std::iter::repeat_n(None, count));
+            for u in &mut inserted_after {
+                if *u > at {
+                    *u = *u + count - replacing;
+                }
+            }
+            inserted_after.push(at);
+            if at <= start {
+                // Before the pass or at its first move: the pass runs again from its start.
+                continue 'passes;
+            }
+            // The furthest start's blocks up to the unwind's pose, then the retract; the
+            // rapids on the safe plane start the next passes. (Should the retract itself not
+            // go, the shortened pass is run again from its start.)
+            let (blocks, block_ends) = furthest;
+            out.extend_from_slice(&blocks[..block_ends[at - start]]);
+            let retract = at + 1;
+            let resumable = moves[retract].kind != MoveKind::Rapid;
+            let resumed =
+                out.last()
+                    .copied()
+                    .filter(|_| resumable)
+                    .and_then(|(prev_move, prev_j)| {
+                        let placed = out.len();
+                        let j = march(
+                            kin,
+                            &prev_move.pose,
+                            &prev_j,
+                            &moves[retract],
+                            retract,
+                            opts,
+                            budget,
+                            &mut out,
+                        )
+                        .ok()?;
+                        out.push((moves[retract], j));
+                        let inside = out[placed..]
+                            .iter()
+                            .all(|(_, j)| kin.check_limits(j).is_ok());
+                        inside.then_some(())
+                    });
+            let next_is_rapid = moves
+                .get(retract + 1)
+                .is_some_and(|m| m.kind == MoveKind::Rapid);
+            match resumed {
+                Some(()) if next_is_rapid => {
+                    start = retract + 1;
+                }
+                _ => out.truncate(kept),
+            }
+            continue 'passes;
         }
-        start = end;
+        let source = first_error
+            .map(Box::new)
+            .ok_or(LineariseError::NonFinite { move_index: start })?;
+        return Err(LineariseError::NoStart {
+            first_move: start,
+            last_move: end - 1,
+            tried: candidates.len(),
+            source,
+        });
     }
-    Ok(out)
+    inserted_after.sort_unstable();
+    Ok(Unwound {
+        blocks: out,
+        moves,
+        origin,
+        inserted_after,
+    })
 }
 
 /// Linearises the pass `moves[start..end]` into `out`: the pass's first move placed, then each
-/// feed move walked ([`march`]). On a table machine the first move is a rapid straight to the
-/// joints `first` (`None`: the nearest); with head axes the machine first turns in place to
-/// `first`, another branch or turn of the previous pose, if given, then follows the rapid's
-/// planned motion. Every block is checked against the limits and travel.
+/// feed move walked ([`march`]). With `turn_before` the machine first turns in place at the
+/// end of the move before, to `first`, another branch or turn of that pose, if given; with
+/// head axes the rapid then follows its planned motion, on a table machine it goes straight to
+/// the nearest joints. Without, the rapid goes straight to `first` (`None`: the nearest). Every
+/// block is checked against the limits and travel as it is made, so that an error names the
+/// move where a limit stops the pass.
 #[allow(clippy::too_many_arguments)]
 fn run_pass<K: MachineKinematics + ?Sized>(
     kin: &K,
@@ -393,21 +568,27 @@ fn run_pass<K: MachineKinematics + ?Sized>(
     start: usize,
     end: usize,
     first: Option<&Joints>,
+    turn_before: bool,
     opts: &LineariseOptions,
     budget: f64,
     out: &mut Vec<(Move, Joints)>,
+    ends: &mut Vec<usize>,
 ) -> Result<(), LineariseError> {
-    let kept = out.len();
+    ends.clear();
     let mv = &moves[start];
     let kin_err = |source| LineariseError::Kinematics {
         move_index: start,
         source,
     };
-    match (out.last().copied(), first) {
-        (Some((prev_move, prev_j)), first) if kin.has_head_axes() => {
-            // A head swings the tool about its pivot: the joint path of a rapid is not safe by
-            // itself, so the rapid follows its planned motion like a feed move, after turning
-            // in place to the other branch or turn `first` of the previous pose, if given.
+    let checked = |out: &[(Move, Joints)], from: usize, move_index: usize| {
+        out[from..].iter().try_for_each(|(_, j)| {
+            kin.check_limits(j)
+                .map_err(|source| LineariseError::Kinematics { move_index, source })
+        })
+    };
+    let placed = out.len();
+    match out.last().copied() {
+        Some((prev_move, prev_j)) if turn_before => {
             let from = match first {
                 Some(j) => {
                     out.push((prev_move, *j));
@@ -415,31 +596,41 @@ fn run_pass<K: MachineKinematics + ?Sized>(
                 }
                 None => prev_j,
             };
-            let arrived = march(kin, &prev_move.pose, &from, mv, start, opts, budget, out)?;
-            out.push((*mv, arrived));
+            if kin.has_head_axes() {
+                // A head swings the tool about its pivot: the joint path of a rapid is not
+                // safe by itself, so the rapid follows its planned motion like a feed move.
+                let arrived = march(kin, &prev_move.pose, &from, mv, start, opts, budget, out)?;
+                out.push((*mv, arrived));
+            } else {
+                out.push((
+                    *mv,
+                    kin.inverse_relaxed(&mv.pose, &from, budget)
+                        .map_err(kin_err)?,
+                ));
+            }
         }
-        (_, Some(first)) => out.push((*mv, *first)),
-        (None, None) => out.push((*mv, kin.inverse(&mv.pose, None).map_err(kin_err)?)),
-        (Some((_, prev_j)), None) => out.push((
-            *mv,
-            kin.inverse_relaxed(&mv.pose, &prev_j, budget)
-                .map_err(kin_err)?,
-        )),
+        previous => {
+            let joints = match (previous, first) {
+                (_, Some(first)) => *first,
+                (None, None) => kin.inverse(&mv.pose, None).map_err(kin_err)?,
+                (Some((_, prev_j)), None) => kin
+                    .inverse_relaxed(&mv.pose, &prev_j, budget)
+                    .map_err(kin_err)?,
+            };
+            out.push((*mv, joints));
+        }
     }
+    checked(out, placed, start)?;
+    ends.push(out.len());
     for (i, mv) in moves.iter().enumerate().take(end).skip(start + 1) {
         let &(prev_move, prev_j) = out
             .last()
             .ok_or(LineariseError::NonFinite { move_index: i })?;
+        let placed = out.len();
         let j = march(kin, &prev_move.pose, &prev_j, mv, i, opts, budget, out)?;
         out.push((*mv, j));
-    }
-    // Every block inside the rotary limits and the linear travel.
-    for (k, (_, j)) in out[kept..].iter().enumerate() {
-        kin.check_limits(j)
-            .map_err(|source| LineariseError::Kinematics {
-                move_index: (start + k).min(end - 1),
-                source,
-            })?;
+        checked(out, placed, i)?;
+        ends.push(out.len());
     }
     Ok(())
 }
@@ -491,6 +682,34 @@ fn march<K: MachineKinematics + ?Sized>(
             (t, cur_p, cur_j) = (t_next, p_next, j_next);
             dt *= 2.0;
         } else if dt <= min_dt {
+            // A step that cannot be made short enough while a rotary axis jumps is the
+            // inverse keeping a limited axis inside its travel by another branch or turn (the
+            // motion itself turns the axes steadily, and the relaxed inverse holds them near
+            // the singular cone): the limit is what stops the pass, and saying so lets an
+            // unwind help.
+            let jumps = [(j_next.a - cur_j.a).abs(), (j_next.c - cur_j.c).abs()];
+            if jumps.iter().any(|&d| d > LIMIT_JUMP_DEG) {
+                let values = [cur_j.a, cur_j.c];
+                let nearest = kin
+                    .rotary_axes()
+                    .into_iter()
+                    .zip(kin.rotary_limits())
+                    .zip(values)
+                    .filter_map(|((axis, limits), value)| {
+                        let (lo, hi) = limits?;
+                        Some(((value - lo).min(hi - value), axis, value, lo, hi))
+                    })
+                    .min_by(|u, v| u.0.total_cmp(&v.0));
+                if let Some((_, axis, at_deg, min_deg, max_deg)) = nearest {
+                    return Err(LineariseError::LimitReached {
+                        move_index,
+                        axis,
+                        at_deg,
+                        min_deg,
+                        max_deg,
+                    });
+                }
+            }
             return Err(LineariseError::DepthLimit {
                 move_index,
                 depth: opts.max_depth,

@@ -107,6 +107,10 @@ impl MachineKinematics for Machine {
         self.kinematics().rotary_axes()
     }
 
+    fn rotary_limits(&self) -> Vec<Option<(f64, f64)>> {
+        self.kinematics().rotary_limits()
+    }
+
     fn joints_for_tip(&self, tip: &nalgebra::Point3<f64>, first: f64, second: f64) -> Joints {
         self.kinematics().joints_for_tip(tip, first, second)
     }

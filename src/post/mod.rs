@@ -53,7 +53,10 @@ pub use heidenhain::HeidenhainWriter;
 pub use kinematics::{
     Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, TableTableAC, ThreeAxis,
 };
-pub use linearise::{LineariseError, LineariseOptions, linearise, linearise_opt};
+pub use linearise::{
+    LineariseError, LineariseOptions, Splice, UnwindHook, Unwound, linearise, linearise_opt,
+    linearise_unwinding,
+};
 pub use machine::Machine;
 pub use machine_file::{MachineDefinition, MachineFileError};
 pub use planar::{PlanarBlock, PlanarError, PlanarProgram};

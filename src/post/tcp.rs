@@ -90,6 +90,10 @@ impl<K: MachineKinematics + ?Sized> MachineKinematics for ToolCentrePoint<'_, K>
         self.0.rotary_axes()
     }
 
+    fn rotary_limits(&self) -> Vec<Option<(f64, f64)>> {
+        self.0.rotary_limits()
+    }
+
     fn description(&self) -> String {
         format!("{} (tool centre point)", self.0.description())
     }

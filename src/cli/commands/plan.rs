@@ -172,6 +172,13 @@ pub(crate) fn summarise(r: &job::PlanReport, out: &Path) {
         r.nc_blocks
     );
     say!("  cutting length   {:.1} mm", r.cutting_length_mm);
+    if !r.machine.unwinds.is_empty() {
+        say!(
+            "  unwinds          {} (a rotary limit: retract, turn on the safe plane, re-plunge; \
+             report.json machine.unwinds)",
+            r.machine.unwinds.len()
+        );
+    }
     say!(
         "  estimated time   {:.1} min",
         r.estimated_time.total_s / 60.0

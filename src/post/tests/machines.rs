@@ -319,3 +319,107 @@ fn a_pass_starts_where_the_limits_let_it_finish() {
     assert!(e.to_string().contains("unwind"), "{e}");
     let _ = pose;
 }
+
+/// Where no start carries a pass (C turning 300° on a C limited to ±140°, on a head-head fork
+/// and on an A/C trunnion), the hook's unwind lets the program go on: every block inside the
+/// limits, every planned pose reached, the rotaries turning only in place at the top of the
+/// unwind, and the moves' origins kept.
+#[test]
+fn an_unwind_carries_a_pass_past_a_limit() {
+    use crate::geom::{Move, ToolPose};
+    use crate::post::linearise_unwinding;
+    let mut rows = vec![
+        (MoveKind::Rapid, 0.0, [0.0, 0.0, 200.0], dir(30.0, -150.0)),
+        (MoveKind::Rapid, 0.0, [0.0, 0.0, 150.0], dir(30.0, -150.0)),
+    ];
+    for k in 0..=30 {
+        let az = -150.0 - 10.0 * k as f64;
+        rows.push((
+            MoveKind::Cut,
+            800.0,
+            [0.1 * k as f64, 0.0, 20.0],
+            dir(30.0, az),
+        ));
+    }
+    let path = toolpath(&rows);
+    for name in ["head-head", "trunnion-ac"] {
+        let (d, _) = machine(name);
+        let mut chain = d.chain_for(Vector3::zeros(), 100.0);
+        let c = if name == "head-head" {
+            &mut chain.first
+        } else {
+            &mut chain.second
+        };
+        c.limits_deg = Some((-140.0, 140.0));
+        let m = Machine::Chain(Box::new(chain));
+        let lin = LineariseOptions::default();
+        assert!(linearise_opt(&m, &path, &lin).is_err(), "{name}");
+        let mut asked = Vec::new();
+        let mut hook = |moves: &[Move], start: usize, stop: usize| {
+            asked.push((start, stop));
+            let at = stop - 1;
+            let p = moves[at].pose;
+            let up = |d: f64, kind, feed| Move {
+                pose: ToolPose {
+                    tip: p.tip + p.axis.into_inner() * d,
+                    axis: p.axis,
+                },
+                kind,
+                feed,
+            };
+            (at > start + 1).then(|| crate::post::Splice {
+                after: at,
+                replacing: 0,
+                moves: vec![
+                    up(5.0, MoveKind::Retract, 2000.0),
+                    up(150.0, MoveKind::Rapid, 0.0),
+                    up(5.0, MoveKind::Rapid, 0.0),
+                    up(0.0, MoveKind::Approach, 300.0),
+                ],
+            })
+        };
+        let unwound = linearise_unwinding(&m, &path, &lin, &mut hook)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(!unwound.inserted_after.is_empty(), "{name}");
+        assert_eq!(
+            unwound.inserted_after.len(),
+            asked.len(),
+            "{name}: {asked:?}"
+        );
+        assert_eq!(unwound.moves.len(), path.moves.len() + 4 * asked.len());
+        // The input's moves keep their order; the unwinds' are the hook's.
+        let kept: Vec<usize> = unwound.origin.iter().flatten().copied().collect();
+        assert_eq!(kept, (0..path.moves.len()).collect::<Vec<_>>(), "{name}");
+        for (n, o) in unwound.origin.iter().enumerate() {
+            if let Some(o) = o {
+                assert_eq!(unwound.moves[n], path.moves[*o]);
+            }
+        }
+        for &at in &unwound.inserted_after {
+            assert!(unwound.origin[at].is_some() && unwound.origin[at + 1].is_none());
+            assert_eq!(unwound.moves[at + 4].pose, unwound.moves[at].pose, "{name}");
+        }
+        for (k, (mv, j)) in unwound.blocks.iter().enumerate() {
+            m.check_limits(j)
+                .unwrap_or_else(|e| panic!("{name}: block {k}: {e}"));
+            let p = m.forward(j);
+            assert!(
+                (p.tip - mv.pose.tip).norm() < 1e-6
+                    && (p.axis.into_inner() - mv.pose.axis.into_inner()).norm() < 1e-6,
+                "{name}: block {k} is not at its pose"
+            );
+        }
+        // A big rotary turn between blocks happens only at the top of an unwind, in place.
+        for w in unwound.blocks.windows(2) {
+            let turn = (w[1].1.a - w[0].1.a).abs() + (w[1].1.c - w[0].1.c).abs();
+            if turn > 90.0 {
+                assert_eq!(w[0].0.pose, w[1].0.pose, "{name}: a turn that moves");
+                assert!(
+                    w[0].0.pose.tip.z > 100.0,
+                    "{name}: turned at {:?}",
+                    w[0].0.pose
+                );
+            }
+        }
+    }
+}
