@@ -98,6 +98,13 @@ fn model(name: &str, output: OutputMode, pivot: [f64; 3], gauge: f64, tool: u32)
     })
 }
 
+/// How the machine describes itself, as `simulate` reports it.
+fn d_description(name: &str) -> String {
+    let text = SHIPPED.iter().find(|(n, _)| *n == name).unwrap().1;
+    let d = MachineDefinition::parse(text, name).unwrap();
+    d.chain.kind.name().to_string()
+}
+
 fn segment_distance(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
     let ab = b - a;
     let t = if ab.norm_squared() > 0.0 {
@@ -185,6 +192,31 @@ fn every_shipped_machine_posts_verified_programs_in_both_modes() {
                 posted.motion_blocks
             );
 
+            // `simulate` reads the program back for the same machine: the part comes out of an
+            // offset blank with no gouge, and the read-back path is the program's.
+            if matches!(
+                (name, output),
+                ("head-head", OutputMode::Joint) | ("head-table-bc", OutputMode::Tcp)
+            ) {
+                let mut options = job::SimulateOptions::new(
+                    job::BlankSpec::parse("offset:0.5").unwrap(),
+                    2.0 * r_ball,
+                );
+                options.assembly = Some(tool.clone());
+                options.format = job::ProgramFormat::PostedFor(Box::new(job.clone()));
+                let run =
+                    job::simulate_program(&raw, "dome", &out.gcode, "job.nc", &options, &Quiet)
+                        .expect(&what);
+                let sim = &run.report;
+                assert_eq!(sim.gouge.count, 0, "{what}: {:?}", sim.gouge);
+                assert!(sim.removed_volume_mm3 > 0.0, "{what}");
+                assert!(
+                    sim.program_format.contains(&d_description(name)),
+                    "{what}: {}",
+                    sim.program_format
+                );
+            }
+
             // LinuxCNC's own interpreter reads the ISO programs it can run.
             let runnable = match name {
                 "trunnion-ac" | "head-head" => true,
@@ -227,4 +259,83 @@ fn a_part_beyond_the_travel_is_refused() {
         "{text}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A head-head fork whose C turns only ±100° (either branch reaches every azimuth, but not
+/// along a whole pass): the dome's passes swing the axis round the top further than that, so the plan unwinds (retract along the axis, turn on the safe plane,
+/// re-plunge), and the program that results passes every check: C stays inside its limits in
+/// the program as read back, each unwind leaves and returns to its pose along the axis, and
+/// nothing touches the part.
+#[test]
+fn a_short_c_fork_is_unwound_on_the_safe_plane() {
+    let dir = std::env::temp_dir().join(format!("wavemill-unwind-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("short-c.toml");
+    let text = SHIPPED
+        .iter()
+        .find(|(n, _)| *n == "head-head")
+        .unwrap()
+        .1
+        .replace("limits = [-360, 360]", "limits = [-100, 100]");
+    std::fs::write(&file, text).unwrap();
+    let mut job = job_for("head-head", OutputMode::Joint);
+    job.use_machine(file.to_str().unwrap()).unwrap();
+    let raw = RawMesh {
+        mesh: dome(),
+        warnings: Vec::new(),
+    };
+    let out = job::plan(&raw, "dome", "mm", &job, &Quiet).expect("planned with unwinds");
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(out.verification_failure, None);
+    let r = &out.report;
+    let unwinds = &r.machine.unwinds;
+    assert!(
+        !unwinds.is_empty(),
+        "no unwind needed: the test lost its point"
+    );
+    let moves = &out.toolpath.moves;
+    let along = |from: &wavemill::geom::ToolPose, to: &wavemill::geom::ToolPose| {
+        let up = to.tip - from.tip;
+        to.axis == from.axis && up.cross(&from.axis).norm() < 1e-9 && up.dot(&from.axis) > 0.0
+    };
+    for &at in unwinds {
+        // Up the cut pose's axis (fed, then rapid to the safe plane), down an entry's axis
+        // (rapid, then fed): the same pose, or the next segment's entry where a short link
+        // was to reach it.
+        let entry = (at + 1..moves.len())
+            .find(|&i| moves[i].kind == MoveKind::Approach)
+            .expect("re-plunged");
+        let kinds: Vec<MoveKind> = moves[at + 1..entry].iter().map(|m| m.kind).collect();
+        assert!(
+            kinds.len() >= 3
+                && kinds[0] == MoveKind::Retract
+                && kinds[1..].iter().all(|&k| k == MoveKind::Rapid),
+            "{kinds:?}"
+        );
+        // Between, only stops on the safe plane.
+        let pivot = Point3::from(r.machine.pivot_in_part_frame);
+        for m in &moves[at + 2..entry - 1] {
+            let height = (m.pose.tip - pivot).dot(&m.pose.axis);
+            assert!(height >= r.machine.safe_distance_mm - 1e-6, "{height}");
+        }
+        let (cut, down) = (&moves[at].pose, &moves[entry].pose);
+        assert!(along(cut, &moves[at + 1].pose) && along(cut, &moves[at + 2].pose));
+        assert!(along(down, &moves[entry - 1].pose) && along(down, &moves[entry - 2].pose));
+    }
+    // Every C word of the program, as the control reads it.
+    let c: Vec<f64> = out
+        .gcode
+        .lines()
+        .filter(|l| !l.starts_with('(') && !l.starts_with(';'))
+        .flat_map(|l| l.split_whitespace())
+        .filter_map(|w| w.strip_prefix('C')?.parse::<f64>().ok())
+        .collect();
+    assert!(c.len() > unwinds.len());
+    assert!(
+        c.iter().all(|&c| (-100.0..=100.0).contains(&c)),
+        "C leaves its limits: {:?}",
+        c.iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)))
+    );
+    eprintln!("{} unwinds", unwinds.len());
 }

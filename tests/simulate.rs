@@ -363,7 +363,7 @@ fn a_posted_program_and_its_cl_data_give_the_same_stock() {
         nc["program_format"]
             .as_str()
             .unwrap()
-            .starts_with("posted g-code")
+            .starts_with("posted program, table-table A/C")
     );
     let volume = |r: &serde_json::Value| r["removed_volume_mm3"].as_f64().unwrap();
     // The post's linearisation and rounding move the tip by a few µm over the ~100 mm² cut.

@@ -76,7 +76,7 @@ pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use rough::{RoughOptions, RoughOutput, RoughReport, RoughToolRun, rough, write_rough_outputs};
 pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
-pub use setup::{PlanSetup, PreparedPart, machine, prepare_part};
+pub use setup::{PlanSetup, PreparedPart, machine, posted_program_model, prepare_part};
 pub use simulate::{
     ProgramFormat, SimulateOptions, SimulationReport, SimulationRun, StockReport, simulate_program,
     write_simulation,

@@ -125,36 +125,12 @@ impl PlanSetup {
     /// The machine as the back-simulation models it (plain data for the verifier's own
     /// kinematics), with the gauge length of every tool the program runs (`(number, mm)`).
     pub fn verifier_model(&self, gauges: &[(u32, f64)]) -> crate::verify::MachineModel {
-        use crate::verify::{ChainModel, MachineModel, ModelAxis};
-        match &self.kinematics {
-            Machine::Chain(chain) => {
-                let axis = |j: &crate::post::RotaryJoint| ModelAxis {
-                    letter: j.letter.to_string().chars().next().unwrap_or('A'),
-                    on_table: j.side == crate::post::AxisSide::Table,
-                    direction: j.direction.into_inner(),
-                    point: j.point,
-                };
-                let head = chain.has_head_axes();
-                MachineModel::Chain(ChainModel {
-                    axes: [axis(&chain.first), axis(&chain.second)],
-                    part_origin_in_table: chain.part_origin_in_table,
-                    head_lengths: if head {
-                        gauges
-                            .iter()
-                            .map(|&(id, g)| (id, chain.pivot_length + g))
-                            .collect()
-                    } else {
-                        Vec::new()
-                    },
-                    tcp: self.gcode_options.output == crate::post::OutputMode::Tcp,
-                    tcp_in_program: self.gcode_options.dialect != crate::post::Dialect::Linuxcnc,
-                    conversational: self.gcode_options.dialect == crate::post::Dialect::Heidenhain,
-                })
-            }
-            _ => MachineModel::TableTableAc {
-                part_origin_in_table: self.part_origin_in_table,
-            },
-        }
+        verifier_model_of(
+            &self.kinematics,
+            self.part_origin_in_table,
+            &self.gcode_options,
+            gauges,
+        )
     }
 
     /// The cell for `part`: collision structures, the job's tool, the machine with the part
@@ -178,15 +154,7 @@ impl PlanSetup {
             holder: job.safety.holder_margin,
         };
         let prepared_tool = PreparedTool::new(&tool, &margins);
-        let part_box = part.part.aabb();
-        let part_origin_in_table = job
-            .machine
-            .part_origin_in_table
-            .map(Vector3::from)
-            .unwrap_or_else(|| {
-                -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z)
-            })
-            .map(positive_zero);
+        let part_origin_in_table = part_origin_in_table(job, &part.part);
         let kinematics = machine(job, part_origin_in_table, tool.total_length())?;
         let pivot = Point3::from(-part_origin_in_table);
         let reach = part
@@ -210,16 +178,7 @@ impl PlanSetup {
         }
         // Rounding is charged where the ball centre is farthest from the pivot: on the safe
         // plane.
-        let gcode_options = match job.machine_definition()? {
-            Some(d) => GcodeOptions {
-                dialect: d.dialect,
-                output: d.output,
-                feed: d.feed,
-                max_rotary_speed: d.max_rotary_speed,
-                ..GcodeOptions::default()
-            },
-            None => GcodeOptions::default(),
-        };
+        let gcode_options = gcode_options(job)?;
         let budget = ToleranceBudget::split(
             job.strategy.tolerance,
             &gcode_options,
@@ -352,6 +311,98 @@ pub(crate) fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
         positions: mesh.positions.iter().map(|p| rotation * p).collect(),
         triangles: mesh.triangles.clone(),
     }
+}
+
+/// Where the job clamps `part` on the table: `[machine] part_origin_in_table`, by default
+/// centred on the table's axis in X and Y and standing on the table.
+pub fn part_origin_in_table(job: &Job, part: &Mesh) -> Vector3 {
+    let part_box = part.aabb();
+    job.machine
+        .part_origin_in_table
+        .map(Vector3::from)
+        .unwrap_or_else(|| -Vector3::new(part_box.center().x, part_box.center().y, part_box.min.z))
+        .map(positive_zero)
+}
+
+/// The program's dialect, output and feed modes: the machine definition's, else LinuxCNC
+/// joint output with feed per minute.
+pub fn gcode_options(job: &Job) -> Result<GcodeOptions> {
+    Ok(match job.machine_definition()? {
+        Some(d) => GcodeOptions {
+            dialect: d.dialect,
+            output: d.output,
+            feed: d.feed,
+            max_rotary_speed: d.max_rotary_speed,
+            ..GcodeOptions::default()
+        },
+        None => GcodeOptions::default(),
+    })
+}
+
+/// How the back-simulation reads a program posted for `kinematics` in `options`' dialect and
+/// output mode: plain data for the verifier's own forward kinematics, with the gauge length of
+/// every tool the program runs (`(number, mm)`).
+pub fn verifier_model_of(
+    kinematics: &Machine,
+    part_origin_in_table: Vector3,
+    options: &GcodeOptions,
+    gauges: &[(u32, f64)],
+) -> crate::verify::MachineModel {
+    use crate::verify::{ChainModel, MachineModel, ModelAxis};
+    match kinematics {
+        Machine::Chain(chain) => {
+            let axis = |j: &crate::post::RotaryJoint| ModelAxis {
+                letter: j.letter.to_string().chars().next().unwrap_or('A'),
+                on_table: j.side == crate::post::AxisSide::Table,
+                direction: j.direction.into_inner(),
+                point: j.point,
+            };
+            let head = chain.has_head_axes();
+            MachineModel::Chain(ChainModel {
+                axes: [axis(&chain.first), axis(&chain.second)],
+                part_origin_in_table: chain.part_origin_in_table,
+                head_lengths: if head {
+                    gauges
+                        .iter()
+                        .map(|&(id, g)| (id, chain.pivot_length + g))
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+                tcp: options.output == crate::post::OutputMode::Tcp,
+                tcp_in_program: options.dialect != crate::post::Dialect::Linuxcnc,
+                conversational: options.dialect == crate::post::Dialect::Heidenhain,
+            })
+        }
+        _ => MachineModel::TableTableAc {
+            part_origin_in_table,
+        },
+    }
+}
+
+/// How a program posted for `job`'s machine is read back, with `part` clamped where the job
+/// clamps it and the job's tool in the spindle (tool number `tool_number`), and a one-line
+/// description of it.
+pub fn posted_program_model(
+    job: &Job,
+    part: &Mesh,
+    tool_number: u32,
+) -> Result<(crate::verify::MachineModel, String)> {
+    let origin = part_origin_in_table(job, part);
+    let gauge = job.tool.assembly().total_length();
+    let kinematics = machine(job, origin, gauge)?;
+    let options = gcode_options(job)?;
+    let model = verifier_model_of(&kinematics, origin, &options, &[(tool_number, gauge)]);
+    let description = format!(
+        "{}, {} output in the {} dialect, part origin in table [{}, {}, {}] mm",
+        kinematics.description(),
+        options.output.name(),
+        options.dialect.name(),
+        origin.x,
+        origin.y,
+        origin.z
+    );
+    Ok((model, description))
 }
 
 /// The machine the job describes, with the part clamped at `part_origin_in_table` and a tool of

@@ -38,13 +38,17 @@ use crate::stock::{DEFAULT_MAX_DEXELS, Stock};
 pub enum ProgramFormat {
     /// CL data (`cl.csv`, as `plan` writes it): tip and axis in the part frame.
     ClData,
-    /// Posted G-code for a table-table A/C machine, read back through its forward kinematics
-    /// (`verify`'s model, written apart from the post) with the part clamped at
-    /// `part_origin_in_table` (`None`: where `plan` puts it by default, the part's box centre
-    /// in X and Y and its bottom on the table).
-    TableTableAc {
-        part_origin_in_table: Option<[f64; 3]>,
+    /// A posted program (G-code, or Heidenhain conversational), read back through the
+    /// machine's forward kinematics as the verifier models it (written apart from the post;
+    /// [`super::setup::posted_program_model`] builds it for a job's machine).
+    Posted {
+        model: crate::verify::MachineModel,
+        /// The machine and the part's place on it, for the report.
+        machine: String,
     },
+    /// A program posted for a job's machine ([`super::setup::posted_program_model`]): the
+    /// part clamped where the job clamps it, the job's tool in the spindle.
+    PostedFor(Box<super::config::Job>),
 }
 
 /// Options of [`simulate_program`].
@@ -300,8 +304,17 @@ pub fn simulate_program(
         }));
     }
     let part = closed_part(raw, part_name)?;
-    let (toolpath, lines, format) = match &options.format {
-        ProgramFormat::ClData => (
+    let posted = match &options.format {
+        ProgramFormat::ClData => None,
+        ProgramFormat::Posted { model, machine } => Some((model.clone(), machine.clone())),
+        ProgramFormat::PostedFor(job) => Some(super::setup::posted_program_model(
+            job,
+            &part,
+            job.tool.assembly().id,
+        )?),
+    };
+    let (toolpath, lines, format) = match posted {
+        None => (
             read_cl_csv(cl_text, cl_name).map_err(|e| Error::DataFile {
                 file: e.file,
                 line: e.line,
@@ -310,21 +323,11 @@ pub fn simulate_program(
             None,
             "cl data; moves are numbered by their row from 0 (the header not counted)".to_string(),
         ),
-        ProgramFormat::TableTableAc {
-            part_origin_in_table,
-        } => {
-            let b = part.aabb();
-            let origin = part_origin_in_table
-                .map(Vector3::from)
-                .unwrap_or_else(|| -Vector3::new(b.center().x, b.center().y, b.min.z))
-                .map(|v| v + 0.0);
-            let machine = crate::verify::MachineModel::TableTableAc {
-                part_origin_in_table: origin,
-            };
+        Some((model, machine)) => {
             // Moves within a quarter of the tolerance of the control's interpolation.
             let (toolpath, lines) = crate::verify::program_toolpath(
                 cl_text,
-                &machine,
+                &model,
                 0.25 * options.tolerance.max(1e-4),
             )
             .map_err(|e| Error::DataFile {
@@ -336,8 +339,8 @@ pub fn simulate_program(
                 toolpath,
                 Some(lines),
                 format!(
-                    "posted g-code, table-table A/C, part origin in table [{}, {}, {}] mm, read back through the machine's forward kinematics; moves are named by their program line",
-                    origin.x, origin.y, origin.z
+                    "posted program, {machine}, read back through the machine's forward \
+                     kinematics; moves are named by their program line"
                 ),
             )
         }

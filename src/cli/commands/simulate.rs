@@ -34,6 +34,17 @@ pub struct SimulateArgs {
     /// ball diameter).
     #[arg(long, value_name = "SPEC", value_parser = cutter_spec, required_unless_present = "job")]
     pub tool: Option<String>,
+    /// The machine the program was posted for: a shipped one (trunnion-ac, trunnion-bc,
+    /// head-table-bc, head-table-ac, head-head) or a machine definition file (TOML); overrides
+    /// the job file's machine.definition.
+    #[arg(long)]
+    pub machine: Option<String>,
+    /// The program's output mode, `joint` or `tcp`, when it is not the machine's.
+    #[arg(long, value_parser = ["joint", "tcp"])]
+    pub output: Option<String>,
+    /// The program's feed mode, `per-minute` or `inverse-time`, when it is not the machine's.
+    #[arg(long, value_parser = ["per-minute", "inverse-time"])]
+    pub feed: Option<String>,
     /// Fluted length from the tip, mm [default: 3 × D; with --job: the job's].
     #[arg(long, value_parser = positive)]
     pub flute_length: Option<f64>,
@@ -116,20 +127,40 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     if !is_cl {
-        options.format = match &machine {
-            Some(job) if job.machine.kinematics != crate::post::KinematicsKind::TableTableAc => {
-                return Err(Error::Usage(format!(
-                    "{cl_name}: posted programs are read back for table-table A/C machines; the job's machine is {:?}",
-                    job.machine.kinematics
-                )));
+        let mut job = machine.unwrap_or_default();
+        let mut flags = vec![("tool.", "--tool")];
+        if let Some(o) = &args.output {
+            job.machine.output = Some(if o == "tcp" {
+                crate::post::OutputMode::Tcp
+            } else {
+                crate::post::OutputMode::Joint
+            });
+            flags.push(("machine.output", "--output"));
+        }
+        if let Some(f) = &args.feed {
+            job.machine.feed = Some(if f == "inverse-time" {
+                crate::post::FeedMode::InverseTime
+            } else {
+                crate::post::FeedMode::PerMinute
+            });
+            flags.push(("machine.feed", "--feed"));
+        }
+        if let Some(m) = &args.machine {
+            flags.push(("machine.definition", "--machine"));
+            job.use_machine(m)
+                .map_err(|e| name_flags(Error::from(e), &flags))?;
+        }
+        if args.job.is_none() {
+            // The job's default ball stands for the tool's length on a machine with head
+            // axes; the cutter given is what removes material.
+            if let Some(cutter) = cutter_given {
+                job.tool.diameter = cutter.diameter();
             }
-            Some(job) => job::ProgramFormat::TableTableAc {
-                part_origin_in_table: job.machine.part_origin_in_table,
-            },
-            None => job::ProgramFormat::TableTableAc {
-                part_origin_in_table: None,
-            },
-        };
+        }
+        // The machine's file and modes are read here, so that a fault names its flag.
+        job.machine_definition()
+            .map_err(|e| name_flags(Error::from(e), &flags))?;
+        options.format = job::ProgramFormat::PostedFor(Box::new(job));
     }
     let bars = super::super::progress::Bars::new();
     let run = job::simulate_program(&raw, &name, &cl_text, &cl_name, &options, &bars)
