@@ -19,6 +19,7 @@
 pub use error::{Error, Result};
 
 pub mod access;
+pub mod cad;
 pub mod cli;
 pub mod collide;
 pub mod contour;

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&str] = &[
     "geom",        // numbers, primitives, poses and moves
     "mesh",        // triangle meshes, exact point–mesh distance, plane sections
+    "cad",         // NURBS curves and surfaces, IGES, tessellation
     "sample",      // the bundled sample part
     "tool",        // cutters and tool assemblies
     "access",      // visibility maps (obvhs rays)
