@@ -311,4 +311,113 @@ mod tests {
         let e = read_iges(&b.text()).unwrap_err().to_string();
         assert!(e.contains("124 expected"), "{e}");
     }
+
+    /// The plane face of the first test and the cone of the second in one file.
+    fn rich_file() -> String {
+        let mut b = Builder::new();
+        let surface = b.add(
+            128,
+            0,
+            "00010000",
+            "1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.,0.,0.,0.,10.,0.,0.,0.,20.,0.,10.,20.,0.,0.,1.,0.,1.",
+        );
+        let lines: Vec<usize> = [
+            (0.0, 0.0, 0.5, 0.0),
+            (0.5, 0.0, 0.5, 0.5),
+            (0.5, 0.5, 0.0, 0.0),
+        ]
+        .iter()
+        .map(|(a, c, d, e)| b.add(110, 0, "00010500", &format!("{a},{c},0.,{d},{e},0.")))
+        .collect();
+        let composite = b.add(
+            102,
+            0,
+            "00010500",
+            &format!("3,{},{},{}", lines[0], lines[1], lines[2]),
+        );
+        let on_surface = b.add(142, 0, "00010500", &format!("1,{surface},{composite},0,1"));
+        b.add(144, 0, "00000000", &format!("{surface},1,0,{on_surface}"));
+        let matrix = b.add(124, 0, "00000000", "0.,-1.,0.,5.,1.,0.,0.,0.,0.,0.,1.,0.");
+        let axis = b.add(110, matrix, "00010000", "0.,0.,0.,0.,0.,1.");
+        let generatrix = b.add(
+            126,
+            0,
+            "00010000",
+            "2,2,1,0,1,0,0.,0.,0.,1.,1.,1.,1.,1.,1.,1.,0.,0.,1.5,0.,1.,2.,0.,2.,0.,1.,0.,0.,1.",
+        );
+        b.add(120, 0, "00000000", &format!("{axis},{generatrix},0.,3.14"));
+        b.text()
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// Any damage to a valid file gives `Ok` or `Err`, never a panic: bytes replaced,
+        /// the file cut short, lines dropped, numbers made huge or negative.
+        #[test]
+        fn damage_never_panics(
+            edits in proptest::collection::vec((0usize..100_000, 0u8..128, 0u8..7), 1..6),
+        ) {
+            let mut text = rich_file().into_bytes();
+            for (at, byte, kind) in edits {
+                if text.is_empty() {
+                    break;
+                }
+                let at = at % text.len();
+                match kind {
+                    0 => text[at] = byte,
+                    1 => text.truncate(at),
+                    2 => {
+                        let end = text[at..].iter().position(|&b| b == b'\n').map_or(text.len(), |k| at + k + 1);
+                        text.drain(at..end);
+                    }
+                    3 => {
+                        // A number made as large as its field allows.
+                        let start = text[at..].iter().position(|b| b.is_ascii_digit()).map(|k| at + k);
+                        if let Some(start) = start {
+                            let run = text[start..].iter().take_while(|b| b.is_ascii_digit()).count();
+                            text[start..start + run].fill(b'9');
+                        }
+                    }
+                    4 => {
+                        let digit = text[at..].iter().position(|b| b.is_ascii_digit());
+                        if let Some(k) = digit {
+                            text[at + k] = b'-';
+                        }
+                    }
+                    5 => {
+                        // Two cards swapped: the format holds, the pointers lie.
+                        let cards: Vec<&[u8]> = text.split(|&b| b == b'\n').collect();
+                        let (a, b) = (at % cards.len(), (at / 7 + usize::from(byte)) % cards.len());
+                        let mut cards: Vec<Vec<u8>> = cards.into_iter().map(<[u8]>::to_vec).collect();
+                        cards.swap(a, b);
+                        text = cards.join(&b'\n');
+                    }
+                    _ => text.insert(at, byte),
+                }
+            }
+            let text = String::from_utf8_lossy(&text);
+            if let Ok(model) = read_iges(&text) {
+                for face in &model.faces {
+                    let ((u0, u1), (v0, v1)) = face.surface.domain();
+                    let _ = face.surface.point(0.5 * (u0 + u1), 0.5 * (v0 + v1));
+                    if let Some(outer) = &face.outer {
+                        let _ = outer.sample(2);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The rich file reads: the plane face and the cone, placed by its 124.
+    #[test]
+    fn the_rich_file_reads() {
+        let model = read_iges(&rich_file()).unwrap();
+        assert_eq!(model.faces.len(), 2);
+        // The cone's axis, turned a quarter about z and moved 5 along x, runs up x = 5, y = 0.
+        let Surface::Revolution { axis, .. } = &model.faces[1].surface else {
+            panic!("a surface of revolution");
+        };
+        assert!((axis.0 - nalgebra::Point3::new(5.0, 0.0, 0.0)).norm() < 1e-12);
+        assert!((axis.1 - nalgebra::Point3::new(5.0, 0.0, 1.0)).norm() < 1e-12);
+    }
 }
