@@ -9,16 +9,6 @@ mod common;
 use nalgebra::Point3;
 use wavemill::cad::iges::{Curve, read_iges};
 
-fn segment_distance(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
-    let ab = b - a;
-    let t = if ab.norm_squared() > 0.0 {
-        ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + ab * t)).norm()
-}
-
 #[test]
 fn the_impeller_iges_reads_and_its_trims_agree_in_both_spaces() {
     let Some(dir) = common::testdata() else {
@@ -53,7 +43,7 @@ fn the_impeller_iges_reads_and_its_trims_agree_in_both_spaces() {
         for p in &on_surface {
             let d = polyline
                 .windows(2)
-                .map(|w| segment_distance(p, &w[0], &w[1]))
+                .map(|w| common::segment_distance(p, &w[0], &w[1]))
                 .fold(f64::INFINITY, f64::min);
             worst = worst.max(d);
         }

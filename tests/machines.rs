@@ -105,16 +105,6 @@ fn d_description(name: &str) -> String {
     d.chain.kind.name().to_string()
 }
 
-fn segment_distance(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
-    let ab = b - a;
-    let t = if ab.norm_squared() > 0.0 {
-        ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + ab * t)).norm()
-}
-
 #[test]
 fn every_shipped_machine_posts_verified_programs_in_both_modes() {
     let raw = RawMesh {
@@ -177,8 +167,11 @@ fn every_shipped_machine_posts_verified_programs_in_both_modes() {
                     centre(&out.toolpath.moves[i1].pose),
                 );
                 for k in k0..=k1 {
-                    worst_path =
-                        worst_path.max(segment_distance(&centre(&read.moves[k].pose), &a, &b));
+                    worst_path = worst_path.max(common::segment_distance(
+                        &centre(&read.moves[k].pose),
+                        &a,
+                        &b,
+                    ));
                 }
             }
             assert!(

@@ -195,6 +195,40 @@ pub(crate) fn flat_diameter(spec: &str) -> Result<f64> {
     }
 }
 
+/// The machine flags `plan` and `simulate` share, applied to `job`: `--output` and `--feed`
+/// (overriding the machine's modes), then `--machine` (a shipped name or a definition file);
+/// each flag given is added to `flags`, so later errors name it.
+pub(crate) fn apply_machine_flags(
+    job: &mut crate::job::Job,
+    machine: Option<&str>,
+    output: Option<&str>,
+    feed: Option<&str>,
+    flags: &mut Vec<(&'static str, &'static str)>,
+) -> Result<()> {
+    if let Some(o) = output {
+        job.machine.output = Some(if o == "tcp" {
+            crate::post::OutputMode::Tcp
+        } else {
+            crate::post::OutputMode::Joint
+        });
+        flags.push(("machine.output", "--output"));
+    }
+    if let Some(f) = feed {
+        job.machine.feed = Some(if f == "inverse-time" {
+            crate::post::FeedMode::InverseTime
+        } else {
+            crate::post::FeedMode::PerMinute
+        });
+        flags.push(("machine.feed", "--feed"));
+    }
+    if let Some(m) = machine {
+        flags.push(("machine.definition", "--machine"));
+        job.use_machine(m)
+            .map_err(|e| name_flags(Error::from(e), flags))?;
+    }
+    Ok(())
+}
+
 /// Names the command-line flag in place of the library's option or job-file key: an option
 /// error whose key has a flag becomes a usage error (exit 2) naming the flag, and a limit the
 /// user can raise names the flag that raises it. `flags` maps key prefixes to flags.

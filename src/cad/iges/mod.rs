@@ -171,22 +171,20 @@ mod tests {
         }
     }
 
-    /// A plane patch (bilinear 128, 2×2 net) trimmed by a square of four lines in its
-    /// parameter plane, and a model-space arc placed by a 124: read exactly.
-    #[test]
-    fn a_small_file_reads_into_exact_geometry() {
-        let mut b = Builder::new();
+    /// A plane patch (bilinear 128, 2×2 net: the point (u, v) is (10u, 20v, 0)) trimmed by a
+    /// triangle of three lines in its parameter plane.
+    fn add_plane_face(b: &mut Builder) {
         let surface = b.add(
             128,
             0,
             "00010000",
-            "1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.,0.,0.,0.,10.,0.,0.,0.,20.,0.,10.,20.,0.,0.,1.,0.,1.",
+            "1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.,0.,0.,0.,10.,0.,0.,0.,20.,0.,10.,\
+             20.,0.,0.,1.,0.,1.",
         );
         let lines: Vec<usize> = [
             (0.0, 0.0, 0.5, 0.0),
             (0.5, 0.0, 0.5, 0.5),
-            (0.5, 0.5, 0.0, 0.5),
-            (0.0, 0.5, 0.0, 0.0),
+            (0.5, 0.5, 0.0, 0.0),
         ]
         .iter()
         .map(|(a, c, d, e)| b.add(110, 0, "00010500", &format!("{a},{c},0.,{d},{e},0.")))
@@ -195,10 +193,17 @@ mod tests {
             102,
             0,
             "00010500",
-            &format!("4,{},{},{},{}", lines[0], lines[1], lines[2], lines[3]),
+            &format!("3,{},{},{}", lines[0], lines[1], lines[2]),
         );
         let on_surface = b.add(142, 0, "00010500", &format!("1,{surface},{composite},0,1"));
         b.add(144, 0, "00000000", &format!("{surface},1,0,{on_surface}"));
+    }
+
+    /// The plane face reads into exact geometry.
+    #[test]
+    fn a_small_file_reads_into_exact_geometry() {
+        let mut b = Builder::new();
+        add_plane_face(&mut b);
         let text = b.text();
         let model = read_iges(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert_eq!(model.millimetres_per_unit, 1.0);
@@ -208,7 +213,7 @@ mod tests {
         let p = face.surface.point(0.25, 0.75);
         assert!((p - nalgebra::Point3::new(2.5, 15.0, 0.0)).norm() < 1e-14);
         let outer = face.outer.as_ref().unwrap().sample(1);
-        assert_eq!(outer.len(), 5);
+        assert_eq!(outer.len(), 4);
         assert_eq!(outer[2], nalgebra::Point3::new(0.5, 0.5, 0.0));
         assert!(model.skipped.is_empty());
     }
@@ -315,28 +320,7 @@ mod tests {
     /// The plane face of the first test and the cone of the second in one file.
     fn rich_file() -> String {
         let mut b = Builder::new();
-        let surface = b.add(
-            128,
-            0,
-            "00010000",
-            "1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.,0.,0.,0.,10.,0.,0.,0.,20.,0.,10.,20.,0.,0.,1.,0.,1.",
-        );
-        let lines: Vec<usize> = [
-            (0.0, 0.0, 0.5, 0.0),
-            (0.5, 0.0, 0.5, 0.5),
-            (0.5, 0.5, 0.0, 0.0),
-        ]
-        .iter()
-        .map(|(a, c, d, e)| b.add(110, 0, "00010500", &format!("{a},{c},0.,{d},{e},0.")))
-        .collect();
-        let composite = b.add(
-            102,
-            0,
-            "00010500",
-            &format!("3,{},{},{}", lines[0], lines[1], lines[2]),
-        );
-        let on_surface = b.add(142, 0, "00010500", &format!("1,{surface},{composite},0,1"));
-        b.add(144, 0, "00000000", &format!("{surface},1,0,{on_surface}"));
+        add_plane_face(&mut b);
         let matrix = b.add(124, 0, "00000000", "0.,-1.,0.,5.,1.,0.,0.,0.,0.,0.,1.,0.");
         let axis = b.add(110, matrix, "00010000", "0.,0.,0.,0.,0.,1.");
         let generatrix = b.add(

@@ -103,27 +103,13 @@ pub fn run(args: &PlanArgs) -> Result<()> {
     if args.channel {
         job.roughing.channel = true;
     }
-    if let Some(o) = &args.output {
-        job.machine.output = Some(if o == "tcp" {
-            crate::post::OutputMode::Tcp
-        } else {
-            crate::post::OutputMode::Joint
-        });
-        flags.push(("machine.output", "--output"));
-    }
-    if let Some(f) = &args.feed {
-        job.machine.feed = Some(if f == "inverse-time" {
-            crate::post::FeedMode::InverseTime
-        } else {
-            crate::post::FeedMode::PerMinute
-        });
-        flags.push(("machine.feed", "--feed"));
-    }
-    if let Some(m) = &args.machine {
-        flags.push(("machine.definition", "--machine"));
-        job.use_machine(m)
-            .map_err(|e| crate::cli::name_flags(Error::from(e), &flags))?;
-    }
+    crate::cli::apply_machine_flags(
+        &mut job,
+        args.machine.as_deref(),
+        args.output.as_deref(),
+        args.feed.as_deref(),
+        &mut flags,
+    )?;
     if let Some(n) = args.max_drive_points {
         job.limits.max_drive_points = n;
         flags.push(("limits.max_drive_points", "--max-drive-points"));

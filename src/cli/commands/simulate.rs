@@ -129,27 +129,13 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if !is_cl {
         let mut job = machine.unwrap_or_default();
         let mut flags = vec![("tool.", "--tool")];
-        if let Some(o) = &args.output {
-            job.machine.output = Some(if o == "tcp" {
-                crate::post::OutputMode::Tcp
-            } else {
-                crate::post::OutputMode::Joint
-            });
-            flags.push(("machine.output", "--output"));
-        }
-        if let Some(f) = &args.feed {
-            job.machine.feed = Some(if f == "inverse-time" {
-                crate::post::FeedMode::InverseTime
-            } else {
-                crate::post::FeedMode::PerMinute
-            });
-            flags.push(("machine.feed", "--feed"));
-        }
-        if let Some(m) = &args.machine {
-            flags.push(("machine.definition", "--machine"));
-            job.use_machine(m)
-                .map_err(|e| name_flags(Error::from(e), &flags))?;
-        }
+        crate::cli::apply_machine_flags(
+            &mut job,
+            args.machine.as_deref(),
+            args.output.as_deref(),
+            args.feed.as_deref(),
+            &mut flags,
+        )?;
         if args.job.is_none() {
             // The job's default ball stands for the tool's length on a machine with head
             // axes; the cutter given is what removes material.

@@ -278,69 +278,7 @@ impl Nurbs {
 
     /// Basis function values and derivatives (The NURBS Book, algorithm A2.3) for span `i`.
     fn ders_basis(&self, i: usize, u: f64, nd: usize) -> Vec<Vec<f64>> {
-        let p = self.degree;
-        let kn = &self.knots;
-        let mut ndu = vec![vec![0.0; p + 1]; p + 1];
-        let mut left = vec![0.0; p + 1];
-        let mut right = vec![0.0; p + 1];
-        ndu[0][0] = 1.0;
-        for j in 1..=p {
-            left[j] = u - kn[i + 1 - j];
-            right[j] = kn[i + j] - u;
-            let mut saved = 0.0;
-            for r in 0..j {
-                // Knot differences over a non-empty span are positive (they contain it).
-                ndu[j][r] = right[r + 1] + left[j - r];
-                let temp = ndu[r][j - 1] / ndu[j][r];
-                ndu[r][j] = saved + right[r + 1] * temp;
-                saved = left[j - r] * temp;
-            }
-            ndu[j][j] = saved;
-        }
-        let mut ders = vec![vec![0.0; p + 1]; nd + 1];
-        for j in 0..=p {
-            ders[0][j] = ndu[j][p];
-        }
-        let mut a = vec![vec![0.0; p + 1]; 2];
-        for r in 0..=p {
-            let (mut s1, mut s2) = (0usize, 1usize);
-            a[0][0] = 1.0;
-            for k in 1..=nd {
-                let mut d = 0.0;
-                let rk = r as isize - k as isize;
-                let pk = p - k;
-                if r >= k {
-                    let rk = rk as usize;
-                    a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
-                    d = a[s2][0] * ndu[rk][pk];
-                }
-                let j1: usize = if rk >= -1 { 1 } else { (-rk) as usize };
-                let j2: usize = if r as isize - 1 <= pk as isize {
-                    k - 1
-                } else {
-                    p - r
-                };
-                for j in j1..=j2 {
-                    let idx = (rk + j as isize) as usize;
-                    a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][idx];
-                    d += a[s2][j] * ndu[idx][pk];
-                }
-                if r <= pk {
-                    a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
-                    d += a[s2][k] * ndu[r][pk];
-                }
-                ders[k][r] = d;
-                std::mem::swap(&mut s1, &mut s2);
-            }
-        }
-        let mut f = p as f64;
-        for (k, row) in ders.iter_mut().enumerate().skip(1) {
-            for v in row.iter_mut() {
-                *v *= f;
-            }
-            f *= (p - k) as f64;
-        }
-        ders
+        crate::cad::nurbs::basis_derivatives(i, u, self.degree, nd, &self.knots)
     }
 }
 

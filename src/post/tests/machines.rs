@@ -278,17 +278,8 @@ fn inverse_time_feeds_give_the_planned_feed_at_the_part() {
     }
 }
 
-/// A head-head fork whose C is limited to ±200°: a pass whose axis turns C by 300° cannot
-/// start on the nearest turn; another start carries it, and when none can, the error says so.
-#[test]
-fn a_pass_starts_where_the_limits_let_it_finish() {
-    let (d, _) = machine("head-head");
-    let mut chain = d.chain_for(Vector3::zeros(), 100.0);
-    chain.first.limits_deg = Some((-250.0, 250.0));
-    let m = Machine::Chain(Box::new(chain.clone()));
-    // C = 180° − azimuth (with A = 30°) or C + 180° (with A = −30°): the pass turns C by
-    // 300°, from −30° (the default start, which runs into +250°) or from −210° (which ends at
-    // +90°); the turn from +150° would end at 450°.
+/// Two rapids down, then a pass whose axis, tilted 30°, turns its azimuth by 300°.
+fn c_turning_pass() -> Vec<(MoveKind, f64, [f64; 3], [f64; 3])> {
     let mut rows = vec![
         (MoveKind::Rapid, 0.0, [0.0, 0.0, 200.0], dir(30.0, -150.0)),
         (MoveKind::Rapid, 0.0, [0.0, 0.0, 150.0], dir(30.0, -150.0)),
@@ -302,6 +293,21 @@ fn a_pass_starts_where_the_limits_let_it_finish() {
             dir(30.0, az),
         ));
     }
+    rows
+}
+
+/// A head-head fork whose C is limited to ±200°: a pass whose axis turns C by 300° cannot
+/// start on the nearest turn; another start carries it, and when none can, the error says so.
+#[test]
+fn a_pass_starts_where_the_limits_let_it_finish() {
+    let (d, _) = machine("head-head");
+    let mut chain = d.chain_for(Vector3::zeros(), 100.0);
+    chain.first.limits_deg = Some((-250.0, 250.0));
+    let m = Machine::Chain(Box::new(chain.clone()));
+    // C = 180° − azimuth (with A = 30°) or C + 180° (with A = −30°): the pass turns C by
+    // 300°, from −30° (the default start, which runs into +250°) or from −210° (which ends at
+    // +90°); the turn from +150° would end at 450°.
+    let rows = c_turning_pass();
     let lin = LineariseOptions::default();
     let blocks = linearise_opt(&m, &toolpath(&rows), &lin).unwrap();
     for (_, j) in &blocks {
@@ -328,19 +334,7 @@ fn a_pass_starts_where_the_limits_let_it_finish() {
 fn an_unwind_carries_a_pass_past_a_limit() {
     use crate::geom::{Move, ToolPose};
     use crate::post::linearise_unwinding;
-    let mut rows = vec![
-        (MoveKind::Rapid, 0.0, [0.0, 0.0, 200.0], dir(30.0, -150.0)),
-        (MoveKind::Rapid, 0.0, [0.0, 0.0, 150.0], dir(30.0, -150.0)),
-    ];
-    for k in 0..=30 {
-        let az = -150.0 - 10.0 * k as f64;
-        rows.push((
-            MoveKind::Cut,
-            800.0,
-            [0.1 * k as f64, 0.0, 20.0],
-            dir(30.0, az),
-        ));
-    }
+    let rows = c_turning_pass();
     let path = toolpath(&rows);
     for name in ["head-head", "trunnion-ac"] {
         let (d, _) = machine(name);
