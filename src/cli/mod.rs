@@ -195,17 +195,32 @@ pub(crate) fn flat_diameter(spec: &str) -> Result<f64> {
     }
 }
 
-/// The machine flags `plan` and `simulate` share, applied to `job`: `--output` and `--feed`
-/// (overriding the machine's modes), then `--machine` (a shipped name or a definition file);
-/// each flag given is added to `flags`, so later errors name it.
+/// The machine flags `plan` and `simulate` share.
+#[derive(clap::Args, Debug, Default)]
+pub struct MachineArgs {
+    /// The machine: a shipped one (trunnion-ac, trunnion-bc, head-table-bc, head-table-ac,
+    /// head-head) or a machine definition file (TOML, see data/machines/); overrides the job
+    /// file's machine.definition. Without one, the job's table-table A/C machine.
+    #[arg(long)]
+    pub machine: Option<String>,
+    /// Output mode: `joint` (machine axes, linearised) or `tcp` (tool tip in the part frame,
+    /// the control's tool-centre-point mode on); overrides the machine's.
+    #[arg(long, value_parser = ["joint", "tcp"])]
+    pub output: Option<String>,
+    /// Feed mode: `per-minute` (G94) or `inverse-time` (G93); overrides the machine's.
+    #[arg(long, value_parser = ["per-minute", "inverse-time"])]
+    pub feed: Option<String>,
+}
+
+/// The machine flags applied to `job`: `--output` and `--feed` (overriding the machine's
+/// modes), then `--machine` (a shipped name or a definition file); each flag given is added
+/// to `flags`, so later errors name it.
 pub(crate) fn apply_machine_flags(
     job: &mut crate::job::Job,
-    machine: Option<&str>,
-    output: Option<&str>,
-    feed: Option<&str>,
+    args: &MachineArgs,
     flags: &mut Vec<(&'static str, &'static str)>,
 ) -> Result<()> {
-    if let Some(o) = output {
+    if let Some(o) = &args.output {
         job.machine.output = Some(if o == "tcp" {
             crate::post::OutputMode::Tcp
         } else {
@@ -213,7 +228,7 @@ pub(crate) fn apply_machine_flags(
         });
         flags.push(("machine.output", "--output"));
     }
-    if let Some(f) = feed {
+    if let Some(f) = &args.feed {
         job.machine.feed = Some(if f == "inverse-time" {
             crate::post::FeedMode::InverseTime
         } else {
@@ -221,7 +236,7 @@ pub(crate) fn apply_machine_flags(
         });
         flags.push(("machine.feed", "--feed"));
     }
-    if let Some(m) = machine {
+    if let Some(m) = &args.machine {
         flags.push(("machine.definition", "--machine"));
         job.use_machine(m)
             .map_err(|e| name_flags(Error::from(e), flags))?;

@@ -42,18 +42,8 @@ pub struct PlanArgs {
     /// the ball, 5-axis, in offset layers (`channel-rough`; `[roughing] channel = true`).
     #[arg(long)]
     pub channel: bool,
-    /// The machine: a shipped one (trunnion-ac, trunnion-bc, head-table-bc, head-table-ac,
-    /// head-head) or a machine definition file (TOML, see data/machines/); overrides the job
-    /// file's machine.definition. Without one, the job's table-table A/C machine.
-    #[arg(long)]
-    pub machine: Option<String>,
-    /// Output mode: `joint` (machine axes, linearised) or `tcp` (tool tip in the part frame,
-    /// the control's tool-centre-point mode on); overrides the machine's.
-    #[arg(long, value_parser = ["joint", "tcp"])]
-    pub output: Option<String>,
-    /// Feed mode: `per-minute` (G94) or `inverse-time` (G93); overrides the machine's.
-    #[arg(long, value_parser = ["per-minute", "inverse-time"])]
-    pub feed: Option<String>,
+    #[command(flatten)]
+    pub machine: crate::cli::MachineArgs,
     /// Worker threads, 1 to 256 (default: all cores). Outputs are identical for any count.
     #[arg(long, value_parser = threads)]
     pub threads: Option<usize>,
@@ -103,13 +93,7 @@ pub fn run(args: &PlanArgs) -> Result<()> {
     if args.channel {
         job.roughing.channel = true;
     }
-    crate::cli::apply_machine_flags(
-        &mut job,
-        args.machine.as_deref(),
-        args.output.as_deref(),
-        args.feed.as_deref(),
-        &mut flags,
-    )?;
+    crate::cli::apply_machine_flags(&mut job, &args.machine, &mut flags)?;
     if let Some(n) = args.max_drive_points {
         job.limits.max_drive_points = n;
         flags.push(("limits.max_drive_points", "--max-drive-points"));

@@ -34,17 +34,8 @@ pub struct SimulateArgs {
     /// ball diameter).
     #[arg(long, value_name = "SPEC", value_parser = cutter_spec, required_unless_present = "job")]
     pub tool: Option<String>,
-    /// The machine the program was posted for: a shipped one (trunnion-ac, trunnion-bc,
-    /// head-table-bc, head-table-ac, head-head) or a machine definition file (TOML); overrides
-    /// the job file's machine.definition.
-    #[arg(long)]
-    pub machine: Option<String>,
-    /// The program's output mode, `joint` or `tcp`, when it is not the machine's.
-    #[arg(long, value_parser = ["joint", "tcp"])]
-    pub output: Option<String>,
-    /// The program's feed mode, `per-minute` or `inverse-time`, when it is not the machine's.
-    #[arg(long, value_parser = ["per-minute", "inverse-time"])]
-    pub feed: Option<String>,
+    #[command(flatten)]
+    pub machine: crate::cli::MachineArgs,
     /// Fluted length from the tip, mm [default: 3 × D; with --job: the job's].
     #[arg(long, value_parser = positive)]
     pub flute_length: Option<f64>,
@@ -129,13 +120,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if !is_cl {
         let mut job = machine.unwrap_or_default();
         let mut flags = vec![("tool.", "--tool")];
-        crate::cli::apply_machine_flags(
-            &mut job,
-            args.machine.as_deref(),
-            args.output.as_deref(),
-            args.feed.as_deref(),
-            &mut flags,
-        )?;
+        crate::cli::apply_machine_flags(&mut job, &args.machine, &mut flags)?;
         if args.job.is_none() {
             // The job's default ball stands for the tool's length on a machine with head
             // axes; the cutter given is what removes material.
