@@ -34,12 +34,18 @@ pub fn find_span(n: usize, p: usize, u: f64, knots: &[f64]) -> usize {
     mid
 }
 
+/// Basis function values of one span.
+pub type Basis = smallvec::SmallVec<[f64; 12]>;
+
 /// The `p + 1` basis functions of degree `p` that are non-zero on span `i`, at `u`:
 /// `N[i − p + j](u)` for `j = 0..=p`.
-pub fn basis_functions(i: usize, u: f64, p: usize, knots: &[f64]) -> Vec<f64> {
-    let mut n = vec![0.0; p + 1];
-    let mut left = vec![0.0; p + 1];
-    let mut right = vec![0.0; p + 1];
+///
+/// Held inline up to degree 11 (the surfaces of real parts are cubic or quintic), so that
+/// evaluating a point allocates nothing.
+pub fn basis_functions(i: usize, u: f64, p: usize, knots: &[f64]) -> Basis {
+    let mut n: Basis = smallvec::smallvec![0.0; p + 1];
+    let mut left: Basis = smallvec::smallvec![0.0; p + 1];
+    let mut right: Basis = smallvec::smallvec![0.0; p + 1];
     n[0] = 1.0;
     for j in 1..=p {
         left[j] = u - knots[i + 1 - j];

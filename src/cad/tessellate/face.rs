@@ -1,0 +1,279 @@
+//! One face's triangles: a constrained Delaunay triangulation of its parameter region, with
+//! the trim loops as constraint edges, refined until the linear triangles stay within the
+//! tolerance of the surface.
+//!
+//! The triangulation runs in the parameter plane scaled by the surface's mean speed along u
+//! and v, so that a triangle that is well shaped there is roughly well shaped in space. The
+//! refinement inserts, for every triangle whose surface leaves it by more than the tolerance,
+//! the worst of its centroid and its free edges' midpoints, and repeats. Boundary edges are
+//! never split: they are shared with the neighbouring faces (see `seams`).
+
+use std::collections::{HashSet, VecDeque};
+
+use nalgebra::{Point2, Point3};
+use spade::handles::FixedVertexHandle;
+use spade::{ConstrainedDelaunayTriangulation, Point2 as SpadePoint, Triangulation};
+
+use super::trim::BoundaryLoop;
+use crate::cad::iges::Surface;
+
+/// Where a triangle corner's position comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Corner {
+    /// A welded boundary vertex (shared with other faces).
+    Boundary(u32),
+    /// The face's own interior vertex with this index.
+    Interior(u32),
+}
+
+/// A face's triangulation: its vertices (parameter values and sources) and its triangles.
+#[derive(Clone, Debug, Default)]
+pub(super) struct FaceMesh {
+    /// Parameter values of the triangulation's vertices.
+    pub uv: Vec<Point2<f64>>,
+    /// Where each vertex's position comes from.
+    pub corners: Vec<Corner>,
+    /// Positions of the interior vertices (on the surface).
+    pub interior: Vec<Point3<f64>>,
+    /// Triangles over `uv`/`corners`, counter-clockwise in the parameter plane.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Why a face could not be triangulated.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct FaceError(pub String);
+
+type Cdt = ConstrainedDelaunayTriangulation<SpadePoint<f64>>;
+
+/// Most vertices one face may need before it is refused: a guard against a surface the
+/// tolerance cannot be met on (a singular parameterisation), not a limit real faces meet.
+const MAX_FACE_VERTICES: usize = 2_000_000;
+
+/// Triangulates a face bounded by `loops` (welded ids in `ids`), refining until the surface
+/// is within `tolerance` of every triangle at its centroid and free edges' midpoints.
+/// `boundary_positions` are the welded positions.
+pub(super) fn triangulate_face(
+    surface: &Surface,
+    loops: &[BoundaryLoop],
+    ids: &[Vec<u32>],
+    boundary_positions: &[Point3<f64>],
+    tolerance: f64,
+) -> Result<FaceMesh, FaceError> {
+    let scale = parameter_scale(surface, loops);
+    // spade refuses magnitudes below ~1e-26 other than zero; such a coordinate is zero here.
+    let flush = |x: f64| if x.abs() < 1e-20 { 0.0 } else { x };
+    let to_plane =
+        |uv: &Point2<f64>| SpadePoint::new(flush(uv.x * scale[0]), flush(uv.y * scale[1]));
+    let mut cdt = Cdt::new();
+    let mut mesh = FaceMesh::default();
+    let mut positions: Vec<Point3<f64>> = Vec::new();
+    let mut handles: Vec<Vec<FixedVertexHandle>> = Vec::with_capacity(loops.len());
+    for (lp, lp_ids) in loops.iter().zip(ids) {
+        let mut hs = Vec::with_capacity(lp.len());
+        for (v, &id) in lp.iter().zip(lp_ids) {
+            let h = cdt.insert(to_plane(&v.uv)).map_err(|e| {
+                FaceError(format!("boundary point (u, v) = ({}, {}): {e:?}", v.uv.x, v.uv.y))
+            })?;
+            if h.index() == mesh.uv.len() {
+                mesh.uv.push(v.uv);
+                mesh.corners.push(Corner::Boundary(id));
+                positions.push(boundary_positions[id as usize]);
+            }
+            hs.push(h);
+        }
+        handles.push(hs);
+    }
+    for hs in &handles {
+        for (i, &from) in hs.iter().enumerate() {
+            let to = hs[(i + 1) % hs.len()];
+            if from == to || cdt.exists_constraint(from, to) {
+                continue;
+            }
+            let added = cdt.try_add_constraint(from, to);
+            if added.len() != 1 {
+                let at = mesh.uv[from.index()];
+                return Err(FaceError(format!(
+                    "its trim loops cross or touch near (u, v) = ({:.6}, {:.6})",
+                    at.x, at.y
+                )));
+            }
+        }
+    }
+
+    let mut settled: HashSet<[u32; 3]> = HashSet::new();
+    loop {
+        let inside = inside_faces(&cdt)?;
+        let mut wanted: Vec<Point2<f64>> = Vec::new();
+        for f in cdt.inner_faces() {
+            if !inside[f.fix().index()] {
+                continue;
+            }
+            let vs = f.vertices().map(|v| v.fix().index() as u32);
+            let mut key = vs;
+            key.sort_unstable();
+            if settled.contains(&key) {
+                continue;
+            }
+            let uv = vs.map(|i| mesh.uv[i as usize]);
+            let p = vs.map(|i| positions[i as usize]);
+            let plane = uv.map(|q| to_plane(&q));
+            let edges = f.adjacent_edges();
+            // A point too near a boundary edge would split it in spade's exact arithmetic; a
+            // triangle that thin is left as it is (the deviation measure still sees it).
+            let clear_of_boundary = |q: &Point2<f64>| {
+                let q = to_plane(q);
+                edges.iter().enumerate().all(|(k, e)| {
+                    !e.is_constraint_edge()
+                        || plane_distance(q, plane[k], plane[(k + 1) % 3])
+                            > 1e-9 * plane_length(plane[k], plane[(k + 1) % 3])
+                })
+            };
+            let mut worst: Option<(f64, Point2<f64>)> = None;
+            let mut consider = |error: f64, at: Point2<f64>| {
+                if worst.is_none_or(|w| error > w.0) && clear_of_boundary(&at) {
+                    worst = Some((error, at));
+                }
+            };
+            let centroid_uv = Point2::from((uv[0].coords + uv[1].coords + uv[2].coords) / 3.0);
+            let centroid = Point3::from((p[0].coords + p[1].coords + p[2].coords) / 3.0);
+            consider(
+                (surface.point(centroid_uv.x, centroid_uv.y) - centroid).norm(),
+                centroid_uv,
+            );
+            for (k, e) in edges.iter().enumerate() {
+                if e.is_constraint_edge() {
+                    continue;
+                }
+                // Edge k of a spade face runs from vertex k to vertex k + 1.
+                let (a, b) = (k, (k + 1) % 3);
+                let mid_uv = Point2::from((uv[a].coords + uv[b].coords) * 0.5);
+                let mid = Point3::from((p[a].coords + p[b].coords) * 0.5);
+                consider((surface.point(mid_uv.x, mid_uv.y) - mid).norm(), mid_uv);
+            }
+            let worst = worst.unwrap_or((0.0, centroid_uv));
+            if worst.0 > tolerance {
+                wanted.push(worst.1);
+            } else {
+                settled.insert(key);
+            }
+        }
+        if wanted.is_empty() {
+            break;
+        }
+        for uv in wanted {
+            let constraints = cdt.num_constraints();
+            let h = cdt
+                .insert(to_plane(&uv))
+                .map_err(|e| FaceError(format!("refinement point {uv:?}: {e:?}")))?;
+            if cdt.num_constraints() != constraints {
+                // The point fell on a boundary edge and split it: undo, the boundary is shared.
+                return Err(FaceError(format!(
+                    "a refinement point fell on a trim edge at (u, v) = ({:.6}, {:.6})",
+                    uv.x, uv.y
+                )));
+            }
+            if h.index() == mesh.uv.len() {
+                let position = surface.point(uv.x, uv.y);
+                mesh.uv.push(uv);
+                mesh.corners.push(Corner::Interior(mesh.interior.len() as u32));
+                mesh.interior.push(position);
+                positions.push(position);
+            }
+        }
+        if mesh.uv.len() > MAX_FACE_VERTICES {
+            return Err(FaceError(format!(
+                "more than {MAX_FACE_VERTICES} vertices would be needed at this tolerance"
+            )));
+        }
+    }
+    let inside = inside_faces(&cdt)?;
+    mesh.triangles = cdt
+        .inner_faces()
+        .filter(|f| inside[f.fix().index()])
+        .map(|f| f.vertices().map(|v| v.fix().index() as u32))
+        .collect();
+    Ok(mesh)
+}
+
+/// For every face of the triangulation (outer face included), whether it is inside the loops:
+/// an odd number of constraint edges away from the outside.
+fn inside_faces(cdt: &Cdt) -> Result<Vec<bool>, FaceError> {
+    const UNKNOWN: u8 = u8::MAX;
+    let mut parity = vec![UNKNOWN; cdt.num_all_faces()];
+    let mut queue = VecDeque::new();
+    for f in cdt.inner_faces() {
+        for e in f.adjacent_edges() {
+            if e.rev().face().is_outer() {
+                let p = u8::from(e.is_constraint_edge());
+                let slot = &mut parity[f.fix().index()];
+                if *slot == UNKNOWN {
+                    *slot = p;
+                    queue.push_back(f.fix());
+                } else if *slot != p {
+                    return Err(FaceError("its trim loops are not closed".into()));
+                }
+            }
+        }
+    }
+    while let Some(fh) = queue.pop_front() {
+        let pf = parity[fh.index()];
+        for e in cdt.face(fh).adjacent_edges() {
+            if let Some(g) = e.rev().face().as_inner() {
+                let p = pf ^ u8::from(e.is_constraint_edge());
+                let slot = &mut parity[g.fix().index()];
+                if *slot == UNKNOWN {
+                    *slot = p;
+                    queue.push_back(g.fix());
+                } else if *slot != p {
+                    return Err(FaceError("its trim loops are not closed or cross".into()));
+                }
+            }
+        }
+    }
+    Ok(parity.into_iter().map(|p| p == 1).collect())
+}
+
+/// Mean speeds `|S_u|`, `|S_v|` over the loops' parameter box (central differences on a 5 × 5
+/// grid), floored so that a degenerate side cannot collapse the plane.
+fn parameter_scale(surface: &Surface, loops: &[BoundaryLoop]) -> [f64; 2] {
+    let (mut lo, mut hi) = (
+        Point2::new(f64::INFINITY, f64::INFINITY),
+        Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
+    for v in loops.iter().flatten() {
+        lo = lo.inf(&v.uv);
+        hi = hi.sup(&v.uv);
+    }
+    let size = hi - lo;
+    if !(size.x > 0.0 && size.y > 0.0) {
+        return [1.0, 1.0];
+    }
+    let h = size * 1e-4;
+    let (mut su, mut sv) = (0.0, 0.0);
+    for i in 0..5 {
+        for j in 0..5 {
+            let u = lo.x + size.x * (i as f64 + 0.5) / 5.0;
+            let v = lo.y + size.y * (j as f64 + 0.5) / 5.0;
+            su += (surface.point(u + h.x, v) - surface.point(u - h.x, v)).norm() / (2.0 * h.x);
+            sv += (surface.point(u, v + h.y) - surface.point(u, v - h.y)).norm() / (2.0 * h.y);
+        }
+    }
+    let floor = 1e-6 * (su + sv).max(f64::MIN_POSITIVE);
+    [(su / 25.0).max(floor), (sv / 25.0).max(floor)]
+}
+
+fn plane_length(a: SpadePoint<f64>, b: SpadePoint<f64>) -> f64 {
+    (b.x - a.x).hypot(b.y - a.y)
+}
+
+/// Distance from `q` to the segment `a`–`b` in the (scaled) parameter plane.
+fn plane_distance(q: SpadePoint<f64>, a: SpadePoint<f64>, b: SpadePoint<f64>) -> f64 {
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((q.x - a.x) * dx + (q.y - a.y) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (q.x - a.x - t * dx).hypot(q.y - a.y - t * dy)
+}
