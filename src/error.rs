@@ -17,6 +17,20 @@ pub enum Error {
     /// The part (a mesh or an outline) was read but cannot be used as it is.
     #[error("{file}: {reason}")]
     Mesh { file: String, reason: String },
+    /// An IGES file is malformed; the error names the line.
+    #[error("{file}: {error}")]
+    Iges {
+        file: String,
+        #[source]
+        error: crate::cad::iges::IgesError,
+    },
+    /// A CAD face could not be tessellated; the error names the face.
+    #[error("{file}: tessellating {error}")]
+    Tessellate {
+        file: String,
+        #[source]
+        error: crate::cad::tessellate::TessellateError,
+    },
     /// A job file or option is wrong, naming the key, operation or file.
     #[error(transparent)]
     JobFile(#[from] JobError),

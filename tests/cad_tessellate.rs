@@ -96,3 +96,69 @@ fn probe_face() {
     if let Some(o) = &f.outer { show(o, 0); }
     for u in [0.057, 0.1185, 0.18, 0.303] { for v in [0.0, 1.45e-9, 1e-6, 1e-3] { let p = f.surface.point(u, v); eprintln!("S({u},{v}) = {:?}", (p.x,p.y,p.z)); } }
 }
+
+#[test]
+fn probe_sign() {
+    let Some(dir) = common::testdata() else { return; };
+    let path = dir.join("cad/impeller_solidworks__pyvista_pyiges.igs");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let model = read_iges(&text).unwrap();
+    let t = tessellate(&model.faces, &TessellateOptions::default()).unwrap();
+    let (mesh, rep) = wavemill::mesh::prepare(&t.mesh, &Default::default()).unwrap();
+    eprintln!("{:?}", rep.problems());
+    let sd = wavemill::mesh::SurfaceDistance::new(&mesh);
+    let bb = mesh.aabb();
+    let mut bad = 0;
+    let mut state = 12345u64;
+    let mut rnd = || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; (state >> 11) as f64 / (1u64 << 53) as f64 };
+    for _ in 0..20000 {
+        let p = nalgebra::Point3::new(bb.min.x + rnd() * (bb.max.x - bb.min.x), bb.min.y + rnd() * (bb.max.y - bb.min.y), bb.min.z + rnd() * (bb.max.z - bb.min.z));
+        let (d, c) = sd.signed_distance(&p).unwrap();
+        let par = sd.contains_by_parity(&p);
+        if (d < 0.0) != par && d.abs() > 0.05 {
+            bad += 1;
+            if bad < 10 { eprintln!("disagree at {p} d {d:.4} parity {par} closest {:?}", c); }
+        }
+    }
+    eprintln!("bad {bad}");
+}
+
+#[test]
+fn probe_flips() {
+    let Some(dir) = common::testdata() else { return; };
+    let path = dir.join("cad/impeller_solidworks__pyvista_pyiges.igs");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let model = read_iges(&text).unwrap();
+    let t = tessellate(&model.faces, &TessellateOptions::default()).unwrap();
+    let mut signs: std::collections::BTreeMap<u32, (usize, usize, Vec<usize>)> = Default::default();
+    for i in 0..t.mesh.triangles.len() {
+        let f = t.face_of_triangle[i];
+        let s = &model.faces[f as usize].surface;
+        let uv = t.corner_parameters(i);
+        let c = (uv[0].coords + uv[1].coords + uv[2].coords) / 3.0;
+        let h = 1e-6;
+        let su = s.point(c.x + h, c.y) - s.point(c.x - h, c.y);
+        let sv = s.point(c.x, c.y + h) - s.point(c.x, c.y - h);
+        let n = su.cross(&sv);
+        let tn = t.mesh.face_normal(i);
+        let e = signs.entry(f).or_default();
+        if n.dot(&tn) > 0.0 { e.0 += 1 } else { e.1 += 1; e.2.push(i) }
+    }
+    let q = nalgebra::Point3::new(-20.37847364463208, 35.718767728431395, -0.9448355360245393);
+    for i in 0..t.mesh.triangles.len() {
+        let c = t.mesh.corners(i);
+        if c.iter().any(|p| (p - q).norm() < 0.05) {
+            let f = t.face_of_triangle[i];
+            let s = &model.faces[f as usize].surface;
+            let uv = t.corner_parameters(i);
+            eprintln!("near: tri {i} face {f} corners {:?} uv {:?} normal {:?} rev {}", c.map(|p| (p.x, p.y, p.z)), uv.map(|q| (q.x, q.y)), t.mesh.face_normal(i), matches!(s, wavemill::cad::iges::Surface::Revolution{..}));
+        }
+    }
+    for (f, (a, b, list)) in &signs {
+        let minority = if a < b { *a } else { *b };
+        if minority > 0 {
+            let bad: Vec<_> = if a < b { vec![] } else { list.iter().take(3).map(|&i| { let c = t.mesh.corners(i); (i, c[0], t.mesh.triangles[i]) }).collect() };
+            eprintln!("face {f}: {a} vs {b} {:?}", bad);
+        }
+    }
+}

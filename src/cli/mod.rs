@@ -30,6 +30,7 @@ pub use commands::rough::RoughArgs;
 pub use commands::sample::{SampleArgs, SampleKind};
 pub use commands::simulate::SimulateArgs;
 pub use commands::subdivide::SubdivideArgs;
+pub use commands::tessellate::TessellateArgs;
 pub use commands::tools::ToolsArgs;
 
 use crate::error::{Error, Result};
@@ -50,7 +51,7 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Print what a mesh file contains: size, topology, problems, units guess.
+    /// Print what a part file contains: size, topology, problems, units guess.
     Info(InfoArgs),
     /// Generate a sample part (GLB and OBJ), deterministically.
     Sample(SampleArgs),
@@ -80,6 +81,9 @@ pub enum Command {
     /// library tool: ramped entries, posted, read back and checked (shape, part, tri-dexel
     /// stock with the whole tool).
     Rough(RoughArgs),
+    /// Tessellate an IGES part (trimmed NURBS and revolved surfaces) into one welded mesh
+    /// within a chord tolerance, and measure how far it is from the surfaces.
+    Tessellate(TessellateArgs),
 }
 
 /// Runs the parsed command; returns the process exit code.
@@ -89,6 +93,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Sample(a) => commands::sample::run(&a),
         Command::Plan(a) => commands::plan::run(&a),
         Command::Subdivide(a) => commands::subdivide::run(&a),
+        Command::Tessellate(a) => commands::tessellate::run(&a),
         Command::Levels(a) => commands::levels::run(&a),
         Command::Contour(a) => commands::contour::run(&a),
         Command::Offsets(a) => commands::offsets::run(&a),

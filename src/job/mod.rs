@@ -11,6 +11,7 @@
 mod access;
 mod blank;
 mod budget;
+mod cad_part;
 mod channel_rough;
 mod config;
 mod contour;
@@ -43,6 +44,10 @@ pub use access::{
 };
 pub use blank::BlankSpec;
 pub use budget::ToleranceBudget;
+pub use cad_part::{
+    TessellateSummary, TessellatedPart, is_iges, load_iges_part, read_iges_file, tessellate_iges,
+    tessellate_summary, tessellation_warnings,
+};
 pub use channel_rough::{
     ChannelLayerSummary, ChannelPlan, ChannelSummary, channel_rough, layer_allowances,
 };

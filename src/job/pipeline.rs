@@ -122,10 +122,22 @@ pub fn drive_surface<'a>(
 /// When the part's size in the file's own numbers suggests other units than `units` by orders
 /// of magnitude (a 185-unit impeller read as inches is 4.7 m across), a warning saying so is
 /// added to the mesh's warnings.
+///
+/// An IGES file (`.igs`, `.iges`) is tessellated at 0.01 mm into one welded mesh; its units
+/// are the file's own (its Global section), so `units` is not asked.
 pub fn load_part(path: &Path, units: &str) -> Result<RawMesh> {
     let units: Units = units
         .parse()
         .map_err(|e| Error::Usage(format!("units of {}: {e}", path.display())))?;
+    if super::is_iges(path) {
+        let mut raw = super::load_iges_part(path, &Default::default())?;
+        if units != Units::Millimetres {
+            raw.warnings.push(format!(
+                "units {units} not applied: an IGES file's Global section gives its own unit"
+            ));
+        }
+        return Ok(raw);
+    }
     let mut raw = read_mesh(path, units)?;
     if let Some(warning) = units_warning(&raw.mesh, units) {
         raw.warnings.push(warning);

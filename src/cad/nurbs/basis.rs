@@ -160,7 +160,7 @@ mod tests {
         for &u in &[0.1, 0.31, 0.42, 0.66, 0.9] {
             let i = find_span(n, p, u, &KNOTS);
             let d = basis_derivatives(i, u, p, 3, &KNOTS);
-            assert_eq!(d[0], basis_functions(i, u, p, &KNOTS));
+            assert_eq!(d[0][..], basis_functions(i, u, p, &KNOTS)[..]);
             let h = 1e-5;
             let (lo, hi) = (
                 basis_functions(i, u - h, p, &KNOTS),

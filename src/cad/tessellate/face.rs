@@ -12,8 +12,11 @@ use std::collections::{HashSet, VecDeque};
 
 use nalgebra::{Point2, Point3};
 use spade::handles::FixedVertexHandle;
-use spade::{ConstrainedDelaunayTriangulation, Point2 as SpadePoint, Triangulation};
+use spade::{
+    ConstrainedDelaunayTriangulation, Point2 as SpadePoint, PositionInTriangulation, Triangulation,
+};
 
+use super::caps::CAP_THINNESS;
 use super::trim::BoundaryLoop;
 use crate::cad::iges::Surface;
 
@@ -67,6 +70,8 @@ pub(super) fn triangulate_face(
     let mut cdt = Cdt::new();
     let mut mesh = FaceMesh::default();
     let mut positions: Vec<Point3<f64>> = Vec::new();
+    // Each vertex where this face put it, before welding moved it to its neighbours'.
+    let mut own: Vec<Point3<f64>> = Vec::new();
     let mut handles: Vec<Vec<FixedVertexHandle>> = Vec::with_capacity(loops.len());
     for (lp, lp_ids) in loops.iter().zip(ids) {
         let mut hs = Vec::with_capacity(lp.len());
@@ -78,6 +83,7 @@ pub(super) fn triangulate_face(
                 mesh.uv.push(v.uv);
                 mesh.corners.push(Corner::Boundary(id));
                 positions.push(boundary_positions[id as usize]);
+                own.push(v.position);
             }
             hs.push(h);
         }
@@ -100,10 +106,12 @@ pub(super) fn triangulate_face(
         }
     }
 
+    let boundary_vertices = mesh.uv.len() as u32;
     let mut settled: HashSet<[u32; 3]> = HashSet::new();
     loop {
         let inside = inside_faces(&cdt)?;
-        let mut wanted: Vec<Point2<f64>> = Vec::new();
+        // (error, point, the triangle it came from)
+        let mut wanted: Vec<(f64, Point2<f64>, [u32; 3])> = Vec::new();
         for f in cdt.inner_faces() {
             if !inside[f.fix().index()] {
                 continue;
@@ -152,7 +160,14 @@ pub(super) fn triangulate_face(
             }
             let worst = worst.unwrap_or((0.0, centroid_uv));
             if worst.0 > tolerance {
-                wanted.push(worst.1);
+                // The circumcentre where it lies inside (Delaunay refinement: the new
+                // triangles are well shaped and no smaller than they need be), else the
+                // worst test point.
+                let at = circumcentre_inside(plane)
+                    .map(|c| Point2::new(c.x / scale[0], c.y / scale[1]))
+                    .filter(|c| clear_of_boundary(c))
+                    .unwrap_or(worst.1);
+                wanted.push((worst.0, at, key));
             } else {
                 settled.insert(key);
             }
@@ -160,7 +175,32 @@ pub(super) fn triangulate_face(
         if wanted.is_empty() {
             break;
         }
-        for uv in wanted {
+        // Worst first, and only into triangles no insertion of this round has changed: a point
+        // fixes its neighbours' errors too, and inserting theirs as well would over-refine.
+        wanted.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
+        for (_, uv, key) in wanted {
+            let unchanged = match cdt.locate(to_plane(&uv)) {
+                PositionInTriangulation::OnFace(f) => {
+                    let mut k = cdt.face(f).vertices().map(|v| v.fix().index() as u32);
+                    k.sort_unstable();
+                    k == key
+                }
+                PositionInTriangulation::OnEdge(e) => {
+                    // An edge midpoint: either side may be its triangle.
+                    let e = cdt.directed_edge(e);
+                    [e.face(), e.rev().face()].iter().any(|f| {
+                        f.as_inner().is_some_and(|f| {
+                            let mut k = f.vertices().map(|v| v.fix().index() as u32);
+                            k.sort_unstable();
+                            k == key
+                        })
+                    })
+                }
+                _ => false,
+            };
+            if !unchanged {
+                continue;
+            }
             let constraints = cdt.num_constraints();
             let h = cdt
                 .insert(to_plane(&uv))
@@ -178,6 +218,7 @@ pub(super) fn triangulate_face(
                 mesh.corners.push(Corner::Interior(mesh.interior.len() as u32));
                 mesh.interior.push(position);
                 positions.push(position);
+                own.push(position);
             }
         }
         if mesh.uv.len() > MAX_FACE_VERTICES {
@@ -192,7 +233,117 @@ pub(super) fn triangulate_face(
         .filter(|f| inside[f.fix().index()])
         .map(|f| f.vertices().map(|v| v.fix().index() as u32))
         .collect();
+    untangle(surface, &mut mesh.triangles, &mesh.uv, &own, &positions, boundary_vertices);
     Ok(mesh)
+}
+
+/// Flips the longest free edge of caps and of triangles that welding turned over.
+///
+/// Three trim vertices in a row along a nearly straight stretch make a cap: a triangle whose
+/// height is a sliver of its length, so its normal is noise (and welding, moving a corner
+/// across that height, can turn it over). A cap's normal spoils the pseudo-normals that tell
+/// inside from outside at its edges. Flipping its long edge with the neighbour there gives two
+/// sound triangles, where they face as the surface does and are less thin than before.
+fn untangle(
+    surface: &Surface,
+    triangles: &mut [[u32; 3]],
+    uv: &[Point2<f64>],
+    own: &[Point3<f64>],
+    welded: &[Point3<f64>],
+    boundary_vertices: u32,
+) {
+    // The surface's normal at a triangle's parameter centroid (central differences), where
+    // the parameterisation is regular; `None` at a pole or a degenerate side.
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let h = 1e-6 * ((u1 - u0).abs() + (v1 - v0).abs()).max(f64::MIN_POSITIVE);
+    let surface_normal = |t: &[u32; 3]| {
+        let c = (uv[t[0] as usize].coords + uv[t[1] as usize].coords + uv[t[2] as usize].coords)
+            / 3.0;
+        let su = surface.point(c.x + h, c.y) - surface.point(c.x - h, c.y);
+        let sv = surface.point(c.x, c.y + h) - surface.point(c.x, c.y - h);
+        let n = su.cross(&sv);
+        (n.norm() > 1e-12 * su.norm() * sv.norm()).then_some(n)
+    };
+    let normal = |t: &[u32; 3], at: &[Point3<f64>]| {
+        let [a, b, c] = t.map(|i| at[i as usize]);
+        (b - a).cross(&(c - a))
+    };
+    // Height over longest side, in the welded positions.
+    let thinness = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| welded[i as usize]);
+        let longest2 = (b - a).norm_squared().max((c - b).norm_squared()).max((a - c).norm_squared());
+        if longest2 > 0.0 { (b - a).cross(&(c - a)).norm() / longest2 } else { 0.0 }
+    };
+    // Turned: against the surface where it has a normal, else against the face's own corners.
+    let turned = |t: &[u32; 3]| match surface_normal(t) {
+        Some(n) => normal(t, welded).dot(&n) <= 0.0,
+        None => normal(t, own).dot(&normal(t, welded)) <= 0.0,
+    };
+    // Only a triangle with a boundary corner can have been moved by welding.
+    let bad = |t: &[u32; 3]| {
+        t.iter().any(|&v| v < boundary_vertices) && (thinness(t) < CAP_THINNESS || turned(t))
+    };
+    if !triangles.iter().any(bad) {
+        return;
+    }
+    let mut across: std::collections::HashMap<(u32, u32), usize> = Default::default();
+    for (i, t) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            across.insert((t[k], t[(k + 1) % 3]), i);
+        }
+    }
+    for _ in 0..3 {
+        let mut changed = false;
+        for i in 0..triangles.len() {
+            if !bad(&triangles[i]) {
+                continue;
+            }
+            let t = triangles[i];
+            let mut sides: Vec<usize> = (0..3).collect();
+            let length = |k: usize| (own[t[k] as usize] - own[t[(k + 1) % 3] as usize]).norm();
+            sides.sort_by(|&x, &y| length(y).total_cmp(&length(x)));
+            for k in sides {
+                let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                let Some(&j) = across.get(&(b, a)) else {
+                    continue;
+                };
+                let u = triangles[j];
+                let Some(d) = u.iter().copied().find(|&x| x != a && x != b) else {
+                    continue;
+                };
+                let (first, second) = ([a, d, c], [d, b, c]);
+                let sound = |t: &[u32; 3]| normal(t, own).norm() > 0.0 && !turned(t);
+                // Both new triangles must face as the old pair did on the surface.
+                let facing = normal(&t, own) + normal(&u, own);
+                let before = thinness(&t).min(thinness(&u));
+                if sound(&first)
+                    && sound(&second)
+                    && (turned(&t) || thinness(&first).min(thinness(&second)) > before)
+                    && normal(&first, own).dot(&facing) > 0.0
+                    && normal(&second, own).dot(&facing) > 0.0
+                {
+                    for (x, y) in [(a, b), (b, c), (c, a)] {
+                        across.remove(&(x, y));
+                    }
+                    for x in 0..3 {
+                        across.remove(&(u[x], u[(x + 1) % 3]));
+                    }
+                    triangles[i] = first;
+                    triangles[j] = second;
+                    for (tri, idx) in [(first, i), (second, j)] {
+                        for x in 0..3 {
+                            across.insert((tri[x], tri[(x + 1) % 3]), idx);
+                        }
+                    }
+                    changed = true;
+                    break;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
 }
 
 /// For every face of the triangulation (outer face included), whether it is inside the loops:
@@ -276,4 +427,29 @@ fn plane_distance(q: SpadePoint<f64>, a: SpadePoint<f64>, b: SpadePoint<f64>) ->
         0.0
     };
     (q.x - a.x - t * dx).hypot(q.y - a.y - t * dy)
+}
+
+/// The circumcentre of a triangle of the (scaled) parameter plane when it lies inside the
+/// triangle (the triangle is acute), else `None`.
+fn circumcentre_inside(t: [SpadePoint<f64>; 3]) -> Option<SpadePoint<f64>> {
+    let [a, b, c] = t;
+    let (bx, by, cx, cy) = (b.x - a.x, b.y - a.y, c.x - a.x, c.y - a.y);
+    let d = 2.0 * (bx * cy - by * cx);
+    if d.abs() <= f64::EPSILON * (bx * bx + by * by + cx * cx + cy * cy) {
+        return None;
+    }
+    let (b2, c2) = (bx * bx + by * by, cx * cx + cy * cy);
+    let ux = (cy * b2 - by * c2) / d;
+    let uy = (bx * c2 - cx * b2) / d;
+    let p = SpadePoint::new(a.x + ux, a.y + uy);
+    // Inside: on the inner side of every edge, by a margin.
+    let side = |u: SpadePoint<f64>, v: SpadePoint<f64>| {
+        (v.x - u.x) * (p.y - u.y) - (v.y - u.y) * (p.x - u.x)
+    };
+    let sign = d.signum();
+    let margin = 1e-6 * d.abs();
+    [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|&(u, v)| side(u, v) * sign > margin)
+        .then_some(p)
 }

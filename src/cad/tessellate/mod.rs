@@ -10,8 +10,11 @@
 
 use std::collections::{BTreeMap, HashMap};
 
+mod caps;
 mod face;
 mod seams;
+#[cfg(test)]
+mod tests;
 mod trim;
 
 use nalgebra::{Point2, Point3};
@@ -84,6 +87,9 @@ pub struct TessellationReport {
     pub junction_vertices: usize,
     /// Triangles dropped because welding collapsed them (at poles and degenerate sides).
     pub collapsed_triangles: usize,
+    /// Caps (triangles thinner than a thousandth of their length) whose middle vertex was
+    /// merged into a neighbour.
+    pub collapsed_caps: usize,
     /// Vertices of edges left open by welding that sewing merged.
     pub sewn_vertices: usize,
     /// Open edges that sewing split at a vertex of the other side.
@@ -183,6 +189,7 @@ pub fn tessellate(
         }
     }
     let sewing = seams::sew(&mut soup, boundary_count, options.sewing_distance());
+    let collapsed_caps = caps::collapse_caps(&mut soup);
     soup.orient_outward(boundary_count, faces.len());
     let mesh = Mesh {
         positions: soup.positions,
@@ -194,6 +201,7 @@ pub fn tessellate(
         vertices: mesh.positions.len(),
         junction_vertices,
         collapsed_triangles,
+        collapsed_caps,
         sewn_vertices: sewing.merged_vertices,
         sewn_edges: sewing.split_edges,
         widest_sewn_gap: sewing.widest_gap,

@@ -11,7 +11,7 @@ use crate::job::{self, Job};
 
 #[derive(Args, Debug)]
 pub struct AccessArgs {
-    /// Part mesh (.stl, .obj, .gltf, .glb).
+    /// Part: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges).
     pub part: PathBuf,
     /// Size K of the direction set (subdivided icosahedron): 12, 42, 162, 642, 2562 or 10242.
     #[arg(long, default_value_t = 642)]

@@ -11,7 +11,7 @@ use crate::mesh::{PrepareOptions, prepare};
 
 #[derive(Args, Debug)]
 pub struct InfoArgs {
-    /// Mesh file (.stl, .obj, .gltf, .glb).
+    /// Part file: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges).
     pub part: PathBuf,
     /// Units the file is written in.
     #[arg(long, default_value = "mm", value_parser = units)]

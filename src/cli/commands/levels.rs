@@ -12,7 +12,7 @@ use crate::multires;
 
 #[derive(Args, Debug)]
 pub struct LevelsArgs {
-    /// Mesh file (.stl, .obj, .gltf, .glb): a manifold surface.
+    /// Part file: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges): a manifold surface.
     pub part: PathBuf,
     /// Units of the input file: mm, m or in.
     #[arg(long, default_value = "mm", value_parser = units)]

@@ -10,4 +10,5 @@ pub mod rough;
 pub mod sample;
 pub mod simulate;
 pub mod subdivide;
+pub mod tessellate;
 pub mod tools;

@@ -12,7 +12,7 @@ use crate::multires;
 
 #[derive(Args, Debug)]
 pub struct OffsetsArgs {
-    /// Mesh file (.stl, .obj, .gltf, .glb): a manifold surface.
+    /// Part file: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges): a manifold surface.
     pub part: PathBuf,
     /// Stock to leave per shape, mm, strictly decreasing, e.g. `1.0,0.5,0.2,0`. Shape j
     /// offsets hierarchy level j (the finest level for the shapes beyond it).

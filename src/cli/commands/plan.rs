@@ -11,7 +11,7 @@ use crate::job::{self, Job};
 
 #[derive(Args, Debug)]
 pub struct PlanArgs {
-    /// Part mesh (.stl, .obj, .gltf, .glb); overrides the job file's part.
+    /// Part: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges); overrides the job file's part.
     pub part: Option<PathBuf>,
     /// Job file (TOML); without it the embedded defaults are used.
     #[arg(long)]

@@ -12,7 +12,7 @@ use crate::job::{self};
 
 #[derive(Args, Debug)]
 pub struct RoughArgs {
-    /// Part mesh (.stl, .obj, .gltf, .glb), closed, standing on its lowest point with its axis
+    /// Part: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges), closed, standing on its lowest point with its axis
     /// along +Z.
     pub part: PathBuf,
     /// Direction in the part file that should point up the spindle, e.g. `0,1,0` for a part

@@ -12,7 +12,7 @@ use crate::job::{self};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
-    /// Part mesh (.stl, .obj, .gltf, .glb), closed, in the frame of the program.
+    /// Part: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges), closed, in the frame of the program.
     pub part: PathBuf,
     /// The program: CL data (a `.csv`, as `plan` writes `cl.csv`: tip, axis, kind, feed,
     /// tool) or posted G-code (any other name, as `plan` writes `job.nc`), read back through

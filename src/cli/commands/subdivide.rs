@@ -14,7 +14,7 @@ use crate::multires;
 
 #[derive(Args, Debug)]
 pub struct SubdivideArgs {
-    /// Mesh file (.stl, .obj, .gltf, .glb).
+    /// Part file: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges).
     pub part: PathBuf,
     /// Number of 1-to-4 subdivision steps, 0 to 8.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=8))]

@@ -11,7 +11,7 @@ use crate::job::{self};
 
 #[derive(Args, Debug)]
 pub struct ToolsArgs {
-    /// Part mesh (.stl, .obj, .gltf, .glb), closed.
+    /// Part: a mesh (.stl, .obj, .gltf, .glb) or IGES surfaces (.igs, .iges), closed.
     pub part: PathBuf,
     /// Tool library (TOML, one `[[tool]]` table per tool; see data/tools.toml).
     #[arg(long)]

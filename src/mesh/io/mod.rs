@@ -10,7 +10,7 @@
 //! header before that header has been checked against the input length.
 //!
 //! Writing is deterministic (same input ⇒ same bytes): [`write_obj`] for meshes that other
-//! tools should read back exactly, [`GlbBuilder`] for previews (triangles with colours, and
+//! tools should read back exactly, [`write_stl`] for those that only take STL, [`GlbBuilder`] for previews (triangles with colours, and
 //! line sets such as toolpaths) that any glTF viewer can open.
 
 use std::fmt;
@@ -24,12 +24,14 @@ mod gltf;
 mod obj;
 mod obj_writer;
 mod stl;
+mod stl_writer;
 
 #[cfg(test)]
 mod tests;
 
 pub use glb_writer::{GlbBuilder, GlbError};
 pub use obj_writer::write_obj;
+pub use stl_writer::write_stl;
 
 /// A mesh file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
