@@ -93,7 +93,10 @@ pub fn tessellation_warnings(part: &TessellatedPart, options: &TessellateOptions
     let r = &part.tessellation.report;
     if r.open_seam_edges > 0 {
         let at = r.open_seams.first().map_or(String::new(), |s| {
-            format!(", the longest {:.3} mm near ({:.3}, {:.3}, {:.3})", s.length, s.at[0], s.at[1], s.at[2])
+            format!(
+                ", the longest {:.3} mm near ({:.3}, {:.3}, {:.3})",
+                s.length, s.at[0], s.at[1], s.at[2]
+            )
         });
         warnings.push(format!(
             "the faces leave {} open seam(s), {:.3} mm in all{at}: faces missing or apart by more than {:.3} mm",

@@ -11,11 +11,13 @@
 
 mod basis;
 mod curve;
+mod patches;
 mod surface;
 
 pub use basis::{basis_derivatives, basis_functions, binomial, find_span};
 pub use curve::NurbsCurve;
 pub use curve::bezier_point;
+pub use patches::PatchEvaluator;
 pub use surface::{BezierPatch, NurbsSurface};
 
 use nalgebra::Vector4;

@@ -414,6 +414,16 @@ mod tests {
             &weights,
         )
         .unwrap();
+        // The power-form patches agree with de Boor everywhere, seams and ends included.
+        let fast = super::super::PatchEvaluator::new(&s);
+        for i in 0..=40 {
+            for j in 0..=40 {
+                let (u, v) = (i as f64 / 40.0, j as f64 / 40.0);
+                let error = (fast.point(u, v) - s.point(u, v)).norm();
+                assert!(error < 1e-12, "({u}, {v}): {error}");
+            }
+        }
+        assert!((fast.point(-1.0, 2.0) - s.point(0.0, 1.0)).norm() < 1e-12);
         let h = 1e-5;
         for &(u, v) in &[(0.1, 0.2), (0.45, 0.5), (0.8, 0.9), (0.6, 0.31)] {
             let d = s.derivatives(u, v, 2);

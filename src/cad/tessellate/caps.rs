@@ -34,7 +34,8 @@ pub(super) fn thinness(p: [Point3<f64>; 3]) -> f64 {
 pub(super) fn collapse_caps(mesh: &mut FaceTriangles) -> usize {
     let mut collapsed = 0;
     for _ in 0..4 {
-        let corners = |mesh: &FaceTriangles, t: usize| mesh.triangles[t].map(|i| mesh.positions[i as usize]);
+        let corners =
+            |mesh: &FaceTriangles, t: usize| mesh.triangles[t].map(|i| mesh.positions[i as usize]);
         let caps: Vec<usize> = (0..mesh.triangles.len())
             .filter(|&t| thinness(corners(mesh, t)) < CAP_THINNESS)
             .collect();
@@ -98,7 +99,8 @@ pub(super) fn collapse_caps(mesh: &mut FaceTriangles) -> usize {
         let mut keep = removed.iter().map(|r| !r);
         mesh.triangles.retain(|_| keep.next().unwrap_or(true));
         let mut keep = removed.iter().map(|r| !r);
-        mesh.face_of_triangle.retain(|_| keep.next().unwrap_or(true));
+        mesh.face_of_triangle
+            .retain(|_| keep.next().unwrap_or(true));
         let mut keep = removed.iter().map(|r| !r);
         mesh.corner_uv.retain(|_| keep.next().unwrap_or(true));
     }
@@ -109,7 +111,12 @@ type Change = (usize, Option<([u32; 3], [nalgebra::Point2<f64>; 3])>);
 
 /// What merging vertex `c` into `target` does to the triangles around `c`, or `None` where it
 /// would not keep the surface manifold or would turn a triangle over.
-fn plan_merge(mesh: &FaceTriangles, around: &[Vec<u32>], c: u32, target: u32) -> Option<Vec<Change>> {
+fn plan_merge(
+    mesh: &FaceTriangles,
+    around: &[Vec<u32>],
+    c: u32,
+    target: u32,
+) -> Option<Vec<Change>> {
     let ring = &around[c as usize];
     let neighbours = |v: u32| {
         let mut n: Vec<u32> = around[v as usize]
@@ -135,7 +142,11 @@ fn plan_merge(mesh: &FaceTriangles, around: &[Vec<u32>], c: u32, target: u32) ->
     opposite.sort_unstable();
     opposite.dedup();
     let (nc, nt) = (neighbours(c), neighbours(target));
-    let common: Vec<u32> = nc.iter().copied().filter(|x| nt.binary_search(x).is_ok()).collect();
+    let common: Vec<u32> = nc
+        .iter()
+        .copied()
+        .filter(|x| nt.binary_search(x).is_ok())
+        .collect();
     if shared.len() != 2 || common != opposite {
         return None;
     }

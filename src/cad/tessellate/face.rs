@@ -16,9 +16,9 @@ use spade::{
     ConstrainedDelaunayTriangulation, Point2 as SpadePoint, PositionInTriangulation, Triangulation,
 };
 
+use super::FaceSurface;
 use super::caps::CAP_THINNESS;
 use super::trim::BoundaryLoop;
-use crate::cad::iges::Surface;
 
 /// Where a triangle corner's position comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,7 +56,7 @@ const MAX_FACE_VERTICES: usize = 2_000_000;
 /// is within `tolerance` of every triangle at its centroid and free edges' midpoints.
 /// `boundary_positions` are the welded positions.
 pub(super) fn triangulate_face(
-    surface: &Surface,
+    surface: &FaceSurface,
     loops: &[BoundaryLoop],
     ids: &[Vec<u32>],
     boundary_positions: &[Point3<f64>],
@@ -77,7 +77,10 @@ pub(super) fn triangulate_face(
         let mut hs = Vec::with_capacity(lp.len());
         for (v, &id) in lp.iter().zip(lp_ids) {
             let h = cdt.insert(to_plane(&v.uv)).map_err(|e| {
-                FaceError(format!("boundary point (u, v) = ({}, {}): {e:?}", v.uv.x, v.uv.y))
+                FaceError(format!(
+                    "boundary point (u, v) = ({}, {}): {e:?}",
+                    v.uv.x, v.uv.y
+                ))
             })?;
             if h.index() == mesh.uv.len() {
                 mesh.uv.push(v.uv);
@@ -215,7 +218,8 @@ pub(super) fn triangulate_face(
             if h.index() == mesh.uv.len() {
                 let position = surface.point(uv.x, uv.y);
                 mesh.uv.push(uv);
-                mesh.corners.push(Corner::Interior(mesh.interior.len() as u32));
+                mesh.corners
+                    .push(Corner::Interior(mesh.interior.len() as u32));
                 mesh.interior.push(position);
                 positions.push(position);
                 own.push(position);
@@ -233,7 +237,14 @@ pub(super) fn triangulate_face(
         .filter(|f| inside[f.fix().index()])
         .map(|f| f.vertices().map(|v| v.fix().index() as u32))
         .collect();
-    untangle(surface, &mut mesh.triangles, &mesh.uv, &own, &positions, boundary_vertices);
+    untangle(
+        surface,
+        &mut mesh.triangles,
+        &mesh.uv,
+        &own,
+        &positions,
+        boundary_vertices,
+    );
     Ok(mesh)
 }
 
@@ -245,7 +256,7 @@ pub(super) fn triangulate_face(
 /// inside from outside at its edges. Flipping its long edge with the neighbour there gives two
 /// sound triangles, where they face as the surface does and are less thin than before.
 fn untangle(
-    surface: &Surface,
+    surface: &FaceSurface,
     triangles: &mut [[u32; 3]],
     uv: &[Point2<f64>],
     own: &[Point3<f64>],
@@ -257,8 +268,8 @@ fn untangle(
     let ((u0, u1), (v0, v1)) = surface.domain();
     let h = 1e-6 * ((u1 - u0).abs() + (v1 - v0).abs()).max(f64::MIN_POSITIVE);
     let surface_normal = |t: &[u32; 3]| {
-        let c = (uv[t[0] as usize].coords + uv[t[1] as usize].coords + uv[t[2] as usize].coords)
-            / 3.0;
+        let c =
+            (uv[t[0] as usize].coords + uv[t[1] as usize].coords + uv[t[2] as usize].coords) / 3.0;
         let su = surface.point(c.x + h, c.y) - surface.point(c.x - h, c.y);
         let sv = surface.point(c.x, c.y + h) - surface.point(c.x, c.y - h);
         let n = su.cross(&sv);
@@ -271,17 +282,25 @@ fn untangle(
     // Height over longest side, in the welded positions.
     let thinness = |t: &[u32; 3]| {
         let [a, b, c] = t.map(|i| welded[i as usize]);
-        let longest2 = (b - a).norm_squared().max((c - b).norm_squared()).max((a - c).norm_squared());
-        if longest2 > 0.0 { (b - a).cross(&(c - a)).norm() / longest2 } else { 0.0 }
+        let longest2 = (b - a)
+            .norm_squared()
+            .max((c - b).norm_squared())
+            .max((a - c).norm_squared());
+        if longest2 > 0.0 {
+            (b - a).cross(&(c - a)).norm() / longest2
+        } else {
+            0.0
+        }
     };
     // Turned: against the surface where it has a normal, else against the face's own corners.
     let turned = |t: &[u32; 3]| match surface_normal(t) {
         Some(n) => normal(t, welded).dot(&n) <= 0.0,
         None => normal(t, own).dot(&normal(t, welded)) <= 0.0,
     };
-    // Only a triangle with a boundary corner can have been moved by welding.
+    // Caps and welded folds have at least two corners on the boundary.
     let bad = |t: &[u32; 3]| {
-        t.iter().any(|&v| v < boundary_vertices) && (thinness(t) < CAP_THINNESS || turned(t))
+        t.iter().filter(|&&v| v < boundary_vertices).count() >= 2
+            && (thinness(t) < CAP_THINNESS || turned(t))
     };
     if !triangles.iter().any(bad) {
         return;
@@ -386,7 +405,7 @@ fn inside_faces(cdt: &Cdt) -> Result<Vec<bool>, FaceError> {
 
 /// Mean speeds `|S_u|`, `|S_v|` over the loops' parameter box (central differences on a 5 × 5
 /// grid), floored so that a degenerate side cannot collapse the plane.
-fn parameter_scale(surface: &Surface, loops: &[BoundaryLoop]) -> [f64; 2] {
+fn parameter_scale(surface: &FaceSurface, loops: &[BoundaryLoop]) -> [f64; 2] {
     let (mut lo, mut hi) = (
         Point2::new(f64::INFINITY, f64::INFINITY),
         Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),

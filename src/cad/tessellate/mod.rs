@@ -20,10 +20,37 @@ mod trim;
 use nalgebra::{Point2, Point3};
 use rayon::prelude::*;
 
-use crate::cad::iges::Face;
+use crate::cad::iges::{Face, Surface};
+use crate::cad::nurbs::PatchEvaluator;
 use crate::mesh::Mesh;
 use crate::mesh::topology::DisjointSets;
 use face::{Corner, FaceMesh, triangulate_face};
+
+/// A face's surface ready for the many evaluations tessellation makes: a NURBS surface in
+/// power-form patches, other surfaces as they are.
+pub(super) struct FaceSurface<'a> {
+    surface: &'a Surface,
+    patches: Option<PatchEvaluator>,
+}
+
+impl<'a> FaceSurface<'a> {
+    fn new(surface: &'a Surface) -> FaceSurface<'a> {
+        let patches = match surface {
+            Surface::Nurbs { surface, .. } => Some(PatchEvaluator::new(surface)),
+            Surface::Revolution { .. } => None,
+        };
+        FaceSurface { surface, patches }
+    }
+    pub(super) fn point(&self, u: f64, v: f64) -> Point3<f64> {
+        match &self.patches {
+            Some(p) => p.point(u, v),
+            None => self.surface.point(u, v),
+        }
+    }
+    pub(super) fn domain(&self) -> ((f64, f64), (f64, f64)) {
+        self.surface.domain()
+    }
+}
 
 /// How finely to tessellate.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -137,30 +164,31 @@ pub fn tessellate(
     faces: &[Face],
     options: &TessellateOptions,
 ) -> Result<Tessellation, TessellateError> {
+    let surfaces: Vec<FaceSurface> = faces
+        .par_iter()
+        .map(|f| FaceSurface::new(&f.surface))
+        .collect();
     let mut loops: Vec<Vec<trim::BoundaryLoop>> = faces
         .par_iter()
-        .map(|f| trim::face_loops(f, options.boundary_tolerance()))
+        .zip(&surfaces)
+        .map(|(f, s)| trim::face_loops(f, s, options.boundary_tolerance()))
         .collect();
     let junction_vertices = seams::insert_junctions(&mut loops, options.weld_distance());
     let (boundary, ids) = seams::weld_boundaries(&loops, options.weld_distance());
     let meshes: Vec<FaceMesh> = faces
         .par_iter()
+        .zip(&surfaces)
         .zip(&loops)
         .zip(&ids)
         .enumerate()
-        .map(|(i, ((face, lp), lp_ids))| {
-            triangulate_face(
-                &face.surface,
-                lp,
-                lp_ids,
-                &boundary,
-                options.interior_tolerance(),
+        .map(|(i, (((face, surface), lp), lp_ids))| {
+            triangulate_face(surface, lp, lp_ids, &boundary, options.interior_tolerance()).map_err(
+                |e| TessellateError {
+                    face: i,
+                    line: face.line,
+                    reason: e.0,
+                },
             )
-            .map_err(|e| TessellateError {
-                face: i,
-                line: face.line,
-                reason: e.0,
-            })
         })
         .collect::<Result<_, _>>()?;
 
@@ -289,7 +317,11 @@ impl FaceTriangles {
                 }
             }
         }
-        let o = self.positions.first().copied().unwrap_or_else(Point3::origin);
+        let o = self
+            .positions
+            .first()
+            .copied()
+            .unwrap_or_else(Point3::origin);
         let turned = |t: usize| flip[self.face_of_triangle[t] as usize].unwrap_or(false);
         let volume: f64 = (0..self.triangles.len())
             .map(|t| {
@@ -326,7 +358,8 @@ fn seam_report(mesh: &Mesh, boundary_count: u32) -> TessellationReport {
         .map(|(e, _)| *e)
         .collect();
     open.sort_unstable();
-    let length = |[a, b]: [u32; 2]| (mesh.positions[a as usize] - mesh.positions[b as usize]).norm();
+    let length =
+        |[a, b]: [u32; 2]| (mesh.positions[a as usize] - mesh.positions[b as usize]).norm();
     // Chains: connected components of the open edges.
     let mut sets = DisjointSets::new(mesh.positions.len());
     for &[a, b] in &open {

@@ -106,7 +106,10 @@ fn junctions_of(faces: &[Vec<BoundaryLoop>], weld: f64) -> (Vec<Vec<BoundaryLoop
                 candidates.clear();
                 let steps = (length / (0.5 * cell)).ceil() as usize;
                 for k in 0..=steps {
-                    grid.around(&(a.position + ab * (k as f64 / steps as f64)), &mut candidates);
+                    grid.around(
+                        &(a.position + ab * (k as f64 / steps as f64)),
+                        &mut candidates,
+                    );
                 }
                 candidates.sort_unstable();
                 candidates.dedup();
@@ -221,7 +224,10 @@ pub(super) fn sew(mesh: &mut FaceTriangles, boundary_count: u32, distance: f64) 
         let mut vertices: Vec<u32> = open.iter().flat_map(|(e, _)| *e).collect();
         vertices.sort_unstable();
         vertices.dedup();
-        let points: Vec<Point3<f64>> = vertices.iter().map(|&v| mesh.positions[v as usize]).collect();
+        let points: Vec<Point3<f64>> = vertices
+            .iter()
+            .map(|&v| mesh.positions[v as usize])
+            .collect();
         let welded = weld(
             &Mesh {
                 positions: points.clone(),
@@ -235,7 +241,10 @@ pub(super) fn sew(mesh: &mut FaceTriangles, boundary_count: u32, distance: f64) 
         }
         let mut remap: HashMap<u32, u32> = HashMap::new();
         for group in groups.iter().filter(|g| g.len() > 1) {
-            let mean = group.iter().map(|&i| points[i].coords).sum::<nalgebra::Vector3<f64>>()
+            let mean = group
+                .iter()
+                .map(|&i| points[i].coords)
+                .sum::<nalgebra::Vector3<f64>>()
                 / group.len() as f64;
             let keep = vertices[group[0]];
             for &i in group {
@@ -318,7 +327,10 @@ pub(super) fn sew(mesh: &mut FaceTriangles, boundary_count: u32, distance: f64) 
             };
             let (x, y, z) = (k, (k + 1) % 3, (k + 2) % 3);
             let uv = mesh.corner_uv[t];
-            let (px, py) = (mesh.positions[tri[x] as usize], mesh.positions[tri[y] as usize]);
+            let (px, py) = (
+                mesh.positions[tri[x] as usize],
+                mesh.positions[tri[y] as usize],
+            );
             let along = px - py;
             let s = ((mesh.positions[q as usize] - py).dot(&along) / along.norm_squared())
                 .clamp(0.0, 1.0);

@@ -92,13 +92,20 @@ fn a_sphere_of_revolution_closes_at_its_poles_and_seam_within_the_tolerance() {
         assert!(worst <= tolerance, "{worst} > {tolerance}");
         // The sampled measure agrees with the closed form to within its sampling.
         let d = t.deviation(&faces, 6);
-        assert!(d.max <= tolerance && d.max > 0.5 * worst, "{d:?} vs {worst}");
+        assert!(
+            d.max <= tolerance && d.max > 0.5 * worst,
+            "{d:?} vs {worst}"
+        );
         // Not wastefully fine either: the chord rule for a sphere, 2πr²/(area of a triangle
         // with edges √(8 r tol)), within a small factor.
         let edge = (8.0 * r * tolerance).sqrt();
         let ideal = 4.0 * std::f64::consts::PI * r * r / (edge * edge * 3f64.sqrt() / 4.0);
         eprintln!("{} vs {ideal}", t.mesh.triangles.len());
-        assert!((t.mesh.triangles.len() as f64) < 6.0 * ideal, "{} vs {ideal}", t.mesh.triangles.len());
+        assert!(
+            (t.mesh.triangles.len() as f64) < 6.0 * ideal,
+            "{} vs {ideal}",
+            t.mesh.triangles.len()
+        );
     }
 }
 
@@ -158,7 +165,10 @@ fn two_faces_sampled_differently_share_their_edges() {
     }) || (0..t.mesh.triangles.len()).all(|i| {
         let c = t.mesh.corners(i);
         let centre = (c[0].coords + c[1].coords + c[2].coords) / 3.0;
-        t.mesh.face_normal(i).dot(&Vector3::new(centre.x, centre.y, 0.0)) < 0.0
+        t.mesh
+            .face_normal(i)
+            .dot(&Vector3::new(centre.x, centre.y, 0.0))
+            < 0.0
     });
     assert!(normals_out);
 }
@@ -191,4 +201,50 @@ fn a_flat_nurbs_face_needs_only_its_corners() {
     assert!(t.mesh.triangles.len() <= 30, "{}", t.mesh.triangles.len());
     assert!((t.mesh.surface_area() - 100.0).abs() < 1e-9);
     assert!(t.deviation(&faces, 8).max < 1e-12);
+}
+
+/// A trim loop that crosses itself cannot bound a region: the face is refused by index and
+/// directory line, not triangulated into nonsense.
+#[test]
+fn a_self_crossing_trim_is_refused_naming_the_face() {
+    let net = vec![
+        vec![Point3::new(0.0, 0.0, 0.0), Point3::new(0.0, 10.0, 0.0)],
+        vec![Point3::new(10.0, 0.0, 0.0), Point3::new(10.0, 10.0, 0.0)],
+    ];
+    let surface = NurbsSurface::new(
+        [1, 1],
+        vec![0.0, 0.0, 1.0, 1.0],
+        vec![0.0, 0.0, 1.0, 1.0],
+        &net,
+        &[vec![1.0; 2], vec![1.0; 2]],
+    )
+    .unwrap();
+    // The diagonals cross at 8/15 of the first: not at any sample point of the sides.
+    let corners = [(0.1, 0.1), (0.9, 0.8), (0.9, 0.1), (0.1, 0.9)];
+    let bow_tie = Curve::Composite(
+        (0..4)
+            .map(|i| {
+                let (a, b) = (corners[i], corners[(i + 1) % 4]);
+                Curve::Line {
+                    start: Point3::new(a.0, a.1, 0.0),
+                    end: Point3::new(b.0, b.1, 0.0),
+                }
+            })
+            .collect(),
+    );
+    let mut bad = face(
+        Surface::Nurbs {
+            surface,
+            u: (0.0, 1.0),
+            v: (0.0, 1.0),
+        },
+        Some(bow_tie),
+    );
+    bad.line = 77;
+    let faces = [sphere(5.0), bad];
+    let Err(error) = tessellate(&faces, &TessellateOptions::default()) else {
+        panic!("a self-crossing trim was triangulated");
+    };
+    assert_eq!((error.face, error.line), (1, 77), "{error}");
+    assert!(error.to_string().contains("cross"), "{error}");
 }

@@ -8,7 +8,8 @@
 
 use nalgebra::{Point2, Point3, Rotation3};
 
-use crate::cad::iges::{Curve, Face, Surface};
+use super::FaceSurface;
+use crate::cad::iges::{Curve, Face};
 
 /// Deepest bisection of one interval: 2⁻²⁴ of a piece is far below any tolerance that matters.
 const MAX_DEPTH: u32 = 24;
@@ -27,21 +28,21 @@ pub(super) struct LoopVertex {
 pub(super) type BoundaryLoop = Vec<LoopVertex>;
 
 /// The face's loops, outer first: its trim curves, or its domain's rectangle when it has none.
-pub(super) fn face_loops(face: &Face, tolerance: f64) -> Vec<BoundaryLoop> {
+pub(super) fn face_loops(face: &Face, surface: &FaceSurface, tolerance: f64) -> Vec<BoundaryLoop> {
     let mut loops = Vec::with_capacity(1 + face.holes.len());
     match &face.outer {
-        Some(outer) => loops.push(sample_loop(&face.surface, outer, tolerance)),
-        None => loops.push(domain_loop(&face.surface, tolerance)),
+        Some(outer) => loops.push(sample_loop(surface, outer, tolerance)),
+        None => loops.push(domain_loop(surface, tolerance)),
     }
     for hole in &face.holes {
-        loops.push(sample_loop(&face.surface, hole, tolerance));
+        loops.push(sample_loop(surface, hole, tolerance));
     }
     loops.retain(|l| l.len() >= 3);
     loops
 }
 
 /// The boundary of the parameter rectangle, counter-clockwise.
-fn domain_loop(surface: &Surface, tolerance: f64) -> BoundaryLoop {
+fn domain_loop(surface: &FaceSurface, tolerance: f64) -> BoundaryLoop {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let corners = [
         Point3::new(u0, v0, 0.0),
@@ -60,14 +61,15 @@ fn domain_loop(surface: &Surface, tolerance: f64) -> BoundaryLoop {
 
 /// One trim loop as vertices; consecutive repeats (members that meet exactly) and the closing
 /// repeat of the first vertex are dropped, gaps between members become edges.
-fn sample_loop(surface: &Surface, curve: &Curve, tolerance: f64) -> BoundaryLoop {
+fn sample_loop(surface: &FaceSurface, curve: &Curve, tolerance: f64) -> BoundaryLoop {
     let mut leaves = Vec::new();
     flatten(curve, &mut leaves);
     let mut out: BoundaryLoop = Vec::new();
     for leaf in leaves {
         sample_leaf(surface, leaf, tolerance, &mut out);
     }
-    let same = |a: &LoopVertex, b: &LoopVertex| (a.uv - b.uv).norm() <= 1e-12 * (1.0 + a.uv.coords.norm());
+    let same =
+        |a: &LoopVertex, b: &LoopVertex| (a.uv - b.uv).norm() <= 1e-12 * (1.0 + a.uv.coords.norm());
     out.dedup_by(|b, a| same(a, b));
     while out.len() > 1 && same(&out[0], &out[out.len() - 1]) {
         out.pop();
@@ -132,7 +134,7 @@ impl Leaf<'_> {
 }
 
 /// Appends the leaf's vertices from its start up to (not including) its end.
-fn sample_leaf(surface: &Surface, leaf: Leaf<'_>, tolerance: f64, out: &mut BoundaryLoop) {
+fn sample_leaf(surface: &FaceSurface, leaf: Leaf<'_>, tolerance: f64, out: &mut BoundaryLoop) {
     let vertex = |s: f64| {
         let uv = leaf.point(s);
         LoopVertex {
@@ -155,15 +157,19 @@ fn sample_leaf(surface: &Surface, leaf: Leaf<'_>, tolerance: f64, out: &mut Boun
             // chord there.
             let off_chord = |s: f64, uv: Point2<f64>| {
                 let chord = a.position + (b.position - a.position) * s;
-                let on_curve = if s == 0.5 { m.position } else { vertex(sa + (sb - sa) * s).position };
+                let on_curve = if s == 0.5 {
+                    m.position
+                } else {
+                    vertex(sa + (sb - sa) * s).position
+                };
                 chord_distance(&on_curve, &a.position, &b.position) > tolerance
                     || (surface.point(uv.x, uv.y) - chord).norm() > tolerance
             };
             let split = depth < MAX_DEPTH
                 && (a.uv - b.uv).norm() > 1e-13
-                && [0.25, 0.5, 0.75].into_iter().any(|s| {
-                    off_chord(s, Point2::from(a.uv.coords * (1.0 - s) + b.uv.coords * s))
-                });
+                && [0.25, 0.5, 0.75]
+                    .into_iter()
+                    .any(|s| off_chord(s, Point2::from(a.uv.coords * (1.0 - s) + b.uv.coords * s)));
             if split {
                 stack.push((sb, b, sm, m, depth + 1));
                 stack.push((sm, m, sa, a, depth + 1));

@@ -74,14 +74,18 @@ pub fn run(args: &TessellateArgs) -> Result<()> {
         }
     };
     job::write_atomically(&args.out, &bytes)?;
-    let summary = (args.measure > 0).then(|| job::tessellate_summary(&part, &options, args.measure));
+    let summary =
+        (args.measure > 0).then(|| job::tessellate_summary(&part, &options, args.measure));
     if args.json {
         let value = match &summary {
             Some(s) => serde_json::to_value(s),
             None => serde_json::to_value(&part.tessellation.report),
         }
         .unwrap_or_default();
-        say!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        say!(
+            "{}",
+            serde_json::to_string_pretty(&value).unwrap_or_default()
+        );
     } else {
         let r = &part.tessellation.report;
         say!("{name}");

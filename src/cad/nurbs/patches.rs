@@ -1,0 +1,106 @@
+//! Fast repeated evaluation of a NURBS surface: its Bézier patches in power form.
+//!
+//! Tessellation evaluates one surface hundreds of thousands of times. De Boor's evaluation
+//! pays `p(p + 1)/2` divisions per direction and point; a Bézier patch rewritten in the
+//! monomial basis of its local parameters, `Σₖ Σₗ Cₖₗ sᵏ tˡ` on homogeneous coordinates, costs
+//! only nested Horner steps. On `[0, 1]` and at the degrees of CAD surfaces (up to 7) the
+//! change of basis loses a few bits at most; the test holds it to 1e-12 of the part size.
+
+use nalgebra::{Point3, Vector4};
+
+use super::{NurbsSurface, binomial};
+
+/// A NURBS surface ready for many evaluations.
+#[derive(Clone, Debug)]
+pub struct PatchEvaluator {
+    degree: [usize; 2],
+    /// Patch boundaries along u and v (ascending; `len = patches + 1` in each direction).
+    breaks_u: Vec<f64>,
+    breaks_v: Vec<f64>,
+    /// Per patch (u-major), `(p + 1)(q + 1)` homogeneous monomial coefficients `C[k][l]`,
+    /// row-major in k.
+    coefficients: Vec<Vector4<f64>>,
+}
+
+/// Bernstein to monomial: `B_i,n(s) = Σ_{k ≥ i} (−1)^{k−i} C(n, k) C(k, i) sᵏ`; entry `[k][i]`.
+fn bernstein_to_monomial(n: usize) -> Vec<Vec<f64>> {
+    (0..=n)
+        .map(|k| {
+            (0..=n)
+                .map(|i| {
+                    if i > k {
+                        0.0
+                    } else {
+                        let sign = if (k - i) % 2 == 0 { 1.0 } else { -1.0 };
+                        sign * binomial(n, k) * binomial(k, i)
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+impl PatchEvaluator {
+    /// Splits the surface into its Bézier patches and rewrites each in power form.
+    pub fn new(surface: &NurbsSurface) -> PatchEvaluator {
+        let [p, q] = surface.degree();
+        let patches = surface.bezier_patches();
+        let mut breaks_u: Vec<f64> = patches.iter().flat_map(|b| [b.u.0, b.u.1]).collect();
+        let mut breaks_v: Vec<f64> = patches.iter().flat_map(|b| [b.v.0, b.v.1]).collect();
+        for breaks in [&mut breaks_u, &mut breaks_v] {
+            breaks.sort_by(f64::total_cmp);
+            breaks.dedup();
+        }
+        let mu = bernstein_to_monomial(p);
+        let mv = bernstein_to_monomial(q);
+        let mut coefficients = Vec::with_capacity(patches.len() * (p + 1) * (q + 1));
+        for b in &patches {
+            let net = |i: usize, j: usize| b.points[i * (q + 1) + j];
+            for k in 0..=p {
+                for l in 0..=q {
+                    let mut c = Vector4::zeros();
+                    for i in 0..=k {
+                        for j in 0..=l {
+                            c += net(i, j) * (mu[k][i] * mv[l][j]);
+                        }
+                    }
+                    coefficients.push(c);
+                }
+            }
+        }
+        PatchEvaluator {
+            degree: [p, q],
+            breaks_u,
+            breaks_v,
+            coefficients,
+        }
+    }
+
+    /// The point at `(u, v)`, clamped into the domain.
+    pub fn point(&self, u: f64, v: f64) -> Point3<f64> {
+        let [p, q] = self.degree;
+        let (iu, s) = locate(&self.breaks_u, u);
+        let (iv, t) = locate(&self.breaks_v, v);
+        let patch = iu * (self.breaks_v.len() - 1) + iv;
+        let c = &self.coefficients[patch * (p + 1) * (q + 1)..(patch + 1) * (p + 1) * (q + 1)];
+        let mut sum = Vector4::zeros();
+        for k in (0..=p).rev() {
+            let row = &c[k * (q + 1)..(k + 1) * (q + 1)];
+            let mut r = row[q];
+            for l in (0..q).rev() {
+                r = r * t + row[l];
+            }
+            sum = sum * s + r;
+        }
+        Point3::from(sum.xyz() / sum.w)
+    }
+}
+
+/// The interval of `breaks` that holds `x` (clamped) and the local parameter in it.
+fn locate(breaks: &[f64], x: f64) -> (usize, f64) {
+    let last = breaks.len() - 2;
+    let x = x.clamp(breaks[0], breaks[last + 1]);
+    let i = breaks[1..=last].partition_point(|&b| b <= x).min(last);
+    let (a, b) = (breaks[i], breaks[i + 1]);
+    (i, if b > a { (x - a) / (b - a) } else { 0.0 })
+}
