@@ -34,6 +34,9 @@ fn every_subcommand_has_help() {
         &["access", "--help"],
         &["contour", "--help"],
         &["tools", "--help"],
+        &["tessellate", "--help"],
+        &["simulate", "--help"],
+        &["rough", "--help"],
     ] {
         let out = wavemill(sub);
         assert_eq!(out.status.code(), Some(0), "{sub:?}");
@@ -758,4 +761,77 @@ fn plan_refuses_an_unknown_machine_and_an_impossible_mode_by_flag() {
         err.contains("--feed") && err.contains("Heidenhain"),
         "{err}"
     );
+}
+
+/// `tessellate` writes the IGES impeller as STL and OBJ that read back as the same closed
+/// mesh, reports the measured deviation within the tolerance, and refuses what it cannot do
+/// before any work: a mesh input, an unknown output format, a damaged file (by its line).
+#[test]
+fn tessellate_writes_the_iges_part_and_refuses_bad_input() {
+    let dir = temp_dir("tessellate");
+    std::fs::create_dir_all(&dir).unwrap();
+    let not_iges = wavemill(&[
+        "tessellate",
+        "data/impeller.glb",
+        "--out",
+        dir.join("x.stl").to_str().unwrap(),
+    ]);
+    assert_eq!(not_iges.status.code(), Some(2), "{}", stderr(&not_iges));
+    assert!(stderr(&not_iges).contains("IGES"));
+
+    let damaged = dir.join("damaged.igs");
+    std::fs::write(&damaged, "not an iges file\n").unwrap();
+    let out = wavemill(&[
+        "tessellate",
+        damaged.to_str().unwrap(),
+        "--out",
+        dir.join("x.stl").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("damaged.igs") && stderr(&out).contains("line 1"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!dir.join("x.stl").exists(), "no output after an error");
+
+    let Some(data) = common::testdata() else {
+        return;
+    };
+    let part = data.join("cad/impeller_solidworks__pyvista_pyiges.igs");
+    let part = part.to_str().unwrap();
+    let wrong = wavemill(&[
+        "tessellate",
+        part,
+        "--out",
+        dir.join("x.ply").to_str().unwrap(),
+    ]);
+    assert_eq!(wrong.status.code(), Some(2));
+
+    let mut meshes = Vec::new();
+    for name in ["part.stl", "part.obj"] {
+        let path = dir.join(name);
+        let run = wavemill(&[
+            "tessellate",
+            part,
+            "--json",
+            "--out",
+            path.to_str().unwrap(),
+        ]);
+        assert_eq!(run.status.code(), Some(0), "{}", stderr(&run));
+        let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        assert_eq!(report["faces"], 277);
+        assert_eq!(report["open_seam_edges"], 0);
+        let deviation = report["deviation"]["max"].as_f64().unwrap();
+        assert!(deviation > 0.0 && deviation <= 0.0105, "{deviation}");
+        let raw =
+            wavemill::mesh::io::read_mesh(&path, wavemill::mesh::io::Units::Millimetres).unwrap();
+        let (mesh, prepared) = wavemill::mesh::prepare(&raw.mesh, &Default::default()).unwrap();
+        assert!(prepared.watertight, "{name}: {:?}", prepared.problems());
+        meshes.push(mesh);
+    }
+    // STL keeps f32 coordinates, OBJ f64: the same surface either way.
+    assert_eq!(meshes[0].triangles.len(), meshes[1].triangles.len());
+    assert!((meshes[0].signed_volume() - meshes[1].signed_volume()).abs() < 1e-3);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -56,12 +56,13 @@ impl PatchEvaluator {
         let mut coefficients = Vec::with_capacity(patches.len() * (p + 1) * (q + 1));
         for b in &patches {
             let net = |i: usize, j: usize| b.points[i * (q + 1) + j];
-            for k in 0..=p {
-                for l in 0..=q {
+            for row_u in &mu {
+                for row_v in &mv {
+                    // Entries above the diagonal are zero, so the sums run over all i, j.
                     let mut c = Vector4::zeros();
-                    for i in 0..=k {
-                        for j in 0..=l {
-                            c += net(i, j) * (mu[k][i] * mv[l][j]);
+                    for (i, &a) in row_u.iter().enumerate() {
+                        for (j, &b) in row_v.iter().enumerate() {
+                            c += net(i, j) * (a * b);
                         }
                     }
                     coefficients.push(c);

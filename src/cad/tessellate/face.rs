@@ -182,7 +182,9 @@ pub(super) fn triangulate_face(
         // fixes its neighbours' errors too, and inserting theirs as well would over-refine.
         wanted.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
         for (_, uv, key) in wanted {
-            let unchanged = match cdt.locate(to_plane(&uv)) {
+            // A corner of the triangle the point came from: the walks start next to it.
+            let hint = FixedVertexHandle::from_index(key[0] as usize);
+            let unchanged = match cdt.locate_with_hint(to_plane(&uv), hint) {
                 PositionInTriangulation::OnFace(f) => {
                     let mut k = cdt.face(f).vertices().map(|v| v.fix().index() as u32);
                     k.sort_unstable();
@@ -206,7 +208,7 @@ pub(super) fn triangulate_face(
             }
             let constraints = cdt.num_constraints();
             let h = cdt
-                .insert(to_plane(&uv))
+                .insert_with_hint(to_plane(&uv), hint)
                 .map_err(|e| FaceError(format!("refinement point {uv:?}: {e:?}")))?;
             if cdt.num_constraints() != constraints {
                 // The point fell on a boundary edge and split it: undo, the boundary is shared.
