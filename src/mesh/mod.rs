@@ -19,6 +19,7 @@ pub mod distance;
 pub mod io;
 pub mod pieces;
 mod prepare;
+pub mod region;
 pub mod section;
 pub mod topology;
 pub mod weld;

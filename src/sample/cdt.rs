@@ -1,12 +1,11 @@
 //! Triangulating a region bounded by vertex loops with a constrained Delaunay triangulation.
 
-use std::collections::VecDeque;
-
 use spade::handles::FixedVertexHandle;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
 use super::SampleError;
 use super::builder::MeshBuilder;
+use crate::mesh::region::faces_inside;
 
 /// Triangulates, in the (x, y) projection, the region bounded by `loops` (an outer boundary and
 /// any number of holes, in any orientation; they must be simple and must not cross), using the
@@ -67,54 +66,17 @@ pub(super) fn triangulate_region(
         }
     }
 
-    // Parity flood fill: 0 = outside, 1 = inside; crossing a constraint edge flips it.
-    const UNKNOWN: u8 = u8::MAX;
-    let mut parity = vec![UNKNOWN; cdt.num_all_faces()];
-    let mut queue = VecDeque::new();
-    for f in cdt.inner_faces() {
-        for e in f.adjacent_edges() {
-            if e.rev().face().is_outer() {
-                let p = u8::from(e.is_constraint_edge());
-                let slot = &mut parity[f.fix().index()];
-                if *slot == UNKNOWN {
-                    *slot = p;
-                    queue.push_back(f.fix());
-                } else if *slot != p {
-                    return Err(fail("inconsistent region parity on the hull".into()));
-                }
-            }
-        }
-    }
-    while let Some(fh) = queue.pop_front() {
-        let f = cdt.face(fh);
-        let pf = parity[fh.index()];
-        for e in f.adjacent_edges() {
-            if let Some(g) = e.rev().face().as_inner() {
-                let p = pf ^ u8::from(e.is_constraint_edge());
-                let slot = &mut parity[g.fix().index()];
-                if *slot == UNKNOWN {
-                    *slot = p;
-                    queue.push_back(g.fix());
-                } else if *slot != p {
-                    return Err(fail("loops are not closed or cross each other".into()));
-                }
-            }
-        }
-    }
+    let inside = faces_inside(&cdt).map_err(|reason| fail(reason.into()))?;
 
     let mut used = vec![false; ids.len()];
     let mut tris = Vec::new();
     for f in cdt.inner_faces() {
-        match parity[f.fix().index()] {
-            1 => {
-                let [a, c, d] = f.vertices().map(|v| v.fix().index());
-                used[a] = true;
-                used[c] = true;
-                used[d] = true;
-                tris.push([ids[a], ids[c], ids[d]]);
-            }
-            0 => {}
-            _ => return Err(fail("a face was not reached by the flood fill".into())),
+        if inside[f.fix().index()] {
+            let [a, c, d] = f.vertices().map(|v| v.fix().index());
+            used[a] = true;
+            used[c] = true;
+            used[d] = true;
+            tris.push([ids[a], ids[c], ids[d]]);
         }
     }
     if let Some(i) = used.iter().position(|u| !u) {

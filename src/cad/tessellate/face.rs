@@ -8,7 +8,7 @@
 //! the worst of its centroid and its free edges' midpoints, and repeats. Boundary edges are
 //! never split: they are shared with the neighbouring faces (see `seams`).
 
-use std::collections::{HashSet, VecDeque};
+use std::collections::HashSet;
 
 use nalgebra::{Point2, Point3};
 use spade::handles::FixedVertexHandle;
@@ -17,8 +17,9 @@ use spade::{
 };
 
 use super::FaceSurface;
-use super::caps::CAP_THINNESS;
+use super::caps::{CAP_THINNESS, thinness};
 use super::trim::BoundaryLoop;
+use crate::mesh::region::faces_inside;
 
 /// Where a triangle corner's position comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -281,19 +282,7 @@ fn untangle(
         let [a, b, c] = t.map(|i| at[i as usize]);
         (b - a).cross(&(c - a))
     };
-    // Height over longest side, in the welded positions.
-    let thinness = |t: &[u32; 3]| {
-        let [a, b, c] = t.map(|i| welded[i as usize]);
-        let longest2 = (b - a)
-            .norm_squared()
-            .max((c - b).norm_squared())
-            .max((a - c).norm_squared());
-        if longest2 > 0.0 {
-            (b - a).cross(&(c - a)).norm() / longest2
-        } else {
-            0.0
-        }
-    };
+    let thinness = |t: &[u32; 3]| thinness(t.map(|i| welded[i as usize]));
     // Turned: against the surface where it has a normal, else against the face's own corners.
     let turned = |t: &[u32; 3]| match surface_normal(t) {
         Some(n) => normal(t, welded).dot(&n) <= 0.0,
@@ -367,42 +356,10 @@ fn untangle(
     }
 }
 
-/// For every face of the triangulation (outer face included), whether it is inside the loops:
-/// an odd number of constraint edges away from the outside.
+/// For every face of the triangulation, whether it is inside the loops.
 fn inside_faces(cdt: &Cdt) -> Result<Vec<bool>, FaceError> {
-    const UNKNOWN: u8 = u8::MAX;
-    let mut parity = vec![UNKNOWN; cdt.num_all_faces()];
-    let mut queue = VecDeque::new();
-    for f in cdt.inner_faces() {
-        for e in f.adjacent_edges() {
-            if e.rev().face().is_outer() {
-                let p = u8::from(e.is_constraint_edge());
-                let slot = &mut parity[f.fix().index()];
-                if *slot == UNKNOWN {
-                    *slot = p;
-                    queue.push_back(f.fix());
-                } else if *slot != p {
-                    return Err(FaceError("its trim loops are not closed".into()));
-                }
-            }
-        }
-    }
-    while let Some(fh) = queue.pop_front() {
-        let pf = parity[fh.index()];
-        for e in cdt.face(fh).adjacent_edges() {
-            if let Some(g) = e.rev().face().as_inner() {
-                let p = pf ^ u8::from(e.is_constraint_edge());
-                let slot = &mut parity[g.fix().index()];
-                if *slot == UNKNOWN {
-                    *slot = p;
-                    queue.push_back(g.fix());
-                } else if *slot != p {
-                    return Err(FaceError("its trim loops are not closed or cross".into()));
-                }
-            }
-        }
-    }
-    Ok(parity.into_iter().map(|p| p == 1).collect())
+    faces_inside(cdt)
+        .map_err(|reason| FaceError(format!("its trim loops bound no region: {reason}")))
 }
 
 /// Mean speeds `|S_u|`, `|S_v|` over the loops' parameter box (central differences on a 5 × 5

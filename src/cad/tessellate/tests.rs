@@ -173,22 +173,27 @@ fn two_faces_sampled_differently_share_their_edges() {
     assert!(normals_out);
 }
 
-/// A bilinear NURBS square is flat: its corners' two triangles meet any tolerance, and the
-/// sampled deviation is round-off.
-#[test]
-fn a_flat_nurbs_face_needs_only_its_corners() {
+/// The square [0, 10]² in z = 0 as a bilinear NURBS surface on [0, 1]².
+fn flat_square() -> NurbsSurface {
     let net = vec![
         vec![Point3::new(0.0, 0.0, 0.0), Point3::new(0.0, 10.0, 0.0)],
         vec![Point3::new(10.0, 0.0, 0.0), Point3::new(10.0, 10.0, 0.0)],
     ];
-    let surface = NurbsSurface::new(
+    NurbsSurface::new(
         [1, 1],
         vec![0.0, 0.0, 1.0, 1.0],
         vec![0.0, 0.0, 1.0, 1.0],
         &net,
         &[vec![1.0; 2], vec![1.0; 2]],
     )
-    .unwrap();
+    .expect("a valid net")
+}
+
+/// A bilinear NURBS square is flat: its corners' two triangles meet any tolerance, and the
+/// sampled deviation is round-off.
+#[test]
+fn a_flat_nurbs_face_needs_only_its_corners() {
+    let surface = flat_square();
     let faces = [face(
         Surface::Nurbs {
             surface,
@@ -207,18 +212,7 @@ fn a_flat_nurbs_face_needs_only_its_corners() {
 /// directory line, not triangulated into nonsense.
 #[test]
 fn a_self_crossing_trim_is_refused_naming_the_face() {
-    let net = vec![
-        vec![Point3::new(0.0, 0.0, 0.0), Point3::new(0.0, 10.0, 0.0)],
-        vec![Point3::new(10.0, 0.0, 0.0), Point3::new(10.0, 10.0, 0.0)],
-    ];
-    let surface = NurbsSurface::new(
-        [1, 1],
-        vec![0.0, 0.0, 1.0, 1.0],
-        vec![0.0, 0.0, 1.0, 1.0],
-        &net,
-        &[vec![1.0; 2], vec![1.0; 2]],
-    )
-    .unwrap();
+    let surface = flat_square();
     // The diagonals cross at 8/15 of the first: not at any sample point of the sides.
     let corners = [(0.1, 0.1), (0.9, 0.8), (0.9, 0.1), (0.1, 0.9)];
     let bow_tie = Curve::Composite(
