@@ -10,6 +10,9 @@ use nalgebra::{Point3, Vector4};
 
 use super::{NurbsSurface, binomial};
 
+/// Most patches a table is built for (a bicubic table of this many is 51 MB).
+const MAX_PATCHES: usize = 100_000;
+
 /// A NURBS surface ready for many evaluations.
 #[derive(Clone, Debug)]
 pub struct PatchEvaluator {
@@ -41,9 +44,16 @@ fn bernstein_to_monomial(n: usize) -> Vec<Vec<f64>> {
 }
 
 impl PatchEvaluator {
-    /// Splits the surface into its Bézier patches and rewrites each in power form.
-    pub fn new(surface: &NurbsSurface) -> PatchEvaluator {
+    /// Splits the surface into its Bézier patches and rewrites each in power form; `None`
+    /// for a surface of more than `MAX_PATCHES` patches (the table would outweigh the
+    /// evaluations it saves) or none.
+    pub fn new(surface: &NurbsSurface) -> Option<PatchEvaluator> {
         let [p, q] = surface.degree();
+        let (knots_u, knots_v) = surface.knots();
+        let spans = |k: &[f64]| k.windows(2).filter(|w| w[1] > w[0]).count();
+        if spans(knots_u) * spans(knots_v) > MAX_PATCHES {
+            return None;
+        }
         let patches = surface.bezier_patches();
         let mut breaks_u: Vec<f64> = patches.iter().flat_map(|b| [b.u.0, b.u.1]).collect();
         let mut breaks_v: Vec<f64> = patches.iter().flat_map(|b| [b.v.0, b.v.1]).collect();
@@ -69,12 +79,15 @@ impl PatchEvaluator {
                 }
             }
         }
-        PatchEvaluator {
+        if breaks_u.len() < 2 || breaks_v.len() < 2 {
+            return None;
+        }
+        Some(PatchEvaluator {
             degree: [p, q],
             breaks_u,
             breaks_v,
             coefficients,
-        }
+        })
     }
 
     /// The point at `(u, v)`, clamped into the domain.

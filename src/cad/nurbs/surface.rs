@@ -415,7 +415,7 @@ mod tests {
         )
         .unwrap();
         // The power-form patches agree with de Boor everywhere, seams and ends included.
-        let fast = super::super::PatchEvaluator::new(&s);
+        let fast = super::super::PatchEvaluator::new(&s).expect("a table");
         for i in 0..=40 {
             for j in 0..=40 {
                 let (u, v) = (i as f64 / 40.0, j as f64 / 40.0);

@@ -36,7 +36,7 @@ pub(super) struct FaceSurface<'a> {
 impl<'a> FaceSurface<'a> {
     fn new(surface: &'a Surface) -> FaceSurface<'a> {
         let patches = match surface {
-            Surface::Nurbs { surface, .. } => Some(PatchEvaluator::new(surface)),
+            Surface::Nurbs { surface, .. } => PatchEvaluator::new(surface),
             Surface::Revolution { .. } => None,
         };
         FaceSurface { surface, patches }
