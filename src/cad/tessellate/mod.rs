@@ -1,12 +1,15 @@
 //! Trimmed faces into one welded triangle mesh within a chord tolerance (issue 23).
 //!
 //! Per face: the trim loops are sampled into parameter-plane polygons whose edges stay within
-//! the tolerance on the surface ([`trim`]); all faces' boundary vertices are then shared
-//! between neighbours (junction vertices inserted, near vertices welded: [`seams`]); each
+//! the tolerance on the surface (`trim`); all faces' boundary vertices are then shared between
+//! neighbours (junction vertices inserted, near vertices welded at their mean: `seams`); each
 //! face's region is triangulated with its loops as constraint edges and refined until the
-//! surface is within the tolerance ([`face`]). The tolerance is split between these steps so
-//! that the measured deviation ([`Tessellation::deviation`]), which includes the welding's
-//! moves, stays within the whole of it.
+//! surface is within the tolerance, its caps and welded folds flipped away (`face`). The whole
+//! is then sewn where the file's faces miss each other by more than the weld distance, its
+//! remaining caps merged (`caps`) and turned outward. The tolerance is split between these
+//! steps so that the measured deviation ([`Tessellation::deviation`]), which includes the
+//! welding's moves, stays within the whole of it wherever the file's own faces agree to it.
+//! docs/cad.md has the figures on the test impeller.
 
 use std::collections::{BTreeMap, HashMap};
 

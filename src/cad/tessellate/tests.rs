@@ -100,7 +100,6 @@ fn a_sphere_of_revolution_closes_at_its_poles_and_seam_within_the_tolerance() {
         // with edges √(8 r tol)), within a small factor.
         let edge = (8.0 * r * tolerance).sqrt();
         let ideal = 4.0 * std::f64::consts::PI * r * r / (edge * edge * 3f64.sqrt() / 4.0);
-        eprintln!("{} vs {ideal}", t.mesh.triangles.len());
         assert!(
             (t.mesh.triangles.len() as f64) < 6.0 * ideal,
             "{} vs {ideal}",
