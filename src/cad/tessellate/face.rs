@@ -182,6 +182,7 @@ pub(super) fn triangulate_face(
         // Worst first, and only into triangles no insertion of this round has changed: a point
         // fixes its neighbours' errors too, and inserting theirs as well would over-refine.
         wanted.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
+        let vertices_before = mesh.uv.len();
         for (_, uv, key) in wanted {
             // A corner of the triangle the point came from: the walks start next to it.
             let hint = FixedVertexHandle::from_index(key[0] as usize);
@@ -227,6 +228,10 @@ pub(super) fn triangulate_face(
                 positions.push(position);
                 own.push(position);
             }
+        }
+        if mesh.uv.len() == vertices_before {
+            // Every wanted point fell on an existing vertex: nothing more to gain here.
+            break;
         }
         if mesh.uv.len() > MAX_FACE_VERTICES {
             return Err(FaceError(format!(
