@@ -34,8 +34,22 @@ fn the_sample_is_roughed_to_its_offset_shape_without_a_touch() {
     for t in &r.tools {
         // Each tool's moves as read back from the G-code stay outside S₀ (up to the posted
         // rounding), so at least the allowance off the part.
-        assert!(t.overcut_vs_shape.overcuts.is_empty(), "T{}", t.tool.id);
-        assert!(t.overcut_vs_shape.min_clearance_mm > -1e-4);
+        assert!(
+            t.overcut_vs_shape
+                .as_ref()
+                .expect("checked against the offset shape")
+                .overcuts
+                .is_empty(),
+            "T{}",
+            t.tool.id
+        );
+        assert!(
+            t.overcut_vs_shape
+                .as_ref()
+                .expect("checked against the offset shape")
+                .min_clearance_mm
+                > -1e-4
+        );
         assert!(t.overcut_vs_part.min_clearance_mm > options.allowance - 1e-4);
         // The tri-dexel run: nothing touched that must not be.
         let s = &t.stock;
@@ -257,8 +271,22 @@ fn slots_and_corners_are_looped_within_the_engagement_bound() {
             > 10
     );
     assert!(widest(&looped) <= 1.3 * 0.5 * d, "{}", widest(&looped));
-    assert!(looped.overcut_vs_shape.overcuts.is_empty());
-    assert!(looped.overcut_vs_shape.min_clearance_mm > -1e-4);
+    assert!(
+        looped
+            .overcut_vs_shape
+            .as_ref()
+            .expect("checked against the offset shape")
+            .overcuts
+            .is_empty()
+    );
+    assert!(
+        looped
+            .overcut_vs_shape
+            .as_ref()
+            .expect("checked against the offset shape")
+            .min_clearance_mm
+            > -1e-4
+    );
     let s = &looped.stock;
     assert_eq!(
         (s.gouges, s.rapids_through_material, s.collisions),
@@ -289,8 +317,20 @@ fn wavelet_layers_rough_the_sample_as_cleanly() {
         run(wavemill::rough::LayerPaths::Wavelet),
     );
     let t = &wavelet.tools[0];
-    assert!(t.overcut_vs_shape.overcuts.is_empty());
-    assert!(t.overcut_vs_shape.min_clearance_mm > -1e-4);
+    assert!(
+        t.overcut_vs_shape
+            .as_ref()
+            .expect("checked against the offset shape")
+            .overcuts
+            .is_empty()
+    );
+    assert!(
+        t.overcut_vs_shape
+            .as_ref()
+            .expect("checked against the offset shape")
+            .min_clearance_mm
+            > -1e-4
+    );
     let s = &t.stock;
     assert_eq!(
         (s.gouges, s.rapids_through_material, s.collisions),

@@ -4,6 +4,7 @@
 
 #![warn(missing_docs)]
 
+pub mod boxes;
 pub mod iges;
 pub mod nurbs;
 pub mod tessellate;

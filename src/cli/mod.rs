@@ -27,6 +27,7 @@ pub use commands::levels::LevelsArgs;
 pub use commands::offsets::OffsetsArgs;
 pub use commands::plan::PlanArgs;
 pub use commands::rough::RoughArgs;
+pub use commands::rough_boxes::RoughBoxesArgs;
 pub use commands::sample::{SampleArgs, SampleKind};
 pub use commands::simulate::SimulateArgs;
 pub use commands::subdivide::SubdivideArgs;
@@ -81,6 +82,11 @@ pub enum Command {
     /// library tool: ramped entries, posted, read back and checked (shape, part, tri-dexel
     /// stock with the whole tool).
     Rough(RoughArgs),
+    /// Rough an IGES part by seed 002's convex-hull boxes: its Bézier patches boxed, the stock
+    /// sliced at the boxes' tops (thick layers split by de Casteljau, thin ones merged), each
+    /// pocket bounded by the union of the boxes; posted, read back and checked against every
+    /// box; with --compare beside the uniform route.
+    RoughBoxes(RoughBoxesArgs),
     /// Tessellate an IGES part (trimmed NURBS and revolved surfaces) into one welded mesh
     /// within a chord tolerance, and measure how far it is from the surfaces.
     Tessellate(TessellateArgs),
@@ -101,6 +107,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Tools(a) => commands::tools::run(&a),
         Command::Simulate(a) => commands::simulate::run(&a),
         Command::Rough(a) => commands::rough::run(&a),
+        Command::RoughBoxes(a) => commands::rough_boxes::run(&a),
     };
     match result {
         Ok(()) => 0,

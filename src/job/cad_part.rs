@@ -75,7 +75,7 @@ fn skipped_list(model: &IgesModel) -> String {
     model
         .skipped
         .iter()
-        .map(|(t, n)| format!("{t} ×{n}"))
+        .map(|(t, n)| format!("{t} ({}) ×{n}", crate::cad::iges::entity_name(*t)))
         .collect::<Vec<_>>()
         .join(", ")
 }

@@ -73,6 +73,7 @@ pub fn plan_indexed_roughing(
         max_depth: None,
         max_engagement: job.roughing.max_engagement,
         paths: job.roughing.layer_paths,
+        min_depth: None,
     };
     let options = roughing_options(&planning, &tool, &how);
 

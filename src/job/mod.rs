@@ -30,6 +30,7 @@ mod rapids;
 mod render;
 mod report;
 mod rough;
+mod rough_boxes;
 mod rough_stages;
 mod samples;
 mod semi_finish;
@@ -78,7 +79,11 @@ pub use plan_roughing::{
     PlannedRoughing, RoughingContext, RoughingSummary, check_posted_roughing, plan_roughing,
 };
 pub use report::{PlanReport, PoseCounts, StageTimings};
-pub use rough::{RoughOptions, RoughOutput, RoughReport, RoughToolRun, rough, write_rough_outputs};
+pub use rough::{
+    HullBoxesReport, LayerBound, RoughOptions, RoughOutput, RoughReport, RoughToolRun, rough,
+    write_rough_outputs,
+};
+pub use rough_boxes::{RoughBoxesOptions, SlicingRow, rough_boxes, rougher_assembly};
 pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, posted_program_model, prepare_part};

@@ -206,7 +206,7 @@ pub fn plan_roughing(
         rapid: job.machine.rapid_feed,
     };
     let planned = rough_with_tool(
-        &shape,
+        crate::rough::Guard::Shape(&shape),
         &context.blank,
         &tool,
         &ToolRoughing {
@@ -222,6 +222,7 @@ pub fn plan_roughing(
             max_depth: None,
             max_engagement: job.roughing.max_engagement,
             paths: job.roughing.layer_paths,
+            min_depth: None,
         },
         &mut context.stock,
         from_blank,

@@ -26,6 +26,7 @@ use crate::mesh::io::RawMesh;
 use crate::post::{
     GcodeOptions, GcodeWriter, LineariseOptions, ProgramHeader, ProgramSink, ThreeAxis,
 };
+use crate::rough::boxes::box_clearance;
 use crate::rough::check::{OvercutReport, overcuts};
 use crate::rough::{LayerReport, NotReached, RoughingFeeds, RoughingTool};
 use crate::stock::cutter::CuttingBody;
@@ -69,11 +70,51 @@ pub struct RoughOptions {
     pub uniform_layers: bool,
     /// The largest depth of cut of every tool, mm; `None`: each tool's radius.
     pub max_depth: Option<f64>,
+    /// The smallest depth of cut, mm: thinner layers are merged upward; `None`: a fifth of
+    /// each tool's radius.
+    pub min_depth: Option<f64>,
     /// Widest radial engagement of a pass, as a share of the tool's diameter (1: every pass
     /// straight).
     pub max_engagement: f64,
     /// The planner of each layer's passes.
     pub layer_paths: crate::rough::LayerPaths,
+    /// What the layers stop at.
+    pub bound: LayerBound,
+}
+
+/// What the layers of `rough` stop at.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum LayerBound {
+    /// The part's verified offset shape at the allowance.
+    #[default]
+    OffsetShape,
+    /// The part's own mesh (no allowance): a part read from IGES is its surfaces within the
+    /// tessellation's tolerance, so this is slicing the surfaces themselves.
+    Part,
+    /// Seed 002's convex-hull boxes of the Bézier patches of these faces (the part's, as read
+    /// from IGES, in the file's frame), each grown by the allowance.
+    HullBoxes(std::sync::Arc<Vec<crate::cad::iges::Face>>),
+}
+
+impl LayerBound {
+    /// The name in reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            LayerBound::OffsetShape => "offset-shape",
+            LayerBound::Part => "part",
+            LayerBound::HullBoxes(_) => "hull-boxes",
+        }
+    }
+}
+
+/// What the convex-hull boxes of a `hull-boxes` roughing were, and their own check.
+#[derive(Clone, Debug, Serialize)]
+pub struct HullBoxesReport {
+    pub faces: usize,
+    /// Bézier patches of the surfaces (before any split for the layers).
+    pub patches: usize,
+    /// Points of the surfaces, evaluated on their own, each found in a box of its face.
+    pub enclosure: crate::cad::boxes::Enclosure,
 }
 
 impl Default for RoughOptions {
@@ -97,8 +138,10 @@ impl Default for RoughOptions {
             feed_control: Some(crate::feed::CuttingModel::default()),
             uniform_layers: false,
             max_depth: None,
+            min_depth: None,
             max_engagement: 0.5,
             layer_paths: crate::rough::LayerPaths::default(),
+            bound: LayerBound::default(),
         }
     }
 }
@@ -141,10 +184,20 @@ pub struct RoughToolRun {
     pub not_reached: Option<NotReached>,
     pub moves: usize,
     pub cutting_length_mm: f64,
+    /// Every move's length, rapids included, mm.
+    pub path_length_mm: f64,
     /// At the programmed feeds and the rapid rate, s.
     pub estimated_time_s: f64,
-    /// This tool's moves as read back from the G-code, checked against S₀ and the part.
-    pub overcut_vs_shape: OvercutReport,
+    /// This tool's moves as read back from the G-code, checked against S₀ (or the boxes) and
+    /// the part.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overcut_vs_shape: Option<OvercutReport>,
+    /// With `hull-boxes`: how the layers were made, and the moves as read back against every
+    /// box (the seed's guarantee: no cutter position inside any box).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub box_layers: Option<crate::rough::boxes::BoxSummary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overcut_vs_boxes: Option<crate::rough::boxes::BoxClearance>,
     pub overcut_vs_part: OvercutReport,
     pub stock: RoughStockReport,
 }
@@ -165,6 +218,11 @@ pub struct RoughReport {
     pub max_engagement: f64,
     /// The planner of each layer's passes.
     pub layer_paths: crate::rough::LayerPaths,
+    /// What the layers stop at: `offset-shape`, `part` or `hull-boxes`.
+    pub bound: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hull_boxes: Option<HullBoxesReport>,
+    /// Triangles of the offset shape or part the layers stop at (0 for boxes).
     pub shape_triangles: usize,
     pub resolution_mm: f64,
     pub blank_volume_mm3: f64,
@@ -172,6 +230,9 @@ pub struct RoughReport {
     pub tools: Vec<RoughToolRun>,
     pub estimated_time_s: f64,
     pub volume_after_mm3: f64,
+    /// `rough-boxes --compare`: the convex-hull-box route and the uniform one, side by side.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub comparison: Option<Vec<super::rough_boxes::SlicingRow>>,
     pub timings_ms: Option<std::collections::BTreeMap<&'static str, f64>>,
 }
 
@@ -232,13 +293,59 @@ pub fn rough(
     timings.insert("prepare", ms(t));
 
     let t = Instant::now();
-    let shapes = stock_shapes(&part, &Default::default(), &[options.allowance])?;
-    let shape = &shapes
-        .first()
-        .ok_or_else(|| Error::Internal("no offset shape was built".into()))?
-        .1
-        .mesh;
-    timings.insert("offset_shape", ms(t));
+    let frame = match options.up {
+        Some(up) => super::config::unit_direction(up)
+            .map(|axis| super::setup::upright_rotation(&axis))
+            .unwrap_or_else(nalgebra::Rotation3::identity),
+        None => nalgebra::Rotation3::identity(),
+    };
+    let (shape, hull_boxes) = match &options.bound {
+        LayerBound::OffsetShape => {
+            let shapes = stock_shapes(&part, &Default::default(), &[options.allowance])?;
+            let shape = shapes
+                .into_iter()
+                .next()
+                .ok_or_else(|| Error::Internal("no offset shape was built".into()))?
+                .1
+                .mesh;
+            (Some(shape), None)
+        }
+        LayerBound::Part => (Some(part.clone()), None),
+        LayerBound::HullBoxes(faces) => {
+            let boxes = crate::cad::boxes::HullBoxes::of_faces(faces, frame)
+                .map_err(|e| Error::Usage(format!("{part_name}: convex-hull boxes: {e}")))?;
+            let enclosure = boxes.enclosure(faces, 4);
+            if enclosure.outside > 0 {
+                return Err(Error::Internal(format!(
+                    "{part_name}: {} of {} surface points lie outside their face's \
+                     convex-hull boxes, the farthest by {:.3e} mm",
+                    enclosure.outside, enclosure.samples, enclosure.worst_mm
+                )));
+            }
+            let report = HullBoxesReport {
+                faces: faces.len(),
+                patches: boxes.patches.len(),
+                enclosure,
+            };
+            (None, Some((boxes, report)))
+        }
+    };
+    let guard = match (&shape, &hull_boxes) {
+        (Some(shape), _) => crate::rough::Guard::Shape(shape),
+        (None, Some((boxes, _))) => crate::rough::Guard::HullBoxes {
+            boxes,
+            allowance: options.allowance,
+        },
+        (None, None) => return Err(Error::Internal("roughing has nothing to stop at".into())),
+    };
+    timings.insert(
+        if hull_boxes.is_some() {
+            "hull_boxes"
+        } else {
+            "offset_shape"
+        },
+        ms(t),
+    );
 
     // Plan tool by tool on a stock model: each later tool from what the earlier ones leave.
     let t = Instant::now();
@@ -247,7 +354,7 @@ pub fn rough(
     for (k, (assembly, _)) in sequence.iter().enumerate() {
         let from_blank = k == 0;
         let planned_tool = rough_with_tool(
-            shape,
+            guard,
             &blank,
             assembly,
             &ToolRoughing {
@@ -262,6 +369,7 @@ pub fn rough(
                 max_depth: options.max_depth,
                 max_engagement: options.max_engagement,
                 paths: options.layer_paths,
+                min_depth: options.min_depth,
             },
             &mut planning_stock,
             from_blank,
@@ -342,7 +450,18 @@ pub fn rough(
     for (((assembly, chosen), (tool, layers, feed_control, cutting_length)), section) in
         sequence.iter().zip(planned).zip(sections)
     {
-        let overcut_vs_shape = overcuts(shape, &section, tool.radius, rounding);
+        let overcut_vs_shape = shape
+            .as_ref()
+            .map(|shape| overcuts(shape, &section, tool.radius, rounding));
+        let overcut_vs_boxes = layers.hull_boxes.as_ref().map(|planned| {
+            box_clearance(
+                &section,
+                &planned.boxes,
+                tool.radius,
+                rounding,
+                BOX_CHECK_REACH,
+            )
+        });
         let overcut_vs_part = overcuts(&part, &section, tool.radius, rounding);
         let sim = simulate(
             &mut stock,
@@ -354,10 +473,22 @@ pub fn rough(
         .map_err(stock_error)?;
         let rest = rest_over(&stock, &part, &part_model, stock.bounds().diagonal());
         let label = format!("T{}", assembly.id);
-        if let Some(o) = overcut_vs_shape.overcuts.first() {
+        if let Some(o) = overcut_vs_shape.as_ref().and_then(|o| o.overcuts.first()) {
             problems.push(format!(
-                "{label}: {} move(s) into the offset shape, the first by {:.4} mm",
-                overcut_vs_shape.overcuts.len(),
+                "{label}: move(s) into the {}, the first by {:.4} mm",
+                options.bound.name(),
+                o.depth_mm
+            ));
+        }
+        if let Some(c) = overcut_vs_boxes.as_ref().filter(|c| c.violation_count > 0) {
+            problems.push(format!(
+                "{label}: {} move(s) into a convex-hull box, by up to {:.4} mm",
+                c.violation_count, -c.min_clearance_mm
+            ));
+        }
+        if let Some(o) = overcut_vs_part.overcuts.first() {
+            problems.push(format!(
+                "{label}: move(s) into the part, the first by {:.4} mm",
                 o.depth_mm
             ));
         }
@@ -392,11 +523,17 @@ pub fn rough(
             not_reached: layers.not_reached,
             moves: moves.len(),
             cutting_length_mm: cutting_length,
+            path_length_mm: moves
+                .windows(2)
+                .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+                .sum(),
             estimated_time_s: moves
                 .windows(2)
                 .map(|w| 60.0 * (w[1].pose.tip - w[0].pose.tip).norm() / w[1].feed)
                 .sum(),
             overcut_vs_shape,
+            box_layers: layers.hull_boxes.as_ref().map(|b| b.summary.clone()),
+            overcut_vs_boxes,
             overcut_vs_part,
             stock: RoughStockReport {
                 removed_volume_mm3: sim.removed_volume_mm3,
@@ -432,12 +569,15 @@ pub fn rough(
         max_depth_mm: options.max_depth,
         max_engagement: options.max_engagement,
         layer_paths: options.layer_paths,
-        shape_triangles: shape.triangles.len(),
+        bound: options.bound.name(),
+        hull_boxes: hull_boxes.map(|(_, report)| report),
+        shape_triangles: shape.as_ref().map_or(0, |s| s.triangles.len()),
         resolution_mm: spacing,
         blank_volume_mm3: blank_volume,
         estimated_time_s: runs.iter().map(|r| r.estimated_time_s).sum(),
         volume_after_mm3: stock.volume(),
         tools: runs,
+        comparison: None,
         timings_ms: Some(timings),
     };
     Ok(RoughOutput {
@@ -470,6 +610,9 @@ fn choose_tools(
     }
     Ok(sequence)
 }
+
+/// How far from a box the check measures the clearance, mm.
+const BOX_CHECK_REACH: f64 = 5.0;
 
 fn ms(since: Instant) -> f64 {
     (since.elapsed().as_secs_f64() * 1e4).round() / 10.0

@@ -7,7 +7,7 @@ use crate::contour::geometry::Point2;
 use crate::error::{Error, Result};
 use crate::feed::{Cutter as FeedCutter, CuttingModel, FeedReport, control_feeds};
 use crate::geom::Point3;
-use crate::rough::{Blank, Material, RoughingFeeds, RoughingOptions, RoughingTool, rough_layers};
+use crate::rough::{Blank, Material, RoughingFeeds, RoughingOptions, RoughingTool, rough_within};
 use crate::stock::Stock;
 use crate::stock::cutter::CuttingBody;
 use crate::tool::{Cutter, ToolAssembly, ToolLibrary};
@@ -57,6 +57,9 @@ pub(super) struct ToolRoughing<'a> {
     pub max_engagement: f64,
     /// The planner of each layer's passes.
     pub paths: crate::rough::LayerPaths,
+    /// The smallest depth of cut, mm (thinner layers merge upward); `None`: a fifth of the
+    /// tool's radius.
+    pub min_depth: Option<f64>,
 }
 
 /// One tool's layers, and what feed control made of their feeds.
@@ -103,6 +106,9 @@ pub(super) fn roughing_options(
         options.layers.max_depth = depth;
         options.layers.min_depth = options.layers.min_depth.min(depth);
     }
+    if let Some(depth) = how.min_depth {
+        options.layers.min_depth = depth.min(options.layers.max_depth);
+    }
     options
 }
 
@@ -110,7 +116,7 @@ pub(super) fn roughing_options(
 /// `stock` still holds material; each layer is taken off `stock` as it is planned. `stock` is the planning model the next tool starts from. With feed
 /// control, each move's feed is set from the volume it takes off the stock as it stood.
 pub(super) fn rough_with_tool(
-    shape: &crate::mesh::Mesh,
+    guard: crate::rough::Guard,
     blank: &Blank,
     assembly: &ToolAssembly,
     how: &ToolRoughing,
@@ -133,7 +139,7 @@ pub(super) fn rough_with_tool(
             body: &body,
         }
     };
-    let mut layers = rough_layers(shape, blank, &tool, assembly.id, material, &options)?;
+    let mut layers = rough_within(guard, blank, &tool, assembly.id, material, &options)?;
     let removed = std::mem::take(&mut layers.removed_mm3);
     let feed_control = how.feed_control.map(|(model, spindle_rpm)| {
         let cutter = FeedCutter {

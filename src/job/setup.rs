@@ -304,13 +304,18 @@ fn check_drive_points(mesh: &MeshReport, job: &Job) -> Result<()> {
 /// `mesh` turned so that the unit vector `up` points along +Z (the shortest rotation; 180°
 /// about X when `up` points down).
 pub(crate) fn turned_upright(mesh: &Mesh, up: &Vector3) -> Mesh {
-    let rotation = nalgebra::Rotation3::rotation_between(up, &Vector3::z()).unwrap_or_else(|| {
-        nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
-    });
+    let rotation = upright_rotation(up);
     Mesh {
         positions: mesh.positions.iter().map(|p| rotation * p).collect(),
         triangles: mesh.triangles.clone(),
     }
+}
+
+/// The rotation that turns `up` into +Z (the shortest one; a half turn about X for −Z).
+pub(crate) fn upright_rotation(up: &Vector3) -> nalgebra::Rotation3<f64> {
+    nalgebra::Rotation3::rotation_between(up, &Vector3::z()).unwrap_or_else(|| {
+        nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    })
 }
 
 /// Where the job clamps `part` on the table: `[machine] part_origin_in_table`, by default

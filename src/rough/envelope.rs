@@ -8,7 +8,7 @@
 //! and the highest corner of what is left counts. A point sample at cell centres would miss a
 //! blade tip between two centres; the clipped maximum cannot, so the boxes enclose the shape.
 
-use crate::geom::{Point2, Point3};
+use crate::geom::{Aabb, Point2, Point3};
 use crate::mesh::Mesh;
 
 /// The highest point of a shape over each cell of a grid (see the module docs).
@@ -42,6 +42,40 @@ impl TopEnvelope {
         };
         for t in 0..mesh.triangles.len() {
             envelope.add_triangle(&mesh.corners(t));
+        }
+        envelope
+    }
+
+    /// The envelope of axis-aligned boxes (seed 002's convex-hull boxes) on cells of `cell`
+    /// mm: every cell the closed footprint of a box meets stands at least at the box's top, so
+    /// the union of the cells taller than a layer holds the union of the boxes' footprints
+    /// (widened to the cells' sides, by less than a cell).
+    pub fn of_boxes<'a>(
+        boxes: impl IntoIterator<Item = &'a Aabb> + Clone,
+        cell: f64,
+    ) -> TopEnvelope {
+        let bounds = boxes
+            .clone()
+            .into_iter()
+            .fold(Aabb::empty(), |a, b| a.merge(b));
+        let origin = Point2::new(bounds.min.x - cell, bounds.min.y - cell);
+        let width = ((bounds.max.x - origin.x) / cell).ceil().max(0.0) as usize + 2;
+        let height = ((bounds.max.y - origin.y) / cell).ceil().max(0.0) as usize + 2;
+        let mut envelope = TopEnvelope {
+            origin,
+            cell,
+            width,
+            height,
+            top: vec![f64::NEG_INFINITY; width * height],
+        };
+        for b in boxes {
+            let (i0, j0) = envelope.index_of(b.min.x, b.min.y);
+            let (i1, j1) = envelope.index_of(b.max.x, b.max.y);
+            for j in j0..=j1 {
+                for k in j * width + i0..=j * width + i1 {
+                    envelope.top[k] = envelope.top[k].max(b.max.z);
+                }
+            }
         }
         envelope
     }

@@ -28,7 +28,8 @@ pub struct Layer {
     pub z: f64,
     /// Depth below the layer above (or the stock top), mm.
     pub depth: f64,
-    /// At the top of a flat of the shape (else a subdivision of a thick layer).
+    /// At the top of a flat of the shape, or of a convex-hull box (else an even subdivision
+    /// of a thick layer).
     pub at_flat: bool,
 }
 
@@ -62,12 +63,26 @@ pub fn layer_heights(
         .map(|&(_, top)| (top, true))
         .collect();
     planes.push((bottom, false));
+    merge_and_split(planes, stock_top, options)
+}
+
+/// Seed 002's rules on slicing planes `(z, at a flat)` below `stock_top` (the lowest of them
+/// the bottom, which always stays): a plane closer than the minimum depth below the one kept
+/// above it is dropped (its layer joins the next one down — "elevated to the height of its
+/// next top layer"), except the bottom, which then lifts nothing: the plane above it is
+/// dropped instead; then a layer deeper than the maximum is split evenly. Top first.
+pub fn merge_and_split(
+    mut planes: Vec<(f64, bool)>,
+    stock_top: f64,
+    options: &LayerOptions,
+) -> Vec<Layer> {
+    planes.retain(|(z, _)| *z < stock_top);
     planes.sort_by(|a, b| b.0.total_cmp(&a.0));
     planes.dedup_by(|a, b| a.0 == b.0);
+    if planes.is_empty() {
+        return Vec::new();
+    }
 
-    // Merge: a plane closer than the minimum depth below the one above is dropped (its layer
-    // joins the next one down), except the bottom, which then lifts nothing: the layer above it
-    // is dropped instead when it is too close.
     let mut merged: Vec<(f64, bool)> = Vec::new();
     let mut above = stock_top;
     let last = planes.len() - 1;

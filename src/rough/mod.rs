@@ -17,9 +17,13 @@
 //!   material ramped along its pass at a bounded angle instead of plunged, as a 2D material map
 //!   of the layer tells ([`crate::contour::material::MaterialMap`]); the tool moves between
 //!   regions just above the layer when the straight way is clear, else over the blank;
+//! * [`boxes`] — the same layers down to seed 002's own model instead of a shape: the
+//!   convex-hull boxes of the part's Bézier patches ([`crate::cad::boxes`]), sliced at their
+//!   tops, split by de Casteljau where a layer is too thick, and checked on the program;
 //! * [`check`] — the program checked against the shape exactly, by code that shares nothing
 //!   with the planning.
 
+pub mod boxes;
 pub mod check;
 pub mod envelope;
 pub mod indexed;
@@ -389,11 +393,47 @@ pub struct Roughing {
     /// What each move took off the stock as it stood when planned (0 for the first move);
     /// empty for [`Material::Blank`].
     pub removed_mm3: Vec<f64>,
+    /// With [`Guard::HullBoxes`]: the boxes the layers kept out of and how they were made.
+    pub hull_boxes: Option<BoxRoughing>,
+}
+
+/// The boxes a [`Guard::HullBoxes`] roughing kept the tool out of.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoxRoughing {
+    /// Every patch's box after the splits for the layers, grown by the stock to leave.
+    pub boxes: Vec<crate::geom::Aabb>,
+    pub summary: boxes::BoxSummary,
+}
+
+/// What the layers keep the tool out of.
+#[derive(Clone, Copy, Debug)]
+pub enum Guard<'a> {
+    /// A closed shape that holds the part (its verified offset shape, or the part).
+    Shape(&'a Mesh),
+    /// Seed 002's convex-hull boxes of the part's surfaces, each grown by `allowance` mm;
+    /// the layers are then planned at the boxes' tops ([`boxes::box_layers`]).
+    HullBoxes {
+        boxes: &'a crate::cad::boxes::HullBoxes,
+        allowance: f64,
+    },
 }
 
 /// Plans layer roughing of `blank` down to `shape` with `tool` (its T number `tool_id`).
 pub fn rough_layers(
     shape: &Mesh,
+    blank: &Blank,
+    tool: &RoughingTool,
+    tool_id: u32,
+    material: Material,
+    options: &RoughingOptions,
+) -> Result<Roughing, RoughError> {
+    rough_within(Guard::Shape(shape), blank, tool, tool_id, material, options)
+}
+
+/// Plans layer roughing of `blank` down to what `guard` protects with `tool` (its T number
+/// `tool_id`).
+pub fn rough_within(
+    guard: Guard,
     blank: &Blank,
     tool: &RoughingTool,
     tool_id: u32,
@@ -410,21 +450,45 @@ pub fn rough_layers(
             blank.bottom, blank.top
         )));
     }
-    let envelope = TopEnvelope::of_mesh(shape, options.cell);
-    let shape_bottom = shape.aabb().min.z;
+    let guard_bounds = match guard {
+        Guard::Shape(shape) => shape.aabb(),
+        Guard::HullBoxes { boxes, allowance } => boxes.bounds().inflated(allowance),
+    };
+    if guard_bounds.is_empty() {
+        return Err(RoughError::Blank(
+            "there is nothing to rough down to".into(),
+        ));
+    }
+    let shape_bottom = guard_bounds.min.z;
     let floor = options
         .floor
         .unwrap_or_else(|| blank.bottom.max(shape_bottom));
     let holder_top = options.holder_top.unwrap_or(blank.top);
     let reach_floor = holder_top - tool.reach;
-    let cell_area = options.cell * options.cell;
-    let planned = layers::layer_heights(
-        &envelope.top,
-        cell_area,
-        blank.top,
-        floor.max(reach_floor),
-        &options.layers,
-    );
+    let bottom = floor.max(reach_floor);
+    let (envelope, planned, hull_boxes) = match guard {
+        Guard::Shape(shape) => {
+            let envelope = TopEnvelope::of_mesh(shape, options.cell);
+            let planned = layers::layer_heights(
+                &envelope.top,
+                options.cell * options.cell,
+                blank.top,
+                bottom,
+                &options.layers,
+            );
+            (envelope, planned, None)
+        }
+        Guard::HullBoxes { boxes, allowance } => {
+            let planned = boxes::box_layers(boxes, allowance, blank.top, bottom, &options.layers);
+            let envelope = TopEnvelope::of_boxes(&planned.boxes, options.cell);
+            let layers = planned.layers;
+            let kept = BoxRoughing {
+                boxes: planned.boxes,
+                summary: planned.summary,
+            };
+            (envelope, layers, Some(kept))
+        }
+    };
     let not_reached = (reach_floor > floor).then(|| NotReached {
         deepest_cut_z: reach_floor,
         floor_z: floor,
@@ -440,7 +504,7 @@ pub fn rough_layers(
     let axis = Direction::new_normalize(Vector3::z());
     // A coarse shape may stand above a blank that is close to the part's top: the moves over
     // the blank clear it too.
-    let safe_z = blank.top.max(shape.aabb().max.z) + options.clearance;
+    let safe_z = blank.top.max(guard_bounds.max.z) + options.clearance;
     let mut writer = Writer {
         moves: Vec::new(),
         axis,
@@ -711,6 +775,7 @@ pub fn rough_layers(
         safe_z,
         not_reached,
         removed_mm3: removed,
+        hull_boxes,
     })
 }
 

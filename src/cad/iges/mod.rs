@@ -90,12 +90,76 @@ pub fn read_iges(text: &str) -> Result<IgesModel, IgesError> {
             t => *skipped.entry(t).or_insert(0) += 1,
         }
     }
+    if faces.is_empty()
+        && let Some(solid) = raw
+            .entities
+            .iter()
+            .find(|e| e.entity_type == 186 && e.status.subordinate == 0)
+    {
+        return Err(IgesError::at(
+            solid.line,
+            format!(
+                "entity 186 ({}) at DE {}: the part is a B-rep solid (186 with its 514 shells and \
+                 510 faces), which this reader does not read; export it as trimmed surfaces \
+                 (144) instead",
+                entity_name(186),
+                solid.de
+            ),
+        ));
+    }
     Ok(IgesModel {
         global: raw.global,
         millimetres_per_unit,
         faces,
         skipped,
     })
+}
+
+/// What an entity type is, by the IGES 5.3 names of the ones CAD exports carry.
+pub fn entity_name(entity_type: i64) -> &'static str {
+    match entity_type {
+        100 => "circular arc",
+        102 => "composite curve",
+        104 => "conic arc",
+        106 => "copious data",
+        108 => "plane",
+        110 => "line",
+        112 => "parametric spline curve",
+        114 => "parametric spline surface",
+        116 => "point",
+        118 => "ruled surface",
+        120 => "surface of revolution",
+        122 => "tabulated cylinder",
+        123 => "direction",
+        124 => "transformation matrix",
+        126 => "rational B-spline curve",
+        128 => "rational B-spline surface",
+        130 => "offset curve",
+        140 => "offset surface",
+        141 => "boundary",
+        142 => "curve on a parametric surface",
+        143 => "bounded surface",
+        144 => "trimmed surface",
+        186 => "manifold solid B-rep object",
+        190 => "plane surface",
+        192 => "right circular cylindrical surface",
+        194 => "right circular conical surface",
+        196 => "spherical surface",
+        198 => "toroidal surface",
+        212 => "general note",
+        214 => "leader",
+        308 => "subfigure definition",
+        314 => "colour definition",
+        402 => "associativity instance",
+        406 => "property",
+        408 => "singular subfigure instance",
+        502 => "vertex list",
+        504 => "edge list",
+        508 => "loop",
+        510 => "face",
+        514 => "shell",
+        _ => "unknown to this reader",
+    }
 }
 
 #[cfg(test)]
@@ -216,6 +280,33 @@ mod tests {
         assert_eq!(outer.len(), 4);
         assert_eq!(outer[2], nalgebra::Point3::new(0.5, 0.5, 0.0));
         assert!(model.skipped.is_empty());
+    }
+
+    /// A file holding a B-rep solid and no surfaces of its own is refused by name, at the
+    /// solid's line; with a face beside it, the solid is listed as skipped.
+    #[test]
+    fn a_brep_solid_is_refused_by_name() {
+        let mut b = Builder::new();
+        let solid = b.add(186, 0, "00000000", "3,0,0");
+        let text = b.text();
+        let error = read_iges(&text).expect_err("a B-rep solid alone");
+        let message = error.to_string();
+        assert!(
+            message.contains("186")
+                && message.contains("manifold solid B-rep")
+                && message.contains("144"),
+            "{message}"
+        );
+        let line = text
+            .lines()
+            .position(|l| l.ends_with(&format!("D{solid:>7}")))
+            .unwrap()
+            + 1;
+        assert_eq!(error.line, line, "{message}");
+        add_plane_face(&mut b);
+        let model = read_iges(&b.text()).expect("a face beside the solid");
+        assert_eq!(model.faces.len(), 1);
+        assert_eq!(model.skipped.get(&186), Some(&1));
     }
 
     /// Every kind of damage is refused naming its line and what is wrong.

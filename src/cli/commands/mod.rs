@@ -7,6 +7,7 @@ pub mod levels;
 pub mod offsets;
 pub mod plan;
 pub mod rough;
+pub mod rough_boxes;
 pub mod sample;
 pub mod simulate;
 pub mod subdivide;

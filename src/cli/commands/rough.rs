@@ -194,7 +194,10 @@ pub fn run(args: &RoughArgs) -> Result<()> {
     say!(
         "  checks: closest to the offset shape {:.4} mm (posted rounding aside), to the part {:.3} \
          mm; no gouge, rapid through material, or shank or holder touch",
-        clearance(|t| t.overcut_vs_shape.min_clearance_mm),
+        clearance(|t| t
+            .overcut_vs_shape
+            .as_ref()
+            .map_or(f64::INFINITY, |o| o.min_clearance_mm)),
         clearance(|t| t.overcut_vs_part.min_clearance_mm)
     );
     say!("  wrote {}", args.out.display());
