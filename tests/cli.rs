@@ -37,6 +37,7 @@ fn every_subcommand_has_help() {
         &["tessellate", "--help"],
         &["simulate", "--help"],
         &["rough", "--help"],
+        &["rough-boxes", "--help"],
     ] {
         let out = wavemill(sub);
         assert_eq!(out.status.code(), Some(0), "{sub:?}");
@@ -101,6 +102,22 @@ fn bad_input_gives_exit_code_and_names_the_problem() {
 
     assert_eq!(wavemill(&["plan", "--no-such-flag"]).status.code(), Some(2));
     assert!(!out_dir.join("job.nc").exists(), "no output after errors");
+
+    // Convex-hull boxes need surfaces, and a flat or bull-nose end mill.
+    let mesh = wavemill(&[
+        "rough-boxes",
+        "data/impeller.glb",
+        "--tool",
+        "flat:6",
+        "--out",
+        out,
+    ]);
+    assert_eq!(mesh.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&mesh.stderr).contains("IGES"));
+    let ball = wavemill(&["rough-boxes", "part.igs", "--tool", "ball:6", "--out", out]);
+    assert_eq!(ball.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&ball.stderr).contains("flat or bull-nose"));
+    assert!(!out_dir.join("rough.nc").exists(), "no output after errors");
 }
 
 /// The committed sample files are exactly what the generator makes today.

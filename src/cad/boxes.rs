@@ -13,12 +13,17 @@
 //!   fig. 11–12): four patches whose boxes are tighter, which is how a layer thicker than the
 //!   maximum depth of cut gets its intermediate slicing planes.
 //!
-//! The boxes are of whole surfaces: a face's trimming only removes surface, so the boxes of
-//! the untrimmed surface still enclose the face. [`HullBoxes::enclosure`] checks the
-//! enclosure independently of the construction: points of each face's surface, evaluated by
-//! de Boor on the original entity, must each lie in some box of that face.
+//! A trimmed face keeps the patches whose parameter rectangles meet its trimmed region (the
+//! trim loops sampled in the parameter plane, each rectangle grown by the longest chord of
+//! the samples so that a loop bulging between two samples cannot slip past): CAD surfaces
+//! reach well beyond their faces (a blade's surface past the hub and the tip), and boxes of
+//! what was trimmed away would keep the tool off material it may cut. The enclosure is
+//! checked independently of the construction: [`HullBoxes::enclosure`] evaluates untrimmed
+//! faces' surfaces (de Boor on the original entity) on a grid, [`HullBoxes::mesh_enclosure`]
+//! takes every vertex of the tessellation (the tessellator trims on its own); each point must
+//! lie in a box of its face.
 
-use nalgebra::{Rotation3, Unit, Vector3, Vector4};
+use nalgebra::{Point2, Rotation3, Unit, Vector3, Vector4};
 use rayon::prelude::*;
 
 use super::iges::{Curve, Face, Surface};
@@ -79,6 +84,8 @@ pub struct HullBoxes {
     pub patches: Vec<HullPatch>,
     /// The rotation from the file's frame into the boxes' frame.
     pub frame: Rotation3<f64>,
+    /// Patches left out because their parameter rectangles lie outside their face's trim.
+    pub trimmed_away: usize,
 }
 
 /// What [`HullBoxes::enclosure`] found.
@@ -97,7 +104,8 @@ impl HullBoxes {
     /// rotation that stands the part up for machining; the boxes are axis-aligned in that
     /// frame, not the file's).
     pub fn of_faces(faces: &[Face], frame: Rotation3<f64>) -> Result<HullBoxes, BoxError> {
-        let per_face: Vec<Result<Vec<HullPatch>, BoxError>> = faces
+        type FacePatches = (Vec<HullPatch>, usize);
+        let per_face: Vec<Result<FacePatches, BoxError>> = faces
             .par_iter()
             .enumerate()
             .map(|(index, face)| {
@@ -105,8 +113,11 @@ impl HullBoxes {
                     line: face.line,
                     reason,
                 })?;
-                Ok(patches
+                let trim = TrimRegion::of(face);
+                let all = patches.len();
+                let kept: Vec<HullPatch> = patches
                     .into_iter()
+                    .filter(|p| trim.as_ref().is_none_or(|t| t.meets(p.u, p.v)))
                     .map(|mut p| {
                         for q in &mut p.points {
                             let turned = frame * q.xyz();
@@ -114,14 +125,80 @@ impl HullBoxes {
                         }
                         HullPatch::new(index, p, 0)
                     })
-                    .collect())
+                    .collect();
+                let away = all - kept.len();
+                Ok((kept, away))
             })
             .collect();
         let mut patches = Vec::new();
+        let mut trimmed_away = 0;
         for face in per_face {
-            patches.extend(face?);
+            let (kept, away) = face?;
+            patches.extend(kept);
+            trimmed_away += away;
         }
-        Ok(HullBoxes { patches, frame })
+        Ok(HullBoxes {
+            patches,
+            frame,
+            trimmed_away,
+        })
+    }
+
+    /// Checks that the boxes enclose a tessellation of the faces (`mesh` in the file's frame,
+    /// `face_of_triangle` naming each triangle's face): every corner of every triangle, turned
+    /// into the boxes' frame, within `slack` mm (the tessellation's tolerance: seam vertices
+    /// are welded between faces) of a box of the triangle's face.
+    pub fn mesh_enclosure(
+        &self,
+        mesh: &crate::mesh::Mesh,
+        face_of_triangle: &[u32],
+        slack: f64,
+    ) -> Enclosure {
+        let by_face = self.boxes_by_face(
+            face_of_triangle
+                .iter()
+                .map(|&f| f as usize)
+                .max()
+                .map_or(0, |m| m + 1),
+        );
+        let per_triangle: Vec<(usize, f64)> = mesh
+            .triangles
+            .par_iter()
+            .zip(face_of_triangle)
+            .map(|(t, &face)| {
+                let boxes = by_face.get(face as usize).map_or(&[][..], |b| &b[..]);
+                let (mut outside, mut worst) = (0, 0.0f64);
+                for &v in t {
+                    let p = self.frame * mesh.positions[v as usize];
+                    let nearest = boxes
+                        .iter()
+                        .map(|b| b.distance_squared(&p))
+                        .fold(f64::INFINITY, f64::min)
+                        .sqrt();
+                    if nearest > slack {
+                        outside += 1;
+                        worst = worst.max(nearest);
+                    }
+                }
+                (outside, worst)
+            })
+            .collect();
+        Enclosure {
+            samples: 3 * mesh.triangles.len(),
+            outside: per_triangle.iter().map(|t| t.0).sum(),
+            worst_mm: per_triangle.iter().map(|t| t.1).fold(0.0, f64::max),
+        }
+    }
+
+    /// The boxes of each of `faces` faces.
+    fn boxes_by_face(&self, faces: usize) -> Vec<Vec<&Aabb>> {
+        let mut by_face: Vec<Vec<&Aabb>> = vec![Vec::new(); faces];
+        for p in &self.patches {
+            if let Some(list) = by_face.get_mut(p.face) {
+                list.push(&p.bounds);
+            }
+        }
+        by_face
     }
 
     /// The boxes, in patch order.
@@ -134,21 +211,18 @@ impl HullBoxes {
         self.boxes().fold(Aabb::empty(), |a, b| a.merge(b))
     }
 
-    /// Checks that the boxes enclose the surfaces: each face's surface evaluated on its own
+    /// Checks that the boxes enclose the untrimmed faces' surfaces: each evaluated on its own
     /// (de Boor, or the generatrix turned about its axis) at a grid of parameters, about
     /// `density` points per patch side, every point turned into the boxes' frame and looked
     /// for in the boxes of its face (with a round-off slack of 1e-9 of the part's size).
+    /// Trimmed faces are left to [`HullBoxes::mesh_enclosure`].
     pub fn enclosure(&self, faces: &[Face], density: usize) -> Enclosure {
-        let mut by_face: Vec<Vec<&Aabb>> = vec![Vec::new(); faces.len()];
-        for p in &self.patches {
-            if let Some(list) = by_face.get_mut(p.face) {
-                list.push(&p.bounds);
-            }
-        }
+        let by_face = self.boxes_by_face(faces.len());
         let slack = 1e-9 * self.bounds().diagonal().max(1.0);
         let per_face: Vec<(usize, usize, f64)> = faces
             .par_iter()
             .zip(&by_face)
+            .filter(|(face, _)| face.outer.is_none() && face.holes.is_empty())
             .map(|(face, boxes)| {
                 let ((u0, u1), (v0, v1)) = face.surface.domain();
                 let side = density.max(1) * (boxes.len() as f64).sqrt().ceil().max(1.0) as usize;
@@ -179,6 +253,114 @@ impl HullBoxes {
             worst_mm: per_face.iter().map(|f| f.2).fold(0.0, f64::max),
         }
     }
+}
+
+/// A face's trimmed region in its parameter plane, as sampled loops, and how far a loop may
+/// stand off its samples.
+struct TrimRegion {
+    outer: Option<Vec<Point2<f64>>>,
+    holes: Vec<Vec<Point2<f64>>>,
+    /// The longest chord between two samples: a rectangle grown by it cannot miss a loop
+    /// that bends between samples by less than that.
+    margin: f64,
+}
+
+/// Samples per curve piece of a trim loop.
+const TRIM_SAMPLES: usize = 16;
+
+impl TrimRegion {
+    /// `None` for a face that is its whole surface.
+    fn of(face: &Face) -> Option<TrimRegion> {
+        if face.outer.is_none() && face.holes.is_empty() {
+            return None;
+        }
+        let polygon = |c: &Curve| -> Vec<Point2<f64>> {
+            c.sample(TRIM_SAMPLES)
+                .into_iter()
+                .map(|p| Point2::new(p.x, p.y))
+                .collect()
+        };
+        let outer = face.outer.as_ref().map(polygon);
+        let holes: Vec<Vec<Point2<f64>>> = face.holes.iter().map(polygon).collect();
+        let margin = outer
+            .iter()
+            .chain(&holes)
+            .flat_map(|l| l.windows(2).map(|w| (w[1] - w[0]).norm()))
+            .fold(0.0, f64::max);
+        Some(TrimRegion {
+            outer,
+            holes,
+            margin,
+        })
+    }
+
+    /// Whether the rectangle `u × v`, grown by the margin, may hold a point of the region:
+    /// it meets the outer loop or lies inside it, and is not wholly inside a hole.
+    fn meets(&self, u: (f64, f64), v: (f64, f64)) -> bool {
+        let lo = Point2::new(u.0.min(u.1) - self.margin, v.0.min(v.1) - self.margin);
+        let hi = Point2::new(u.0.max(u.1) + self.margin, v.0.max(v.1) + self.margin);
+        let centre = nalgebra::center(&lo, &hi);
+        let crosses = |l: &[Point2<f64>]| {
+            l.windows(2).any(|w| segment_meets_box(w[0], w[1], lo, hi))
+                || l.first()
+                    .is_some_and(|p| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y)
+        };
+        let in_outer = match &self.outer {
+            Some(l) => crosses(l) || inside_polygon(l, centre),
+            None => true,
+        };
+        in_outer
+            && !self
+                .holes
+                .iter()
+                .any(|h| !crosses(h) && inside_polygon(h, centre))
+    }
+}
+
+/// Liang–Barsky: whether the segment has a point in the closed box `lo`–`hi`.
+fn segment_meets_box(a: Point2<f64>, b: Point2<f64>, lo: Point2<f64>, hi: Point2<f64>) -> bool {
+    let d = b - a;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-d.x, a.x - lo.x),
+        (d.x, hi.x - a.x),
+        (-d.y, a.y - lo.y),
+        (d.y, hi.y - a.y),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return false;
+            }
+        } else {
+            let t = q / p;
+            if p < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+            if t0 > t1 {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Even–odd test of `p` against the closed polyline `loop_` (its last point may repeat the
+/// first).
+fn inside_polygon(loop_: &[Point2<f64>], p: Point2<f64>) -> bool {
+    let n = loop_.len();
+    let mut inside = false;
+    for k in 0..n {
+        let (a, b) = (loop_[k], loop_[(k + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if p.x < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
 }
 
 /// The Bézier patches of a surface in the file's frame.

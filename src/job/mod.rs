@@ -80,8 +80,8 @@ pub use plan_roughing::{
 };
 pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use rough::{
-    HullBoxesReport, LayerBound, RoughOptions, RoughOutput, RoughReport, RoughToolRun, rough,
-    write_rough_outputs,
+    HullBoxesReport, LayerBound, PartSurfaces, RoughOptions, RoughOutput, RoughReport,
+    RoughToolRun, rough, write_rough_outputs,
 };
 pub use rough_boxes::{RoughBoxesOptions, SlicingRow, rough_boxes, rougher_assembly};
 pub use samples::{SamplePart, sample_files};

@@ -93,7 +93,25 @@ pub enum LayerBound {
     Part,
     /// Seed 002's convex-hull boxes of the Bézier patches of these faces (the part's, as read
     /// from IGES, in the file's frame), each grown by the allowance.
-    HullBoxes(std::sync::Arc<Vec<crate::cad::iges::Face>>),
+    HullBoxes {
+        surfaces: std::sync::Arc<PartSurfaces>,
+        /// Boxes wider than this are split before the layers, mm; `f64::INFINITY`: only the
+        /// seed's splits for thick layers.
+        max_box_width: f64,
+        /// How the planes at the box tops become layers.
+        merge: crate::rough::boxes::LayerMerge,
+    },
+}
+
+/// The faces of a part read from IGES beside the mesh `rough` is given (their tessellation,
+/// its triangles in the same order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartSurfaces {
+    pub faces: Vec<crate::cad::iges::Face>,
+    /// The face of each triangle of the part's mesh.
+    pub face_of_triangle: Vec<u32>,
+    /// The tessellation's chord tolerance, mm.
+    pub tolerance: f64,
 }
 
 impl LayerBound {
@@ -102,7 +120,7 @@ impl LayerBound {
         match self {
             LayerBound::OffsetShape => "offset-shape",
             LayerBound::Part => "part",
-            LayerBound::HullBoxes(_) => "hull-boxes",
+            LayerBound::HullBoxes { .. } => "hull-boxes",
         }
     }
 }
@@ -111,10 +129,16 @@ impl LayerBound {
 #[derive(Clone, Debug, Serialize)]
 pub struct HullBoxesReport {
     pub faces: usize,
-    /// Bézier patches of the surfaces (before any split for the layers).
+    /// Bézier patches of the surfaces kept (before any split for the layers), and those left
+    /// out as wholly outside their faces' trims.
     pub patches: usize,
-    /// Points of the surfaces, evaluated on their own, each found in a box of its face.
+    pub trimmed_away: usize,
+    /// Points of the untrimmed faces' surfaces, evaluated on their own, each found in a box
+    /// of its face.
     pub enclosure: crate::cad::boxes::Enclosure,
+    /// Every vertex of the part's tessellation found within twice its tolerance of a box of
+    /// its face.
+    pub mesh_enclosure: crate::cad::boxes::Enclosure,
 }
 
 impl Default for RoughOptions {
@@ -311,21 +335,38 @@ pub fn rough(
             (Some(shape), None)
         }
         LayerBound::Part => (Some(part.clone()), None),
-        LayerBound::HullBoxes(faces) => {
+        LayerBound::HullBoxes { surfaces, .. } => {
+            let faces = &surfaces.faces;
             let boxes = crate::cad::boxes::HullBoxes::of_faces(faces, frame)
                 .map_err(|e| Error::Usage(format!("{part_name}: convex-hull boxes: {e}")))?;
-            let enclosure = boxes.enclosure(faces, 4);
-            if enclosure.outside > 0 {
+            if surfaces.face_of_triangle.len() != raw.mesh.triangles.len() {
                 return Err(Error::Internal(format!(
-                    "{part_name}: {} of {} surface points lie outside their face's \
-                     convex-hull boxes, the farthest by {:.3e} mm",
-                    enclosure.outside, enclosure.samples, enclosure.worst_mm
+                    "{part_name}: {} triangles named by face for a mesh of {}",
+                    surfaces.face_of_triangle.len(),
+                    raw.mesh.triangles.len()
                 )));
+            }
+            let enclosure = boxes.enclosure(faces, 4);
+            let mesh_enclosure = boxes.mesh_enclosure(
+                &raw.mesh,
+                &surfaces.face_of_triangle,
+                2.0 * surfaces.tolerance,
+            );
+            for (what, e) in [("surface", &enclosure), ("mesh", &mesh_enclosure)] {
+                if e.outside > 0 {
+                    return Err(Error::Internal(format!(
+                        "{part_name}: {} of {} {what} points lie outside their face's \
+                         convex-hull boxes, the farthest by {:.3e} mm",
+                        e.outside, e.samples, e.worst_mm
+                    )));
+                }
             }
             let report = HullBoxesReport {
                 faces: faces.len(),
                 patches: boxes.patches.len(),
+                trimmed_away: boxes.trimmed_away,
                 enclosure,
+                mesh_enclosure,
             };
             (None, Some((boxes, report)))
         }
@@ -335,6 +376,14 @@ pub fn rough(
         (None, Some((boxes, _))) => crate::rough::Guard::HullBoxes {
             boxes,
             allowance: options.allowance,
+            max_box_width: match &options.bound {
+                LayerBound::HullBoxes { max_box_width, .. } => *max_box_width,
+                _ => f64::INFINITY,
+            },
+            merge: match &options.bound {
+                LayerBound::HullBoxes { merge, .. } => *merge,
+                _ => Default::default(),
+            },
         },
         (None, None) => return Err(Error::Internal("roughing has nothing to stop at".into())),
     };

@@ -15,8 +15,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::blank::BlankSpec;
-use super::rough::{LayerBound, RoughOptions, RoughOutput, RoughReport, rough};
-use crate::cad::iges::Face;
+use super::rough::{LayerBound, PartSurfaces, RoughOptions, RoughOutput, RoughReport, rough};
 use crate::error::{Error, Result};
 use crate::mesh::io::RawMesh;
 use crate::tool::{Cutter, Section, ToolAssembly, ToolLibrary};
@@ -33,6 +32,11 @@ pub struct RoughBoxesOptions {
     /// Length out of the holder, mm; `None`: enough to reach the part's floor with the holder
     /// above the blank ([`rougher_assembly`]).
     pub stickout: Option<f64>,
+    /// Boxes wider than this are split before the layers, mm; `f64::INFINITY`: the seed's
+    /// model, split only where a layer is too thick.
+    pub max_box_width: f64,
+    /// How the planes at the box tops become layers.
+    pub merge: crate::rough::boxes::LayerMerge,
     /// Also plan equal layers down to the part's own sections with the same tool, and compare.
     pub compare_uniform: bool,
 }
@@ -116,11 +120,11 @@ pub fn rougher_assembly(cutter: Cutter, stickout: Option<f64>, depth: f64) -> To
 }
 
 /// Plans, posts, reads back and checks seed 002's roughing of the part `raw` (the
-/// tessellation of `faces`, both in the file's frame, in mm), and with `compare_uniform`
+/// tessellation of `surfaces`, both in the file's frame, in mm), and with `compare_uniform`
 /// the uniform route beside it (its figures in the report's `comparison`).
 pub fn rough_boxes(
     raw: &RawMesh,
-    faces: Arc<Vec<Face>>,
+    surfaces: Arc<PartSurfaces>,
     part_name: &str,
     units: &str,
     options: &RoughBoxesOptions,
@@ -172,7 +176,11 @@ pub fn rough_boxes(
     let boxes_options = RoughOptions {
         tool_id: Some(1),
         rest_tools: 0,
-        bound: LayerBound::HullBoxes(faces),
+        bound: LayerBound::HullBoxes {
+            surfaces,
+            max_box_width: options.max_box_width,
+            merge: options.merge,
+        },
         ..options.rough.clone()
     };
     let mut output = rough(raw, part_name, units, &library, &boxes_options)?;

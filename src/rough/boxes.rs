@@ -62,9 +62,27 @@ pub fn box_layers(
     stock_top: f64,
     bottom: f64,
     options: &LayerOptions,
+    max_box_width: f64,
+    merge: LayerMerge,
 ) -> BoxLayers {
     let mut patches: Vec<HullPatch> = model.patches.clone();
     let mut splits = 0;
+    // Boxes wider than asked are split first: a tighter model, whatever the layers.
+    loop {
+        let chosen: Vec<bool> = patches
+            .iter()
+            .map(|p| {
+                let e = p.bounds.extent();
+                p.splits < MAX_SPLITS && e.x.max(e.y) > max_box_width
+            })
+            .collect();
+        let count = chosen.iter().filter(|&&c| c).count();
+        if count == 0 || patches.len() + 3 * count > MAX_PATCHES {
+            break;
+        }
+        patches = split_chosen(&patches, &chosen);
+        splits += count;
+    }
     let top_of = |p: &HullPatch| p.bounds.max.z + allowance;
     let low_of = |p: &HullPatch| p.bounds.min.z - allowance;
     let planes_of = |patches: &[HullPatch]| {
@@ -108,22 +126,16 @@ pub fn box_layers(
         if count == 0 || patches.len() + 3 * count > MAX_PATCHES {
             break;
         }
-        patches = patches
-            .par_iter()
-            .zip(&chosen)
-            .flat_map_iter(|(p, &split)| {
-                if split {
-                    p.split().to_vec()
-                } else {
-                    vec![p.clone()]
-                }
-            })
-            .collect();
+        patches = split_chosen(&patches, &chosen);
         splits += count;
     }
     let planes = planes_of(&patches);
     let even_slabs = thick_slabs(&planes).len();
     let planes_at_box_tops = planes.len() - 2;
+    let planes = match merge {
+        LayerMerge::Upward => planes,
+        LayerMerge::Deepest => deepest_steps(&planes, stock_top, bottom, options),
+    };
     let marked: Vec<(f64, bool)> = planes
         .into_iter()
         .filter(|&z| z < stock_top)
@@ -145,6 +157,57 @@ pub fn box_layers(
         },
         layers,
     }
+}
+
+/// How the planes at the box tops become layers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LayerMerge {
+    /// The seed's rule: a layer thinner than the minimum is merged with the one above until
+    /// it is not. With thousands of box tops (a real part), nearly every layer then ends up
+    /// just over the minimum depth.
+    #[default]
+    Upward,
+    /// From the top down, the deepest box top within the maximum depth (and at least the
+    /// minimum) below the layer above: every layer still at a box top, as few as the depths
+    /// allow.
+    Deepest,
+}
+
+/// From `stock_top` down, the lowest plane of `planes` (descending, `bottom` the last) in
+/// the window [above − max, above − min]; where the window holds none, the first plane
+/// below it (a slab the even split then divides). Descending, ending at `bottom`.
+fn deepest_steps(planes: &[f64], stock_top: f64, bottom: f64, options: &LayerOptions) -> Vec<f64> {
+    let mut kept = Vec::new();
+    let mut above = stock_top;
+    while above > bottom {
+        let (low, high) = (above - options.max_depth, above - options.min_depth);
+        let next = planes
+            .iter()
+            .copied()
+            .filter(|&z| z >= low && z <= high)
+            .reduce(f64::min)
+            .or_else(|| planes.iter().copied().find(|&z| z < low))
+            .unwrap_or(bottom);
+        kept.push(next);
+        above = next;
+    }
+    kept
+}
+
+/// The patches with the chosen ones replaced by their quarters, in order.
+fn split_chosen(patches: &[HullPatch], chosen: &[bool]) -> Vec<HullPatch> {
+    patches
+        .par_iter()
+        .zip(chosen)
+        .flat_map_iter(|(p, &split)| {
+            if split {
+                p.split().to_vec()
+            } else {
+                vec![p.clone()]
+            }
+        })
+        .collect()
 }
 
 /// What [`box_clearance`] found.
@@ -474,7 +537,15 @@ mod tests {
             flat_band: 0.1,
             flat_area: 1.0,
         };
-        let planned = box_layers(&model, 0.0, 16.0, 0.0, &options);
+        let planned = box_layers(
+            &model,
+            0.0,
+            16.0,
+            0.0,
+            &options,
+            f64::INFINITY,
+            LayerMerge::Upward,
+        );
         let zs: Vec<f64> = planned.layers.iter().map(|l| l.z).collect();
         let near = |a: &[f64], b: &[f64]| {
             a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9)
@@ -489,7 +560,15 @@ mod tests {
         assert_eq!(planned.summary.patches_after_splits, 16);
         assert_eq!(planned.boxes.len(), 16);
         options.min_depth = 5.0;
-        let merged = box_layers(&model, 0.0, 16.0, 0.0, &options);
+        let merged = box_layers(
+            &model,
+            0.0,
+            16.0,
+            0.0,
+            &options,
+            f64::INFINITY,
+            LayerMerge::Upward,
+        );
         let zs: Vec<f64> = merged.layers.iter().map(|l| l.z).collect();
         assert!(near(&zs, &[12.0, 8.0, 4.0, 0.0]), "{zs:?}");
         assert_eq!(
@@ -497,7 +576,15 @@ mod tests {
             [false, true, false, false]
         );
         // Grown by a 1 mm allowance, every box the layers keep out of is 1 mm wider.
-        let grown = box_layers(&model, 1.0, 16.0, 0.0, &options);
+        let grown = box_layers(
+            &model,
+            1.0,
+            16.0,
+            0.0,
+            &options,
+            f64::INFINITY,
+            LayerMerge::Upward,
+        );
         assert!(grown.boxes.iter().all(|b| b.min.y <= 4.0 && b.max.y >= 6.0));
     }
 

@@ -415,6 +415,10 @@ pub enum Guard<'a> {
     HullBoxes {
         boxes: &'a crate::cad::boxes::HullBoxes,
         allowance: f64,
+        /// Patches whose boxes are wider than this, mm, are split first (a tighter model
+        /// than the seed's, which splits only for the layers); `f64::INFINITY`: the seed's.
+        max_box_width: f64,
+        merge: boxes::LayerMerge,
     },
 }
 
@@ -452,7 +456,9 @@ pub fn rough_within(
     }
     let guard_bounds = match guard {
         Guard::Shape(shape) => shape.aabb(),
-        Guard::HullBoxes { boxes, allowance } => boxes.bounds().inflated(allowance),
+        Guard::HullBoxes {
+            boxes, allowance, ..
+        } => boxes.bounds().inflated(allowance),
     };
     if guard_bounds.is_empty() {
         return Err(RoughError::Blank(
@@ -478,8 +484,21 @@ pub fn rough_within(
             );
             (envelope, planned, None)
         }
-        Guard::HullBoxes { boxes, allowance } => {
-            let planned = boxes::box_layers(boxes, allowance, blank.top, bottom, &options.layers);
+        Guard::HullBoxes {
+            boxes,
+            allowance,
+            max_box_width,
+            merge,
+        } => {
+            let planned = boxes::box_layers(
+                boxes,
+                allowance,
+                blank.top,
+                bottom,
+                &options.layers,
+                max_box_width,
+                merge,
+            );
             let envelope = TopEnvelope::of_boxes(&planned.boxes, options.cell);
             let layers = planned.layers;
             let kept = BoxRoughing {

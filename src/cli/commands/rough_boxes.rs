@@ -32,6 +32,17 @@ pub struct RoughBoxesArgs {
     /// third of the largest].
     #[arg(long)]
     pub min_depth: Option<f64>,
+    /// Split every patch whose box is wider than this (in X or Y), mm, before the layers: a
+    /// tighter model that leaves less material [default: none, the seed's model, split only
+    /// where a layer is thicker than --max-depth].
+    #[arg(long, value_parser = positive)]
+    pub box_width: Option<f64>,
+    /// Take, from the top down, the deepest box top within --max-depth of the layer above
+    /// for each layer, instead of the seed's rule (a layer thinner than --min-depth merged
+    /// upward until it is not, which with thousands of box tops leaves layers of about the
+    /// minimum depth).
+    #[arg(long)]
+    pub deepest_layers: bool,
     /// Material left outside the boxes: every box is grown by this much, mm.
     #[arg(long, default_value_t = 0.0)]
     pub allowance: f64,
@@ -105,7 +116,11 @@ pub fn run(args: &RoughBoxesArgs) -> Result<()> {
     for w in &warnings {
         eprintln!("warning: {name}: {w}");
     }
-    let faces = Arc::new(part.model.faces.clone());
+    let surfaces = Arc::new(job::PartSurfaces {
+        faces: part.model.faces,
+        face_of_triangle: part.tessellation.face_of_triangle,
+        tolerance: args.tolerance,
+    });
     let raw = crate::mesh::io::RawMesh {
         mesh: part.tessellation.mesh,
         warnings,
@@ -133,18 +148,25 @@ pub fn run(args: &RoughBoxesArgs) -> Result<()> {
         },
         cutter,
         stickout: args.stickout,
+        max_box_width: args.box_width.unwrap_or(f64::INFINITY),
+        merge: if args.deepest_layers {
+            crate::rough::boxes::LayerMerge::Deepest
+        } else {
+            crate::rough::boxes::LayerMerge::Upward
+        },
         compare_uniform: args.compare,
     };
-    let output = job::rough_boxes(&raw, faces, &name, "mm", &options)?;
+    let output = job::rough_boxes(&raw, surfaces, &name, "mm", &options)?;
     job::write_rough_outputs(&args.out, &output, !args.no_timings)?;
     let r = &output.report;
     if let Some(boxes) = &r.hull_boxes {
         say!(
-            "{name}: {} faces, {} Bézier patches boxed; {} surface points checked, all inside \
-             their face's boxes",
+            "{name}: {} faces, {} Bézier patches boxed ({} left out, outside their trims); {} \
+             points of the surfaces and their mesh checked, all inside their face's boxes",
             boxes.faces,
             boxes.patches,
-            boxes.enclosure.samples
+            boxes.trimmed_away,
+            boxes.enclosure.samples + boxes.mesh_enclosure.samples
         );
     }
     for t in &r.tools {
