@@ -39,3 +39,48 @@ fn the_iges_impeller_plans_end_to_end_without_a_gouge() {
     let oracle = Oracle::new(&out.part.positions, &out.part.triangles, 4.0);
     posted_program_keeps_the_ball_within_the_tolerance(&out, &job, &oracle);
 }
+
+/// A job that roughs the IGES impeller to its convex-hull boxes (seed 002, the deepest box top
+/// per layer, boxes split to 6 mm) before finishing: the roughing's posted moves keep out of
+/// every box and off the part, and the stock run finds no gouge.
+#[test]
+#[ignore = "two minutes in a release build, beyond the CI budget: \
+            cargo test --release --test cad_plan -- --ignored"]
+fn the_iges_impeller_roughs_to_its_hull_boxes_in_a_job() {
+    let Some(dir) = testdata() else { return };
+    let path = dir.join("cad/impeller_solidworks__pyvista_pyiges.igs");
+    let text = "[part]\nup = [0.0, 0.0, -1.0]\n[stock]\nblank = \"cylinder\"\n\
+                [tool]\ndiameter = 6.0\nshank_diameter = 6.0\n\
+                [strategy]\nscallop_height = 2.0\nmax_step = 6.0\n\
+                [[operation]]\nkind = \"rough\"\nstock_to_leave = 0.5\nbound = \"hull-boxes\"\n\
+                box_width = 6.0\nbox_layers = \"deepest\"\n[[operation]]\nkind = \"finish\"\n";
+    let job = Job::from_toml(text, "job.toml").unwrap();
+    let (raw, surfaces) = job::load_part_with_surfaces(&path, "mm").unwrap();
+    assert!(surfaces.is_some());
+    let out = job::plan_with_surfaces(&raw, surfaces, "impeller.igs", "mm", &job, &Quiet).unwrap();
+    assert!(
+        out.verification_failure.is_none(),
+        "{:?}",
+        out.verification_failure
+    );
+    let report = serde_json::to_value(&out.report).unwrap();
+    let rough = &report["roughing"][0];
+    assert_eq!(rough["shape_triangles"], 0, "{rough}");
+    let boxes = &rough["overcut_vs_shape"];
+    assert!(boxes["overcuts"].as_array().unwrap().is_empty(), "{boxes}");
+    assert!(
+        boxes["min_clearance_mm"].as_f64().unwrap() > -1e-4,
+        "{boxes}"
+    );
+    assert!(
+        rough["overcut_vs_part"]["min_clearance_mm"]
+            .as_f64()
+            .unwrap()
+            > 0.4
+    );
+    // The same job on the part's mesh alone is refused at once, naming what is missing.
+    let err = job::plan(&raw, "impeller.stl", "mm", &job, &Quiet)
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("IGES"), "{err}");
+}

@@ -5,7 +5,7 @@
 //! surface — with no surface–plane intersection solved anywhere.
 //!
 //! * B-spline surfaces (128) become patches by knot insertion (seed 002 eq. 1–2,
-//!   [`NurbsSurface::bezier_patches`]).
+//!   [`super::nurbs::NurbsSurface::bezier_patches`]).
 //! * Surfaces of revolution (120) become patches exactly: each Bézier piece of the generatrix
 //!   swept by rational quadratic arcs of at most 90° (the standard NURBS circle), so a hub
 //!   turned by 360° is four patches per generatrix piece, not an approximation.

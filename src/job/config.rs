@@ -1019,6 +1019,36 @@ pub struct OperationSection {
     pub max_layers: Option<usize>,
     /// Channel roughing: `shroud-to-hub` or `offset`; default `roughing.channel_layering`.
     pub layering: Option<Layering>,
+    /// `rough` and `rest-rough`: what the layers stop at, `offset-shape` (default) or
+    /// `hull-boxes` (seed 002's convex-hull boxes of an IGES part's surfaces, grown by the
+    /// stock to leave).
+    pub bound: Option<RoughingBound>,
+    /// With `hull-boxes`: boxes wider than this are split before the layers, mm (default:
+    /// only the seed's splits for layers thicker than the maximum depth).
+    pub box_width: Option<f64>,
+    /// With `hull-boxes`: `upward` (the seed's merge of thin layers, default) or `deepest`
+    /// (the deepest box top within the maximum depth, layer by layer).
+    pub box_layers: Option<crate::rough::boxes::LayerMerge>,
+}
+
+/// What the layers of a roughing operation stop at.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RoughingBound {
+    /// The part's verified offset shape at the stock to leave.
+    #[default]
+    OffsetShape,
+    /// Seed 002's convex-hull boxes of the part's Bézier patches, grown by the stock to
+    /// leave: needs a part read from IGES.
+    HullBoxes,
+}
+
+/// How a `hull-boxes` roughing makes its boxes and layers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxBound {
+    /// Boxes wider than this are split first, mm (`f64::INFINITY`: the seed's model).
+    pub max_box_width: f64,
+    pub merge: crate::rough::boxes::LayerMerge,
 }
 
 /// One operation, every option resolved.
@@ -1037,6 +1067,8 @@ pub struct Operation {
     pub scallop_height: f64,
     /// Channel roughing's offset layers; `None` for every other kind.
     pub layers: Option<ChannelLayers>,
+    /// `rough` and `rest-rough` to the convex-hull boxes instead of the offset shape.
+    pub boxes: Option<BoxBound>,
 }
 
 /// The layers of a `channel-rough` operation.
@@ -1096,6 +1128,7 @@ impl Job {
             stock_to_leave: stock,
             scallop_height: scallop,
             layers: layers(kind, None, None, None),
+            boxes: None,
         };
         let operations: Vec<Operation> = if self.operations.is_empty() {
             // A near-net blank (the part grown, a casting's mesh) is taken as roughed.
@@ -1202,6 +1235,20 @@ impl Job {
                 if s.max_layers == Some(0) {
                     return Err(fail("max_layers must be at least 1"));
                 }
+                let boxed = s.bound == Some(RoughingBound::HullBoxes);
+                if boxed && !matches!(s.kind, OperationKind::Rough | OperationKind::RestRough) {
+                    return Err(fail(
+                        "bound = \"hull-boxes\" is for rough and rest-rough operations",
+                    ));
+                }
+                if !boxed && (s.box_width.is_some() || s.box_layers.is_some()) {
+                    return Err(fail(
+                        "box_width and box_layers set the boxes of bound = \"hull-boxes\" alone",
+                    ));
+                }
+                if s.box_width.is_some_and(|w| !(w.is_finite() && w > 0.0)) {
+                    return Err(fail("box_width must be a positive number of mm"));
+                }
                 listed.push(Operation {
                     name,
                     kind: s.kind,
@@ -1214,6 +1261,10 @@ impl Job {
                         _ => self.strategy.scallop_height,
                     }),
                     layers: layers(s.kind, s.step, s.max_layers, s.layering),
+                    boxes: boxed.then(|| BoxBound {
+                        max_box_width: s.box_width.unwrap_or(f64::INFINITY),
+                        merge: s.box_layers.unwrap_or_default(),
+                    }),
                 });
             }
             listed

@@ -276,7 +276,7 @@ pub fn plan_indexed_roughing(
         },
         tool,
         toolpath,
-        shape,
+        bound: super::plan_roughing::PlannedBound::Shape(shape),
     })
 }
 

@@ -53,10 +53,10 @@ pub use channel_rough::{
     ChannelLayerSummary, ChannelPlan, ChannelSummary, channel_rough, layer_allowances,
 };
 pub use config::{
-    ChannelLayers, CuttingSection, FeedSection, ImpellerSection, Job, JobError, Layering,
+    BoxBound, ChannelLayers, CuttingSection, FeedSection, ImpellerSection, Job, JobError, Layering,
     LimitsSection, MachineSection, NO_BLANK, Operation, OperationKind, OperationSection,
-    PartSection, RoughingSection, SafetySection, StockSection, StrategySection, ToolSection,
-    unit_direction,
+    PartSection, RoughingBound, RoughingSection, SafetySection, StockSection, StrategySection,
+    ToolSection, unit_direction,
 };
 pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,
@@ -72,8 +72,9 @@ pub use operation::InProcessStock;
 pub use output::{OutputKind, check_output_dir, write_atomically, write_output_set, write_outputs};
 pub use pipeline::{
     Observer, OperationDetails, OperationSpan, OperationTarget, PlanOutput, PlannedOperation,
-    Quiet, ToolChange, drive_surface, join_operations, load_part, plan, plan_operation,
-    post_program, post_program_with_tool_changes, program_header, stock_to_leave_shapes,
+    Quiet, ToolChange, drive_surface, join_operations, load_part, load_part_with_surfaces, plan,
+    plan_operation, plan_with_surfaces, post_program, post_program_with_tool_changes,
+    program_header, stock_to_leave_shapes,
 };
 pub use plan_roughing::{
     PlannedRoughing, RoughingContext, RoughingSummary, check_posted_roughing, plan_roughing,

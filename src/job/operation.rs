@@ -185,6 +185,52 @@ mod tests {
         assert_eq!(listed[1].library_tool, None);
     }
 
+    /// `bound = "hull-boxes"` sets a rough or rest-rough operation's boxes (the seed's model
+    /// by default); it and its keys are refused anywhere else.
+    #[test]
+    fn hull_box_roughing_is_a_bound_of_the_layer_operations() {
+        let ops = job("[stock]\nblank = \"cylinder\"\n[[operation]]\nkind = \"rough\"\n\
+             bound = \"hull-boxes\"\nbox_layers = \"deepest\"\n[[operation]]\nkind = \"rest-rough\"\n\
+             bound = \"hull-boxes\"\nbox_width = 4.0\n[[operation]]\nkind = \"finish\"\n")
+        .expect("job");
+        let boxes: Vec<Option<crate::job::config::BoxBound>> =
+            ops.iter().map(|o| o.boxes).collect();
+        use crate::rough::boxes::LayerMerge;
+        assert_eq!(
+            boxes,
+            vec![
+                Some(crate::job::config::BoxBound {
+                    max_box_width: f64::INFINITY,
+                    merge: LayerMerge::Deepest
+                }),
+                Some(crate::job::config::BoxBound {
+                    max_box_width: 4.0,
+                    merge: LayerMerge::Upward
+                }),
+                None,
+            ]
+        );
+        for (text, says) in [
+            (
+                "[[operation]]\nkind = \"semi-finish\"\nstock_to_leave = 0.3\nbound = \"hull-boxes\"\n",
+                "rough and rest-rough",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\nbox_width = 3.0\n",
+                "box_width and box_layers",
+            ),
+            (
+                "[[operation]]\nkind = \"rough\"\nbound = \"hull-boxes\"\nbox_width = -1.0\n",
+                "positive",
+            ),
+        ] {
+            let text =
+                format!("[stock]\nblank = \"cylinder\"\n{text}[[operation]]\nkind = \"finish\"\n");
+            let err = job(&text).expect_err(&text);
+            assert!(err.contains(says), "{text}: {err}");
+        }
+    }
+
     /// Channel roughing: after the end mills by `[roughing] channel`, or listed after a
     /// roughing operation, with its layers' step and count; refused anywhere it would have no
     /// stock model to find its material in, and its layer keys refused on other kinds.

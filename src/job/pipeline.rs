@@ -126,23 +126,43 @@ pub fn drive_surface<'a>(
 /// An IGES file (`.igs`, `.iges`) is tessellated at 0.01 mm into one welded mesh; its units
 /// are the file's own (its Global section), so `units` is not asked.
 pub fn load_part(path: &Path, units: &str) -> Result<RawMesh> {
+    load_part_with_surfaces(path, units).map(|(raw, _)| raw)
+}
+
+/// [`load_part`], and for an IGES file its surfaces beside the mesh (for `hull-boxes`
+/// roughing, [`plan_with_surfaces`]).
+pub fn load_part_with_surfaces(
+    path: &Path,
+    units: &str,
+) -> Result<(RawMesh, Option<std::sync::Arc<super::rough::PartSurfaces>>)> {
     let units: Units = units
         .parse()
         .map_err(|e| Error::Usage(format!("units of {}: {e}", path.display())))?;
     if super::is_iges(path) {
-        let mut raw = super::load_iges_part(path, &Default::default())?;
+        let options = crate::cad::tessellate::TessellateOptions::default();
+        let part = super::tessellate_iges(path, &options)?;
+        let mut warnings = super::tessellation_warnings(&part, &options);
         if units != Units::Millimetres {
-            raw.warnings.push(format!(
+            warnings.push(format!(
                 "units {units} not applied: an IGES file's Global section gives its own unit"
             ));
         }
-        return Ok(raw);
+        let surfaces = super::rough::PartSurfaces {
+            faces: part.model.faces,
+            face_of_triangle: part.tessellation.face_of_triangle,
+            tolerance: options.tolerance,
+        };
+        let raw = RawMesh {
+            mesh: part.tessellation.mesh,
+            warnings,
+        };
+        return Ok((raw, Some(std::sync::Arc::new(surfaces))));
     }
     let mut raw = read_mesh(path, units)?;
     if let Some(warning) = units_warning(&raw.mesh, units) {
         raw.warnings.push(warning);
     }
-    Ok(raw)
+    Ok((raw, None))
 }
 
 /// A warning when the part read in `units` has a size those units make implausible while
@@ -420,8 +440,30 @@ pub fn plan(
     job: &Job,
     observer: &dyn Observer,
 ) -> Result<PlanOutput> {
+    plan_with_surfaces(raw, None, part_name, units, job, observer)
+}
+
+/// [`plan`] of a part read from IGES, with its surfaces beside its mesh: what `hull-boxes`
+/// roughing operations box (`raw` is their tessellation, in the file's frame).
+pub fn plan_with_surfaces(
+    raw: &RawMesh,
+    surfaces: Option<std::sync::Arc<super::rough::PartSurfaces>>,
+    part_name: &str,
+    units: &str,
+    job: &Job,
+    observer: &dyn Observer,
+) -> Result<PlanOutput> {
     job.validate()?;
     let operations = job.operations()?;
+    if surfaces.is_none()
+        && let Some(boxed) = operations.iter().find(|op| op.boxes.is_some())
+    {
+        return Err(Error::JobFile(JobError::Operations(format!(
+            "operation '{}': bound = \"hull-boxes\" boxes the part's surfaces, and {part_name} \
+             is a mesh: plan a part read from IGES (.igs, .iges)",
+            boxed.name
+        ))));
+    }
     let started = Instant::now();
     let mut timings = StageTimings::default();
 
@@ -508,6 +550,7 @@ pub fn plan(
                     units,
                     job,
                     prepared.table_z,
+                    surfaces.clone(),
                 )?),
             };
             let mut rough = if operation.kind == OperationKind::IndexedRough {

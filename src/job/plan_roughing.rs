@@ -24,6 +24,7 @@ use crate::error::{Error, JobError, Result};
 use crate::feed::{Cutter as FeedCutter, CuttingModel, FeedReport, control_feeds};
 use crate::geom::{Move, MoveKind, Point3, Toolpath};
 use crate::mesh::Mesh;
+use crate::rough::boxes::box_clearance;
 use crate::rough::check::{OvercutReport, overcuts};
 use crate::rough::{LayerReport, NotReached, RoughingFeeds, RoughingTool};
 use crate::stock::clearance::MaterialClearance;
@@ -89,8 +90,16 @@ pub struct SetupSummary {
 pub struct PlannedRoughing {
     pub tool: ToolAssembly,
     pub toolpath: Toolpath,
-    pub shape: Mesh,
+    /// What the layers stopped at: the offset shape, or the convex-hull boxes.
+    pub bound: PlannedBound,
     pub summary: RoughingSummary,
+}
+
+/// What a roughing operation's layers stopped at, for the check of the posted program.
+pub enum PlannedBound {
+    Shape(Mesh),
+    /// Every box after the splits, grown by the stock to leave (part frame).
+    Boxes(Vec<crate::geom::Aabb>),
 }
 
 /// What the roughing operations of a plan share: the blank as layers and as a planning
@@ -101,6 +110,9 @@ pub struct RoughingContext {
     pub(super) stock: Stock,
     floor: f64,
     shapes: Vec<(f64, Mesh)>,
+    /// An IGES part's surfaces, for `hull-boxes` roughing, and their boxes once built.
+    surfaces: Option<std::sync::Arc<super::rough::PartSurfaces>>,
+    hull_boxes: Option<crate::cad::boxes::HullBoxes>,
     previous_diameter: Option<f64>,
     /// The end mill of the last roughing operation (what indexed setups cut with).
     pub(super) previous_tool: Option<ToolAssembly>,
@@ -109,7 +121,13 @@ pub struct RoughingContext {
 impl RoughingContext {
     /// The blank of `job` around `part` (as planned, the table's top at `table_z`), the
     /// planning stock model and the library.
-    pub fn new(part: &Mesh, units: &str, job: &Job, table_z: f64) -> Result<Self> {
+    pub fn new(
+        part: &Mesh,
+        units: &str,
+        job: &Job,
+        table_z: f64,
+        surfaces: Option<std::sync::Arc<super::rough::PartSurfaces>>,
+    ) -> Result<Self> {
         let spec = job.stock.blank_spec()?.ok_or_else(|| {
             Error::JobFile(JobError::Operations(
                 "roughing clears a blank: name one in [stock] (e.g. blank = \"cylinder\")".into(),
@@ -130,9 +148,37 @@ impl RoughingContext {
             stock,
             floor,
             shapes: Vec::new(),
+            surfaces,
+            hull_boxes: None,
             previous_diameter: None,
             previous_tool: None,
         })
+    }
+
+    /// The convex-hull boxes of the part's surfaces in the plan's frame (the part turned by
+    /// `[part] up`), built once; an error naming the operation without surfaces.
+    fn hull_boxes(&mut self, job: &Job, operation: &str) -> Result<&crate::cad::boxes::HullBoxes> {
+        if self.hull_boxes.is_none() {
+            let surfaces = self.surfaces.as_ref().ok_or_else(|| {
+                Error::JobFile(JobError::Operations(format!(
+                    "operation '{operation}': bound = \"hull-boxes\" boxes the part's surfaces: \
+                     plan a part read from IGES (.igs, .iges)"
+                )))
+            })?;
+            let frame = job
+                .part
+                .up
+                .and_then(super::config::unit_direction)
+                .map_or_else(nalgebra::Rotation3::identity, |up| {
+                    super::setup::upright_rotation(&up)
+                });
+            let boxes = crate::cad::boxes::HullBoxes::of_faces(&surfaces.faces, frame)
+                .map_err(|e| Error::Usage(format!("convex-hull boxes: {e}")))?;
+            self.hull_boxes = Some(boxes);
+        }
+        self.hull_boxes
+            .as_ref()
+            .ok_or_else(|| Error::Internal("the convex-hull boxes were not built".into()))
     }
 
     /// The part's verified offset shape at `allowance`, built once per allowance.
@@ -199,34 +245,65 @@ pub fn plan_roughing(
             job.tool.assembly().describe()
         )));
     }
-    let shape = context.shape(part, operation.stock_to_leave)?;
+    let shape = match operation.boxes {
+        Some(_) => None,
+        None => Some(context.shape(part, operation.stock_to_leave)?),
+    };
     let feeds = RoughingFeeds {
         cut: job.roughing.cut_feed,
         entry: job.roughing.entry_feed,
         rapid: job.machine.rapid_feed,
     };
-    let planned = rough_with_tool(
-        crate::rough::Guard::Shape(&shape),
-        &context.blank,
-        &tool,
-        &ToolRoughing {
-            holder_margin: margin,
-            floor: context.floor,
-            feeds: &feeds,
-            tolerance: job.strategy.tolerance,
-            feed_control: job
-                .cutting
-                .model()
-                .map(|model| (model, f64::from(job.roughing.spindle_rpm))),
-            uniform_layers: false,
-            max_depth: None,
-            max_engagement: job.roughing.max_engagement,
-            paths: job.roughing.layer_paths,
-            min_depth: None,
-        },
-        &mut context.stock,
-        from_blank,
-    )
+    let how = ToolRoughing {
+        holder_margin: margin,
+        floor: context.floor,
+        feeds: &feeds,
+        tolerance: job.strategy.tolerance,
+        feed_control: job
+            .cutting
+            .model()
+            .map(|model| (model, f64::from(job.roughing.spindle_rpm))),
+        uniform_layers: false,
+        max_depth: None,
+        max_engagement: job.roughing.max_engagement,
+        paths: job.roughing.layer_paths,
+        min_depth: None,
+    };
+    let planned = match (&shape, operation.boxes) {
+        (Some(shape), _) => rough_with_tool(
+            crate::rough::Guard::Shape(shape),
+            &context.blank,
+            &tool,
+            &how,
+            &mut context.stock,
+            from_blank,
+        ),
+        (None, Some(bound)) => {
+            // The boxes are borrowed from the context while its stock is cut: build them
+            // first, then take them out for the call and put them back.
+            context.hull_boxes(job, &operation.name)?;
+            let boxes = context
+                .hull_boxes
+                .take()
+                .ok_or_else(|| Error::Internal("the convex-hull boxes were not built".into()))?;
+            let planned = rough_with_tool(
+                crate::rough::Guard::HullBoxes {
+                    boxes: &boxes,
+                    allowance: operation.stock_to_leave,
+                    max_box_width: bound.max_box_width,
+                    merge: bound.merge,
+                },
+                &context.blank,
+                &tool,
+                &how,
+                &mut context.stock,
+                from_blank,
+            );
+            context.hull_boxes = Some(boxes);
+            planned
+        }
+        (None, None) => return Err(Error::Internal("roughing has nothing to stop at".into())),
+    }
     .map_err(|e| fail(format!("roughing with T{}: {e}", tool.id)))?;
     if from_blank && !planned.cuts() {
         return Err(Error::NothingToCut(format!(
@@ -255,7 +332,7 @@ pub fn plan_roughing(
             material: if from_blank { "blank" } else { "rest" },
             feed_control,
             stock_to_leave_mm: operation.stock_to_leave,
-            shape_triangles: shape.triangles.len(),
+            shape_triangles: shape.as_ref().map_or(0, |s| s.triangles.len()),
             layers: roughing.layers,
             not_reached: roughing.not_reached,
             moves,
@@ -266,7 +343,13 @@ pub fn plan_roughing(
         },
         tool,
         toolpath,
-        shape,
+        bound: match (shape, roughing.hull_boxes) {
+            (Some(shape), _) => PlannedBound::Shape(shape),
+            (None, Some(planned)) => PlannedBound::Boxes(planned.boxes),
+            (None, None) => {
+                return Err(Error::Internal("box roughing returned no boxes".into()));
+            }
+        },
     })
 }
 
@@ -559,7 +642,30 @@ pub fn check_posted_roughing(
                     })
                     .collect(),
             };
-            for (report, mesh) in [(&mut shape, &planned.shape), (&mut against_part, part)] {
+            let mut checks: Vec<(&mut OvercutReport, &Mesh)> = vec![(&mut against_part, part)];
+            match &planned.bound {
+                PlannedBound::Shape(mesh) => checks.push((&mut shape, mesh)),
+                PlannedBound::Boxes(boxes) => {
+                    // Boxes are axis-aligned in the part's frame: the layers they bound run
+                    // along +Z only.
+                    if (axis.into_inner() - crate::geom::Vector3::z()).norm() > 1e-9 {
+                        problems.push(format!(
+                            "{label}: read-back move {start} tilts the axis of a convex-hull-box \
+                             roughing"
+                        ));
+                    }
+                    let found = box_clearance(&run, boxes, radius, rounding, 5.0);
+                    shape.moves_checked += found.moves;
+                    shape.min_clearance_mm = shape.min_clearance_mm.min(found.min_clearance_mm);
+                    shape.overcuts.extend(found.violations.iter().map(|v| {
+                        crate::rough::check::Overcut {
+                            move_index: v.move_index + start,
+                            depth_mm: v.depth_mm,
+                        }
+                    }));
+                }
+            }
+            for (report, mesh) in checks {
                 let found = overcuts(&turned(mesh), &run, radius, rounding);
                 report.moves_checked += found.moves_checked;
                 report.min_clearance_mm = report.min_clearance_mm.min(found.min_clearance_mm);
@@ -572,7 +678,11 @@ pub fn check_posted_roughing(
             }
             start = end;
         }
-        for (what, report) in [("its offset shape", &shape), ("the part", &against_part)] {
+        let bound_name = match planned.bound {
+            PlannedBound::Shape(_) => "its offset shape",
+            PlannedBound::Boxes(_) => "its convex-hull boxes",
+        };
+        for (what, report) in [(bound_name, &shape), ("the part", &against_part)] {
             if let Some(o) = report.overcuts.first() {
                 problems.push(format!(
                     "{label}: {} posted move(s) into {what}, the first by {:.4} mm",

@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use crate::cli::set_tool;
 use crate::cli::values::*;
-use crate::cli::{load, set_tool};
 use crate::error::{Error, Result};
 use crate::job::{self, Job};
 
@@ -116,10 +116,13 @@ pub fn run(args: &PlanArgs) -> Result<()> {
         .num_threads(threads)
         .build()?;
     let name = part_path.display().to_string();
-    let raw = load(&part_path, &units)?;
+    let (raw, surfaces) = job::load_part_with_surfaces(&part_path, &units)?;
+    for w in &raw.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
     let observer = super::super::progress::Bars::new();
     let output = pool
-        .install(|| job::plan(&raw, &name, &units, &job, &observer))
+        .install(|| job::plan_with_surfaces(&raw, surfaces, &name, &units, &job, &observer))
         .map_err(|e| {
             // The drive-point limit is named by its flag whether or not it was given.
             let mut run_flags = flags.clone();
