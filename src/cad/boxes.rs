@@ -169,12 +169,7 @@ impl HullBoxes {
                 let boxes = by_face.get(face as usize).map_or(&[][..], |b| &b[..]);
                 let (mut outside, mut worst) = (0, 0.0f64);
                 for &v in t {
-                    let p = self.frame * mesh.positions[v as usize];
-                    let nearest = boxes
-                        .iter()
-                        .map(|b| b.distance_squared(&p))
-                        .fold(f64::INFINITY, f64::min)
-                        .sqrt();
+                    let nearest = nearest_box(boxes, &(self.frame * mesh.positions[v as usize]));
                     if nearest > slack {
                         outside += 1;
                         worst = worst.max(nearest);
@@ -232,12 +227,7 @@ impl HullBoxes {
                     for j in 0..=n {
                         let u = u0 + (u1 - u0) * i as f64 / n as f64;
                         let v = v0 + (v1 - v0) * j as f64 / n as f64;
-                        let p = self.frame * face.surface.point(u, v);
-                        let nearest = boxes
-                            .iter()
-                            .map(|b| b.distance_squared(&p))
-                            .fold(f64::INFINITY, f64::min)
-                            .sqrt();
+                        let nearest = nearest_box(boxes, &(self.frame * face.surface.point(u, v)));
                         if nearest > slack {
                             outside += 1;
                             worst = worst.max(nearest);
@@ -253,6 +243,15 @@ impl HullBoxes {
             worst_mm: per_face.iter().map(|f| f.2).fold(0.0, f64::max),
         }
     }
+}
+
+/// The distance from `p` to the nearest of `boxes` (0 inside one, ∞ for none).
+fn nearest_box(boxes: &[&Aabb], p: &Point3) -> f64 {
+    boxes
+        .iter()
+        .map(|b| b.distance_squared(p))
+        .fold(f64::INFINITY, f64::min)
+        .sqrt()
 }
 
 /// A face's trimmed region in its parameter plane, as sampled loops, and how far a loop may
@@ -300,8 +299,9 @@ impl TrimRegion {
         let lo = Point2::new(u.0.min(u.1) - self.margin, v.0.min(v.1) - self.margin);
         let hi = Point2::new(u.0.max(u.1) + self.margin, v.0.max(v.1) + self.margin);
         let centre = nalgebra::center(&lo, &hi);
+        let square = crate::geom::Aabb2 { min: lo, max: hi };
         let crosses = |l: &[Point2<f64>]| {
-            l.windows(2).any(|w| segment_meets_box(w[0], w[1], lo, hi))
+            l.windows(2).any(|w| square.meets_segment(w[0], w[1]))
                 || l.first()
                     .is_some_and(|p| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y)
         };
@@ -315,35 +315,6 @@ impl TrimRegion {
                 .iter()
                 .any(|h| !crosses(h) && inside_polygon(h, centre))
     }
-}
-
-/// Liang–Barsky: whether the segment has a point in the closed box `lo`–`hi`.
-fn segment_meets_box(a: Point2<f64>, b: Point2<f64>, lo: Point2<f64>, hi: Point2<f64>) -> bool {
-    let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [
-        (-d.x, a.x - lo.x),
-        (d.x, hi.x - a.x),
-        (-d.y, a.y - lo.y),
-        (d.y, hi.y - a.y),
-    ] {
-        if p == 0.0 {
-            if q < 0.0 {
-                return false;
-            }
-        } else {
-            let t = q / p;
-            if p < 0.0 {
-                t0 = t0.max(t);
-            } else {
-                t1 = t1.min(t);
-            }
-            if t0 > t1 {
-                return false;
-            }
-        }
-    }
-    true
 }
 
 /// Even–odd test of `p` against the closed polyline `loop_` (its last point may repeat the

@@ -141,6 +141,35 @@ impl Aabb2 {
     pub fn center(&self) -> Point2 {
         nalgebra::center(&self.min, &self.max)
     }
+
+    /// Whether the segment `a`–`b` has a point in the closed box (Liang–Barsky clipping).
+    pub fn meets_segment(&self, a: Point2, b: Point2) -> bool {
+        let d = b - a;
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        for (p, q) in [
+            (-d.x, a.x - self.min.x),
+            (d.x, self.max.x - a.x),
+            (-d.y, a.y - self.min.y),
+            (d.y, self.max.y - a.y),
+        ] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return false;
+                }
+            } else {
+                let t = q / p;
+                if p < 0.0 {
+                    t0 = t0.max(t);
+                } else {
+                    t1 = t1.min(t);
+                }
+                if t0 > t1 {
+                    return false;
+                }
+            }
+        }
+        true
+    }
 }
 
 #[cfg(test)]

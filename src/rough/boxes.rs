@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use super::layers::{Layer, LayerOptions, merge_and_split};
 use crate::cad::boxes::{HullBoxes, HullPatch};
-use crate::geom::{Aabb, Point2, Toolpath};
+use crate::geom::{Aabb, Aabb2, Point2, Toolpath};
 
 /// How many times a patch of a surface's own decomposition may be split for the layers.
 pub const MAX_SPLITS: u8 = 6;
@@ -68,21 +68,10 @@ pub fn box_layers(
     let mut patches: Vec<HullPatch> = model.patches.clone();
     let mut splits = 0;
     // Boxes wider than asked are split first: a tighter model, whatever the layers.
-    loop {
-        let chosen: Vec<bool> = patches
-            .iter()
-            .map(|p| {
-                let e = p.bounds.extent();
-                p.splits < MAX_SPLITS && e.x.max(e.y) > max_box_width
-            })
-            .collect();
-        let count = chosen.iter().filter(|&&c| c).count();
-        if count == 0 || patches.len() + 3 * count > MAX_PATCHES {
-            break;
-        }
-        patches = split_chosen(&patches, &chosen);
-        splits += count;
-    }
+    while split_where(&mut patches, &mut splits, |p| {
+        let e = p.bounds.extent();
+        e.x.max(e.y) > max_box_width
+    }) {}
     let top_of = |p: &HullPatch| p.bounds.max.z + allowance;
     let low_of = |p: &HullPatch| p.bounds.min.z - allowance;
     let planes_of = |patches: &[HullPatch]| {
@@ -118,16 +107,9 @@ pub fn box_layers(
             let k = ascending.partition_point(|s| s.1 <= low);
             ascending.get(k).is_some_and(|s| s.0 < top)
         };
-        let chosen: Vec<bool> = patches
-            .iter()
-            .map(|p| p.splits < MAX_SPLITS && meets(p))
-            .collect();
-        let count = chosen.iter().filter(|&&c| c).count();
-        if count == 0 || patches.len() + 3 * count > MAX_PATCHES {
+        if !split_where(&mut patches, &mut splits, meets) {
             break;
         }
-        patches = split_chosen(&patches, &chosen);
-        splits += count;
     }
     let planes = planes_of(&patches);
     let even_slabs = thick_slabs(&planes).len();
@@ -195,11 +177,25 @@ fn deepest_steps(planes: &[f64], stock_top: f64, bottom: f64, options: &LayerOpt
     kept
 }
 
-/// The patches with the chosen ones replaced by their quarters, in order.
-fn split_chosen(patches: &[HullPatch], chosen: &[bool]) -> Vec<HullPatch> {
-    patches
+/// Replaces every patch `wanted` picks (and not yet split [`MAX_SPLITS`] times) by its
+/// quarters, in order, counting them in `splits`; false when none was picked or the patches
+/// would pass [`MAX_PATCHES`].
+fn split_where(
+    patches: &mut Vec<HullPatch>,
+    splits: &mut usize,
+    wanted: impl Fn(&HullPatch) -> bool,
+) -> bool {
+    let chosen: Vec<bool> = patches
+        .iter()
+        .map(|p| p.splits < MAX_SPLITS && wanted(p))
+        .collect();
+    let count = chosen.iter().filter(|&&c| c).count();
+    if count == 0 || patches.len() + 3 * count > MAX_PATCHES {
+        return false;
+    }
+    *patches = patches
         .par_iter()
-        .zip(chosen)
+        .zip(&chosen)
         .flat_map_iter(|(p, &split)| {
             if split {
                 p.split().to_vec()
@@ -207,7 +203,9 @@ fn split_chosen(patches: &[HullPatch], chosen: &[bool]) -> Vec<HullPatch> {
                 vec![p.clone()]
             }
         })
-        .collect()
+        .collect();
+    *splits += count;
+    true
 }
 
 /// What [`box_clearance`] found.
@@ -308,18 +306,14 @@ pub fn box_clearance(
 
 /// Distance between the segment `a`–`b` and the box's footprint (0 when they meet).
 fn segment_rectangle_distance(a: Point2, b: Point2, bx: &Aabb) -> f64 {
-    let (lo, hi) = (
-        Point2::new(bx.min.x, bx.min.y),
-        Point2::new(bx.max.x, bx.max.y),
-    );
-    if segment_meets_rectangle(a, b, lo, hi) {
+    let footprint = Aabb2 {
+        min: Point2::new(bx.min.x, bx.min.y),
+        max: Point2::new(bx.max.x, bx.max.y),
+    };
+    if footprint.meets_segment(a, b) {
         return 0.0;
     }
-    let to_rectangle = |p: Point2| {
-        let dx = (lo.x - p.x).max(p.x - hi.x).max(0.0);
-        let dy = (lo.y - p.y).max(p.y - hi.y).max(0.0);
-        dx.hypot(dy)
-    };
+    let (lo, hi) = (footprint.min, footprint.max);
     let to_segment = |p: Point2| {
         let d = b - a;
         let t = if d.norm_squared() > 0.0 {
@@ -330,8 +324,8 @@ fn segment_rectangle_distance(a: Point2, b: Point2, bx: &Aabb) -> f64 {
         (a + d * t - p).norm()
     };
     [
-        to_rectangle(a),
-        to_rectangle(b),
+        footprint.point_distance(a),
+        footprint.point_distance(b),
         to_segment(lo),
         to_segment(hi),
         to_segment(Point2::new(lo.x, hi.y)),
@@ -339,35 +333,6 @@ fn segment_rectangle_distance(a: Point2, b: Point2, bx: &Aabb) -> f64 {
     ]
     .into_iter()
     .fold(f64::INFINITY, f64::min)
-}
-
-/// Liang–Barsky: whether the segment has a point in the closed rectangle.
-fn segment_meets_rectangle(a: Point2, b: Point2, lo: Point2, hi: Point2) -> bool {
-    let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [
-        (-d.x, a.x - lo.x),
-        (d.x, hi.x - a.x),
-        (-d.y, a.y - lo.y),
-        (d.y, hi.y - a.y),
-    ] {
-        if p == 0.0 {
-            if q < 0.0 {
-                return false;
-            }
-        } else {
-            let t = q / p;
-            if p < 0.0 {
-                t0 = t0.max(t);
-            } else {
-                t1 = t1.min(t);
-            }
-            if t0 > t1 {
-                return false;
-            }
-        }
-    }
-    true
 }
 
 /// Boxes bucketed on a square grid over their footprints, each in every cell its footprint
