@@ -29,17 +29,7 @@ impl TopEnvelope {
     /// The envelope of `mesh` on cells of `cell` mm covering its footprint (one spare cell on
     /// each side, so the boundary of every non-empty region lies inside the grid).
     pub fn of_mesh(mesh: &Mesh, cell: f64) -> TopEnvelope {
-        let bounds = mesh.aabb();
-        let origin = Point2::new(bounds.min.x - cell, bounds.min.y - cell);
-        let width = ((bounds.max.x - origin.x) / cell).ceil() as usize + 2;
-        let height = ((bounds.max.y - origin.y) / cell).ceil() as usize + 2;
-        let mut envelope = TopEnvelope {
-            origin,
-            cell,
-            width,
-            height,
-            top: vec![f64::NEG_INFINITY; width * height],
-        };
+        let mut envelope = TopEnvelope::empty_over(&mesh.aabb(), cell);
         for t in 0..mesh.triangles.len() {
             envelope.add_triangle(&mesh.corners(t));
         }
@@ -58,16 +48,8 @@ impl TopEnvelope {
             .clone()
             .into_iter()
             .fold(Aabb::empty(), |a, b| a.merge(b));
-        let origin = Point2::new(bounds.min.x - cell, bounds.min.y - cell);
-        let width = ((bounds.max.x - origin.x) / cell).ceil().max(0.0) as usize + 2;
-        let height = ((bounds.max.y - origin.y) / cell).ceil().max(0.0) as usize + 2;
-        let mut envelope = TopEnvelope {
-            origin,
-            cell,
-            width,
-            height,
-            top: vec![f64::NEG_INFINITY; width * height],
-        };
+        let mut envelope = TopEnvelope::empty_over(&bounds, cell);
+        let width = envelope.width;
         for b in boxes {
             let (i0, j0) = envelope.index_of(b.min.x, b.min.y);
             let (i1, j1) = envelope.index_of(b.max.x, b.max.y);
@@ -78,6 +60,21 @@ impl TopEnvelope {
             }
         }
         envelope
+    }
+
+    /// Cells of `cell` mm over the footprint of `bounds` with one spare cell on each side (so
+    /// the boundary of every non-empty region lies inside the grid), all empty.
+    fn empty_over(bounds: &Aabb, cell: f64) -> TopEnvelope {
+        let origin = Point2::new(bounds.min.x - cell, bounds.min.y - cell);
+        let width = ((bounds.max.x - origin.x) / cell).ceil().max(0.0) as usize + 2;
+        let height = ((bounds.max.y - origin.y) / cell).ceil().max(0.0) as usize + 2;
+        TopEnvelope {
+            origin,
+            cell,
+            width,
+            height,
+            top: vec![f64::NEG_INFINITY; width * height],
+        }
     }
 
     /// Cell column and row of `p` (clamped to the grid).
