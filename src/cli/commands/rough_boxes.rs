@@ -94,6 +94,16 @@ pub fn run(args: &RoughBoxesArgs) -> Result<()> {
     }
     let cutter =
         crate::tool::parse_cutter(&args.tool).map_err(|e| Error::Usage(format!("--tool: {e}")))?;
+    if !matches!(
+        cutter,
+        crate::tool::Cutter::Flat { .. } | crate::tool::Cutter::BullNose { .. }
+    ) {
+        return Err(Error::Usage(format!(
+            "--tool {}: convex-hull-box roughing cuts with a flat or bull-nose end mill (flat:D \
+             or bull:D:R)",
+            args.tool
+        )));
+    }
     if !(args.allowance.is_finite() && args.allowance >= 0.0) {
         return Err(Error::Usage(format!(
             "--allowance {}: must be a length ≥ 0",
