@@ -93,8 +93,8 @@ impl SlicingRow {
 /// The tool a `rough-boxes` run cuts with: `cutter` as T1 with a shank of its diameter, in a
 /// shrink-fit holder (a nose cone from D + 12 to D + 20 mm over 40 mm, then a Ø50 mm body
 /// 40 mm long, or D + 30 for a cutter wider than 20 mm), sticking out `stickout` mm: by
-/// default `depth` (from the blank's top to the part's floor) plus the holder's 2 mm margin
-/// plus 5 mm, rounded up to 5 mm.
+/// default the longer of `depth` (from the blank's top to the part's floor) and the flutes,
+/// plus the holder's 2 mm margin and 5 mm, rounded up to 5 mm.
 pub fn rougher_assembly(cutter: Cutter, stickout: Option<f64>, depth: f64) -> ToolAssembly {
     let d = cutter.diameter();
     let stickout = stickout.unwrap_or_else(|| {

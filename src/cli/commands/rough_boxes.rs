@@ -20,8 +20,8 @@ pub struct RoughBoxesArgs {
     /// shrink-fit holder (nose cone D + 12 → D + 20 mm over 40 mm, then Ø50 × 40 mm).
     #[arg(long, value_name = "SPEC")]
     pub tool: String,
-    /// Length the tool sticks out of its holder, mm [default: the blank's height + 7, rounded
-    /// up to 5 mm].
+    /// Length the tool sticks out of its holder, mm [default: the longer of the blank's height
+    /// and the flutes, plus 7, rounded up to 5 mm].
     #[arg(long, value_parser = positive)]
     pub stickout: Option<f64>,
     /// Largest depth of cut, mm: thicker layers are split at the tops of de Casteljau halves
