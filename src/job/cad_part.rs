@@ -114,6 +114,17 @@ pub fn tessellation_warnings(part: &TessellatedPart, options: &TessellateOptions
     warnings
 }
 
+/// The faces of a part read from IGES beside the mesh the pipeline is given (their tessellation,
+/// its triangles in the same order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartSurfaces {
+    pub faces: Vec<crate::cad::iges::Face>,
+    /// The face of each triangle of the part's mesh.
+    pub face_of_triangle: Vec<u32>,
+    /// The tessellation's chord tolerance, mm.
+    pub tolerance: f64,
+}
+
 /// Reads and tessellates an IGES part into the raw mesh the pipeline takes, with warnings.
 pub fn load_iges_part(path: &Path, options: &TessellateOptions) -> Result<RawMesh> {
     let part = tessellate_iges(path, options)?;

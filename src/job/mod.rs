@@ -46,8 +46,8 @@ pub use access::{
 pub use blank::BlankSpec;
 pub use budget::ToleranceBudget;
 pub use cad_part::{
-    TessellateSummary, TessellatedPart, is_iges, load_iges_part, read_iges_file, tessellate_iges,
-    tessellate_summary, tessellation_warnings,
+    PartSurfaces, TessellateSummary, TessellatedPart, is_iges, load_iges_part, read_iges_file,
+    tessellate_iges, tessellate_summary, tessellation_warnings,
 };
 pub use channel_rough::{
     ChannelLayerSummary, ChannelPlan, ChannelSummary, channel_rough, layer_allowances,
@@ -81,10 +81,10 @@ pub use plan_roughing::{
 };
 pub use report::{PlanReport, PoseCounts, StageTimings};
 pub use rough::{
-    HullBoxesReport, LayerBound, PartSurfaces, RoughOptions, RoughOutput, RoughReport,
-    RoughToolRun, rough, write_rough_outputs,
+    HullBoxesReport, LayerBound, RoughOptions, RoughOutput, RoughReport, RoughToolRun, SlicingRow,
+    rough, write_rough_outputs,
 };
-pub use rough_boxes::{RoughBoxesOptions, SlicingRow, rough_boxes, rougher_assembly};
+pub use rough_boxes::{RoughBoxesOptions, rough_boxes, rougher_assembly};
 pub use samples::{SamplePart, sample_files};
 pub use semi_finish::{SemiFinishPlan, SemiFinishSummary, semi_finish_operation};
 pub use setup::{PlanSetup, PreparedPart, machine, posted_program_model, prepare_part};

@@ -134,7 +134,10 @@ pub fn load_part(path: &Path, units: &str) -> Result<RawMesh> {
 pub fn load_part_with_surfaces(
     path: &Path,
     units: &str,
-) -> Result<(RawMesh, Option<std::sync::Arc<super::rough::PartSurfaces>>)> {
+) -> Result<(
+    RawMesh,
+    Option<std::sync::Arc<super::cad_part::PartSurfaces>>,
+)> {
     let units: Units = units
         .parse()
         .map_err(|e| Error::Usage(format!("units of {}: {e}", path.display())))?;
@@ -147,7 +150,7 @@ pub fn load_part_with_surfaces(
                 "units {units} not applied: an IGES file's Global section gives its own unit"
             ));
         }
-        let surfaces = super::rough::PartSurfaces {
+        let surfaces = super::cad_part::PartSurfaces {
             faces: part.model.faces,
             face_of_triangle: part.tessellation.face_of_triangle,
             tolerance: options.tolerance,
@@ -447,7 +450,7 @@ pub fn plan(
 /// roughing operations box (`raw` is their tessellation, in the file's frame).
 pub fn plan_with_surfaces(
     raw: &RawMesh,
-    surfaces: Option<std::sync::Arc<super::rough::PartSurfaces>>,
+    surfaces: Option<std::sync::Arc<super::cad_part::PartSurfaces>>,
     part_name: &str,
     units: &str,
     job: &Job,

@@ -111,7 +111,7 @@ pub struct RoughingContext {
     floor: f64,
     shapes: Vec<(f64, Mesh)>,
     /// An IGES part's surfaces, for `hull-boxes` roughing, and their boxes once built.
-    surfaces: Option<std::sync::Arc<super::rough::PartSurfaces>>,
+    surfaces: Option<std::sync::Arc<super::cad_part::PartSurfaces>>,
     hull_boxes: Option<crate::cad::boxes::HullBoxes>,
     previous_diameter: Option<f64>,
     /// The end mill of the last roughing operation (what indexed setups cut with).
@@ -126,7 +126,7 @@ impl RoughingContext {
         units: &str,
         job: &Job,
         table_z: f64,
-        surfaces: Option<std::sync::Arc<super::rough::PartSurfaces>>,
+        surfaces: Option<std::sync::Arc<super::cad_part::PartSurfaces>>,
     ) -> Result<Self> {
         let spec = job.stock.blank_spec()?.ok_or_else(|| {
             Error::JobFile(JobError::Operations(

@@ -94,24 +94,13 @@ pub enum LayerBound {
     /// Seed 002's convex-hull boxes of the Bézier patches of these faces (the part's, as read
     /// from IGES, in the file's frame), each grown by the allowance.
     HullBoxes {
-        surfaces: std::sync::Arc<PartSurfaces>,
+        surfaces: std::sync::Arc<super::cad_part::PartSurfaces>,
         /// Boxes wider than this are split before the layers, mm; `f64::INFINITY`: only the
         /// seed's splits for thick layers.
         max_box_width: f64,
         /// How the planes at the box tops become layers.
         merge: crate::rough::boxes::LayerMerge,
     },
-}
-
-/// The faces of a part read from IGES beside the mesh `rough` is given (their tessellation,
-/// its triangles in the same order).
-#[derive(Clone, Debug, PartialEq)]
-pub struct PartSurfaces {
-    pub faces: Vec<crate::cad::iges::Face>,
-    /// The face of each triangle of the part's mesh.
-    pub face_of_triangle: Vec<u32>,
-    /// The tessellation's chord tolerance, mm.
-    pub tolerance: f64,
 }
 
 impl LayerBound {
@@ -256,8 +245,30 @@ pub struct RoughReport {
     pub volume_after_mm3: f64,
     /// `rough-boxes --compare`: the convex-hull-box route and the uniform one, side by side.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub comparison: Option<Vec<super::rough_boxes::SlicingRow>>,
+    pub comparison: Option<Vec<SlicingRow>>,
     pub timings_ms: Option<std::collections::BTreeMap<&'static str, f64>>,
+}
+
+/// One route of the comparison.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SlicingRow {
+    /// `hull-boxes` (seed 002) or `uniform` (equal layers to the part's sections).
+    pub route: &'static str,
+    pub layers: usize,
+    /// Layers at a box top or a flat of the part.
+    pub layers_at_tops: usize,
+    pub moves: usize,
+    pub cutting_length_mm: f64,
+    /// Every move, rapids included, mm.
+    pub path_length_mm: f64,
+    pub estimated_time_s: f64,
+    /// Material left on the part after the program, on the tri-dexel model, mm³.
+    pub material_left_mm3: f64,
+    /// How thick it stands on the part: mean and largest, mm.
+    pub rest_mean_mm: f64,
+    pub rest_max_mm: f64,
+    /// Least distance between the tool and the part's mesh, mm.
+    pub min_clearance_to_part_mm: f64,
 }
 
 /// What `rough` produced.

@@ -15,7 +15,8 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::blank::BlankSpec;
-use super::rough::{LayerBound, PartSurfaces, RoughOptions, RoughOutput, RoughReport, rough};
+use super::cad_part::PartSurfaces;
+use super::rough::{LayerBound, RoughOptions, RoughOutput, RoughReport, SlicingRow, rough};
 use crate::error::{Error, Result};
 use crate::mesh::io::RawMesh;
 use crate::tool::{Cutter, Section, ToolAssembly, ToolLibrary};
@@ -39,28 +40,6 @@ pub struct RoughBoxesOptions {
     pub merge: crate::rough::boxes::LayerMerge,
     /// Also plan equal layers down to the part's own sections with the same tool, and compare.
     pub compare_uniform: bool,
-}
-
-/// One route of the comparison.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct SlicingRow {
-    /// `hull-boxes` (seed 002) or `uniform` (equal layers to the part's sections).
-    pub route: &'static str,
-    pub layers: usize,
-    /// Layers at a box top or a flat of the part.
-    pub layers_at_tops: usize,
-    pub moves: usize,
-    pub cutting_length_mm: f64,
-    /// Every move, rapids included, mm.
-    pub path_length_mm: f64,
-    pub estimated_time_s: f64,
-    /// Material left on the part after the program, on the tri-dexel model, mm³.
-    pub material_left_mm3: f64,
-    /// How thick it stands on the part: mean and largest, mm.
-    pub rest_mean_mm: f64,
-    pub rest_max_mm: f64,
-    /// Least distance between the tool and the part's mesh, mm.
-    pub min_clearance_to_part_mm: f64,
 }
 
 impl SlicingRow {
