@@ -12,8 +12,6 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use serde::Serialize;
-
 use super::blank::BlankSpec;
 use super::cad_part::PartSurfaces;
 use super::rough::{LayerBound, RoughOptions, RoughOutput, RoughReport, SlicingRow, rough};
