@@ -28,6 +28,7 @@ pub mod feed;
 pub mod geom;
 pub mod impeller;
 pub mod job;
+pub mod lathe;
 pub mod mesh;
 pub mod multires;
 pub mod offset;

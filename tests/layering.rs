@@ -22,6 +22,7 @@ const LAYERS: &[&str] = &[
     "offset",      // stock-to-leave shapes
     "stock",       // in-process material (tri-dexel) and its removal
     "contour",     // 2.5D contour paths
+    "lathe",       // lens turning: compensated polar grids and spiral programs
     "rough",       // layer roughing down to an offset shape
     "feed",        // feeds from engagement (cutting-force model)
     "collide",     // tool bodies against part and table (parry3d)

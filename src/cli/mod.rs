@@ -23,6 +23,7 @@ use clap::{Parser, Subcommand};
 pub use commands::access::AccessArgs;
 pub use commands::contour::{ContourArgs, Direction};
 pub use commands::info::InfoArgs;
+pub use commands::lens::LensArgs;
 pub use commands::levels::LevelsArgs;
 pub use commands::offsets::OffsetsArgs;
 pub use commands::plan::PlanArgs;
@@ -90,6 +91,10 @@ pub enum Command {
     /// Tessellate an IGES part (trimmed NURBS and revolved surfaces) into one welded mesh
     /// within a chord tolerance, and measure how far it is from the surfaces.
     Tessellate(TessellateArgs),
+    /// Turn a freeform lens (seed 003): the surface (IGES face or TOML description) into a
+    /// nose-radius-compensated polar R × θ grid and a spiral slow-tool-servo X/Z/C program,
+    /// both read back and checked against the surface.
+    Lens(LensArgs),
 }
 
 /// Runs the parsed command; returns the process exit code.
@@ -100,6 +105,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Plan(a) => commands::plan::run(&a),
         Command::Subdivide(a) => commands::subdivide::run(&a),
         Command::Tessellate(a) => commands::tessellate::run(&a),
+        Command::Lens(a) => commands::lens::run(&a),
         Command::Levels(a) => commands::levels::run(&a),
         Command::Contour(a) => commands::contour::run(&a),
         Command::Offsets(a) => commands::offsets::run(&a),

@@ -18,6 +18,7 @@ mod contour;
 mod contour_picture;
 mod impeller_finish;
 mod indexed_rough;
+mod lens;
 mod levels;
 mod observer;
 mod offsets;
@@ -62,6 +63,10 @@ pub use contour::{
     CompareReport, ContourComparison, ContourJobOptions, DEFAULT_MAX_LEVELS,
     DEFAULT_MAX_OUTLINE_VERTICES, MethodFigures, StockSpec, contour_compare, contour_wavelet,
     write_contour_outputs,
+};
+pub use lens::{
+    GRID_DISTANCE_TOLERANCE, LensOptions, LensOutput, LensReport, LoadedLens, lens, lens_failure,
+    load_lens, write_lens_outputs,
 };
 pub use levels::{AnalysedHierarchy, LevelSummary, LevelsReport, analyse_hierarchy, levels};
 pub use offsets::{

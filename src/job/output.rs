@@ -103,6 +103,16 @@ impl OutputKind {
         },
     };
 
+    pub const LENS: OutputKind = OutputKind {
+        command: "lens",
+        owns: |n| {
+            matches!(
+                n,
+                "grid.csv" | "grid.bin" | "lens.nc" | "lens.json" | "lens.png" | "offset.igs"
+            )
+        },
+    };
+
     /// Whether `name` is one of this command's outputs.
     pub fn owns(&self, name: &str) -> bool {
         (self.owns)(name)

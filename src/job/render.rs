@@ -23,14 +23,14 @@ impl Canvas {
         }
     }
 
-    fn put(&mut self, x: usize, y: usize, c: [u8; 3]) {
+    pub(crate) fn put(&mut self, x: usize, y: usize, c: [u8; 3]) {
         if x < self.w && y < self.h {
             let k = 3 * (y * self.w + x);
             self.px[k..k + 3].copy_from_slice(&c);
         }
     }
 
-    fn fill(&mut self, x0: usize, y0: usize, w: usize, h: usize, c: [u8; 3]) {
+    pub(crate) fn fill(&mut self, x0: usize, y0: usize, w: usize, h: usize, c: [u8; 3]) {
         for y in y0..y0 + h {
             for x in x0..x0 + w {
                 self.put(x, y, c);
@@ -45,7 +45,7 @@ impl Canvas {
 
     /// `text` in a 3×5 pixel font scaled by `scale`, its top left at `(x, y)`; characters the
     /// font lacks are left as spaces.
-    fn text(&mut self, x: usize, y: usize, text: &str, scale: usize, c: [u8; 3]) {
+    pub(crate) fn text(&mut self, x: usize, y: usize, text: &str, scale: usize, c: [u8; 3]) {
         for (k, ch) in text.chars().enumerate() {
             let Some(rows) = glyph(ch) else { continue };
             for (r, bits) in rows.iter().enumerate() {

@@ -43,6 +43,7 @@ mod cdt;
 #[cfg(test)]
 mod check;
 mod impeller;
+pub mod lens;
 mod loft;
 mod poly;
 

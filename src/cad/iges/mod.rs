@@ -17,11 +17,13 @@
 
 pub mod cards;
 pub mod entities;
+pub mod write;
 
 use std::collections::{BTreeMap, BTreeSet};
 
 pub use cards::{Global, RawEntity, RawFile, read_raw};
 pub use entities::{Curve, Face, Surface, Transform};
+pub use write::{ParameterRectangle, write_surfaces};
 
 /// What is wrong with an IGES file, and on which line.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -17,7 +17,7 @@ mod surface;
 pub use basis::{basis_derivatives, basis_functions, binomial, find_span};
 pub use curve::NurbsCurve;
 pub use curve::bezier_point;
-pub use patches::PatchEvaluator;
+pub use patches::{PatchEvaluator, SurfaceJet};
 pub use surface::{BezierPatch, NurbsSurface};
 
 use nalgebra::Vector4;

@@ -6,7 +6,7 @@
 //! only nested Horner steps. On `[0, 1]` and at the degrees of CAD surfaces (up to 7) the
 //! change of basis loses a few bits at most; the test holds it to 1e-12 of the part size.
 
-use nalgebra::{Point3, Vector4};
+use nalgebra::{Point3, Vector3, Vector4};
 
 use super::{NurbsSurface, binomial};
 
@@ -108,6 +108,86 @@ impl PatchEvaluator {
         }
         Point3::from(sum.xyz() / sum.w)
     }
+
+    /// The point with its first and second partial derivatives at `(u, v)` (clamped into the
+    /// domain): Horner with derivatives on the homogeneous power form, then the quotient rule
+    /// (Piegl & Tiller eq. 4.20 up to second order).
+    pub fn jet(&self, u: f64, v: f64) -> SurfaceJet {
+        let [p, q] = self.degree;
+        let (iu, s, su) = locate_scaled(&self.breaks_u, u);
+        let (iv, t, sv) = locate_scaled(&self.breaks_v, v);
+        let patch = iu * (self.breaks_v.len() - 1) + iv;
+        let c = &self.coefficients[patch * (p + 1) * (q + 1)..(patch + 1) * (p + 1) * (q + 1)];
+        // a[k][l] = ∂ᵏ⁺ˡA/∂sᵏ∂tˡ of the homogeneous A(s, t), k + l ≤ 2.
+        let zero = Vector4::zeros();
+        let (mut a, mut a_s, mut a_ss) = (zero, zero, zero);
+        let (mut a_t, mut a_st, mut a_tt) = (zero, zero, zero);
+        for k in (0..=p).rev() {
+            let row = &c[k * (q + 1)..(k + 1) * (q + 1)];
+            // The row's polynomial in t and its first two derivatives.
+            let (mut r, mut r1, mut r2) = (row[q], zero, zero);
+            for l in (0..q).rev() {
+                r2 = r2 * t + r1 * 2.0;
+                r1 = r1 * t + r;
+                r = r * t + row[l];
+            }
+            a_ss = a_ss * s + a_s * 2.0;
+            a_s = a_s * s + a;
+            a = a * s + r;
+            a_st = a_st * s + a_t;
+            a_t = a_t * s + r1;
+            a_tt = a_tt * s + r2;
+        }
+        let (a_s, a_t) = (a_s * su, a_t * sv);
+        let (a_ss, a_st, a_tt) = (a_ss * (su * su), a_st * (su * sv), a_tt * (sv * sv));
+        let w = a.w;
+        let point = a.xyz() / w;
+        let du = (a_s.xyz() - point * a_s.w) / w;
+        let dv = (a_t.xyz() - point * a_t.w) / w;
+        let duu = (a_ss.xyz() - du * (2.0 * a_s.w) - point * a_ss.w) / w;
+        let dvv = (a_tt.xyz() - dv * (2.0 * a_t.w) - point * a_tt.w) / w;
+        let duv = (a_st.xyz() - du * a_t.w - dv * a_s.w - point * a_st.w) / w;
+        SurfaceJet {
+            point: Point3::from(point),
+            du,
+            dv,
+            duu,
+            duv,
+            dvv,
+        }
+    }
+
+    /// The parameter domain `([u₀, u₁], [v₀, v₁])`.
+    pub fn domain(&self) -> ((f64, f64), (f64, f64)) {
+        (
+            (self.breaks_u[0], self.breaks_u[self.breaks_u.len() - 1]),
+            (self.breaks_v[0], self.breaks_v[self.breaks_v.len() - 1]),
+        )
+    }
+}
+
+/// A surface point with its first and second partial derivatives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceJet {
+    /// `S(u, v)`.
+    pub point: Point3<f64>,
+    /// `∂S/∂u`.
+    pub du: Vector3<f64>,
+    /// `∂S/∂v`.
+    pub dv: Vector3<f64>,
+    /// `∂²S/∂u²`.
+    pub duu: Vector3<f64>,
+    /// `∂²S/∂u∂v`.
+    pub duv: Vector3<f64>,
+    /// `∂²S/∂v²`.
+    pub dvv: Vector3<f64>,
+}
+
+/// [`locate`] with the factor `ds/du` of the local parameter.
+fn locate_scaled(breaks: &[f64], x: f64) -> (usize, f64, f64) {
+    let (i, s) = locate(breaks, x);
+    let width = breaks[i + 1] - breaks[i];
+    (i, s, if width > 0.0 { 1.0 / width } else { 0.0 })
 }
 
 /// The interval of `breaks` that holds `x` (clamped) and the local parameter in it.

@@ -424,6 +424,28 @@ mod tests {
             }
         }
         assert!((fast.point(-1.0, 2.0) - s.point(0.0, 1.0)).norm() < 1e-12);
+        // Its second-order jets agree with the rational de Boor derivatives (A4.4).
+        for i in 0..=20 {
+            for j in 0..=20 {
+                let (u, v) = (i as f64 / 20.0, j as f64 / 20.0);
+                let d = s.derivatives(u, v, 2);
+                let jet = fast.jet(u, v);
+                let pairs = [
+                    (jet.point.coords, d[0][0]),
+                    (jet.du, d[1][0]),
+                    (jet.dv, d[0][1]),
+                    (jet.duu, d[2][0]),
+                    (jet.duv, d[1][1]),
+                    (jet.dvv, d[0][2]),
+                ];
+                for (k, (a, b)) in pairs.into_iter().enumerate() {
+                    assert!(
+                        (a - b).norm() < 1e-9 * b.norm().max(1.0),
+                        "({u}, {v}) #{k}: {a} {b}"
+                    );
+                }
+            }
+        }
         let h = 1e-5;
         for &(u, v) in &[(0.1, 0.2), (0.45, 0.5), (0.8, 0.9), (0.6, 0.31)] {
             let d = s.derivatives(u, v, 2);

@@ -3,6 +3,7 @@
 pub mod access;
 pub mod contour;
 pub mod info;
+pub mod lens;
 pub mod levels;
 pub mod offsets;
 pub mod plan;

@@ -14,12 +14,15 @@ pub enum SampleKind {
     Impeller,
     /// A twisted turbine blade on a root block.
     Blade,
+    /// A 44 mm freeform lens: a rational bicubic patch closed by five planes, as IGES
+    /// (lens.igs), for `wavemill lens`.
+    Lens,
 }
 
 #[derive(Args, Debug)]
 pub struct SampleArgs {
     pub kind: SampleKind,
-    /// Output folder; writes KIND.glb and KIND.obj there.
+    /// Output folder; writes KIND.glb and KIND.obj there (the lens: lens.igs).
     #[arg(long, default_value = "data")]
     pub out: PathBuf,
     /// Impeller: number of blades.
@@ -43,6 +46,7 @@ pub fn run(args: &SampleArgs) -> Result<()> {
             }
             SamplePart::Impeller(p)
         }
+        SampleKind::Lens => return write_lens(args),
         SampleKind::Blade => {
             let mut p = sample::BladeParams::default();
             if let Some(r) = args.resolution {
@@ -75,6 +79,28 @@ pub fn run(args: &SampleArgs) -> Result<()> {
             .map(|(n, _)| args.out.join(n).display().to_string())
             .collect::<Vec<_>>()
             .join(", ")
+    );
+    Ok(())
+}
+
+/// `wavemill sample lens`: the freeform lens as IGES.
+fn write_lens(args: &SampleArgs) -> Result<()> {
+    if args.blades.is_some() || args.resolution.is_some() {
+        return Err(Error::Usage(
+            "--blades and --resolution apply to the impeller and the blade".into(),
+        ));
+    }
+    let text = sample::lens::freeform_lens_iges()
+        .map_err(|e| Error::Internal(format!("the sample lens: {e}")))?;
+    std::fs::create_dir_all(&args.out).map_err(|source| Error::Io {
+        path: args.out.display().to_string(),
+        source,
+    })?;
+    let path = args.out.join("lens.igs");
+    job::write_atomically(&path, text.as_bytes())?;
+    say!(
+        "lens: a freeform patch and five planes -> {}",
+        path.display()
     );
     Ok(())
 }
