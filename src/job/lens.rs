@@ -579,6 +579,31 @@ fn picture(
             worst[k] = e;
         }
     }
+    // Samples lie along the passes, a few pixels apart near the rim of a step: fill the gaps
+    // between them from their neighbours (largest), inside the disc only.
+    for _ in 0..4 {
+        let before = worst.clone();
+        for py in 0..SIDE {
+            for px in 0..SIDE {
+                let k = py * SIDE + px;
+                let (x, y) = to_plane(px, py);
+                if !before[k].is_nan() || x.hypot(y) > outer {
+                    continue;
+                }
+                let mut fill = f64::NAN;
+                for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                    let (qx, qy) = (px as i64 + dx, py as i64 + dy);
+                    if (0..SIDE as i64).contains(&qx) && (0..SIDE as i64).contains(&qy) {
+                        let v = before[qy as usize * SIDE + qx as usize];
+                        if !v.is_nan() && (fill.is_nan() || v > fill) {
+                            fill = v;
+                        }
+                    }
+                }
+                worst[k] = fill;
+            }
+        }
+    }
     for py in 0..SIDE {
         for px in 0..SIDE {
             let e = worst[py * SIDE + px];

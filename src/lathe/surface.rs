@@ -206,6 +206,84 @@ pub struct NurbsLens {
     orientation: f64,
     /// A coarse table of `(u, v, x, y)` for first guesses of the parameters over a point.
     table: Vec<[f64; 4]>,
+    /// The table's entries bucketed by `(x, y)` on a square grid.
+    buckets: Buckets,
+}
+
+/// Table entries bucketed by position in plan, for the nearest-entry lookup.
+#[derive(Clone, Debug)]
+struct Buckets {
+    origin: (f64, f64),
+    cell: f64,
+    side: usize,
+    /// Entry indices per cell, row-major.
+    cells: Vec<Vec<u32>>,
+}
+
+impl Buckets {
+    fn new(table: &[[f64; 4]], side: usize) -> Buckets {
+        let (mut x0, mut y0, mut x1, mut y1) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for e in table {
+            (x0, y0, x1, y1) = (x0.min(e[2]), y0.min(e[3]), x1.max(e[2]), y1.max(e[3]));
+        }
+        let cell = ((x1 - x0).max(y1 - y0) / side as f64).max(1e-12);
+        let mut buckets = Buckets {
+            origin: (x0, y0),
+            cell,
+            side,
+            cells: vec![Vec::new(); side * side],
+        };
+        for (k, e) in table.iter().enumerate() {
+            let (i, j) = buckets.cell_of(e[2], e[3]);
+            buckets.cells[j * side + i].push(k as u32);
+        }
+        buckets
+    }
+
+    fn cell_of(&self, x: f64, y: f64) -> (usize, usize) {
+        let clamp = |t: f64| (t.floor().max(0.0) as usize).min(self.side - 1);
+        (
+            clamp((x - self.origin.0) / self.cell),
+            clamp((y - self.origin.1) / self.cell),
+        )
+    }
+
+    /// The entry nearest `(x, y)` among the cells around its own, widening the ring until one
+    /// holds an entry, then one ring more (an entry in a farther cell can be nearer).
+    fn nearest(&self, table: &[[f64; 4]], x: f64, y: f64) -> Option<usize> {
+        let (ci, cj) = self.cell_of(x, y);
+        let mut best: Option<(f64, usize)> = None;
+        let mut found_at = None;
+        for ring in 0..self.side {
+            let (i0, i1) = (ci.saturating_sub(ring), (ci + ring).min(self.side - 1));
+            let (j0, j1) = (cj.saturating_sub(ring), (cj + ring).min(self.side - 1));
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    if i != i0 && i != i1 && j != j0 && j != j1 {
+                        continue; // inside the ring: seen already
+                    }
+                    for &k in &self.cells[j * self.side + i] {
+                        let e = table[k as usize];
+                        let d = (e[2] - x).powi(2) + (e[3] - y).powi(2);
+                        if best.is_none_or(|(b, bk)| d < b || (d == b && (k as usize) < bk)) {
+                            best = Some((d, k as usize));
+                        }
+                    }
+                }
+            }
+            match found_at {
+                Some(r) if ring > r => break,
+                None if best.is_some() => found_at = Some(ring),
+                _ => {}
+            }
+        }
+        best.map(|(_, k)| k)
+    }
 }
 
 /// Samples per side of the first-guess table.
@@ -228,12 +306,14 @@ impl NurbsLens {
                 table.push([u, v, jet.point.x, jet.point.y]);
             }
         }
+        let buckets = Buckets::new(&table, TABLE_SIDE - 1);
         Some(NurbsLens {
             surface,
             evaluator,
             domain,
             orientation: if normal_z >= 0.0 { 1.0 } else { -1.0 },
             table,
+            buckets,
         })
     }
 }
@@ -320,11 +400,7 @@ impl LensSurface {
             LensSurface::Sag { .. } => return self.contains(x, y, 0.0).then_some((x, y)),
             LensSurface::Nurbs(lens) => lens,
         };
-        let start = lens.table.iter().min_by(|a, b| {
-            let da = (a[2] - x).powi(2) + (a[3] - y).powi(2);
-            let db = (b[2] - x).powi(2) + (b[3] - y).powi(2);
-            da.total_cmp(&db)
-        })?;
+        let start = lens.table[lens.buckets.nearest(&lens.table, x, y)?];
         let ((u0, u1), (v0, v1)) = lens.domain;
         let (mut u, mut v) = (start[0], start[1]);
         for _ in 0..60 {
