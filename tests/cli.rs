@@ -38,6 +38,7 @@ fn every_subcommand_has_help() {
         &["simulate", "--help"],
         &["rough", "--help"],
         &["rough-boxes", "--help"],
+        &["lens", "--help"],
     ] {
         let out = wavemill(sub);
         assert_eq!(out.status.code(), Some(0), "{sub:?}");

@@ -299,6 +299,26 @@ fn analytic_lenses_and_bad_input() {
         ),
     );
     refused(&planes, &[], "no freeform face");
+    // A command line without the grid's spacing is a usage error (exit 2).
+    let o = wavemill(
+        &[
+            "lens",
+            zernike.to_str().unwrap(),
+            "--nose-radius",
+            "0.5",
+            "--diameter",
+            "40",
+            "--out",
+            dir.join("x").to_str().unwrap(),
+        ],
+        "2",
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     // A TOML error names the key.
     let typo = write(
         "typo.toml",

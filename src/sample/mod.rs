@@ -1,4 +1,4 @@
-//! Deterministic generators for the two sample parts `wavemill` ships with.
+//! Deterministic generators for the sample parts `wavemill` ships with.
 //!
 //! * [`impeller()`]: a centrifugal-compressor impeller, axis +Z, base on z = 0. A hub of
 //!   revolution with a through bore (flat bottom, bore cylinder, short outer rim, and a concave
@@ -6,6 +6,8 @@
 //!   wrapped, leaning blades whose height falls from the inlet to the rim. The channels between
 //!   the blades are a few millimetres wide at the inlet, which is what makes the part hard to
 //!   machine. One closed 2-manifold of genus 1.
+//! * [`lens`]: a freeform lens for `wavemill lens`, a rational bicubic B-spline patch closed by
+//!   five planes, as IGES text (not a mesh).
 //! * [`blade()`]: a turbine-blade stand-in. A box root block carries a twisted, tapered, cambered
 //!   airfoil blade (NACA-4-like) with a flat tip. One closed 2-manifold of genus 0.
 //!
