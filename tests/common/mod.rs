@@ -95,6 +95,9 @@ pub struct Oracle {
     cell: f64,
     dims: [usize; 3],
     buckets: Vec<Vec<u32>>,
+    /// Each triangle's bounding box, to skip the exact distance to triangles that cannot be
+    /// nearer than the nearest found so far.
+    boxes: Vec<(Point3<f64>, Point3<f64>)>,
     /// Per ray axis, triangles by the 2D cell of their projected box.
     columns: [std::collections::HashMap<(i64, i64), Vec<u32>>; 3],
 }
@@ -150,12 +153,17 @@ impl Oracle {
                 }
             }
         }
+        let boxes = triangles
+            .iter()
+            .map(|t| (t[0].inf(&t[1]).inf(&t[2]), t[0].sup(&t[1]).sup(&t[2])))
+            .collect();
         Self {
             triangles,
             min,
             cell,
             dims,
             buckets,
+            boxes,
             columns,
         }
     }
@@ -165,7 +173,9 @@ impl Oracle {
         let r = (limit / self.cell).ceil() as i64;
         let c = [0, 1, 2].map(|i| ((p[i] - self.min[i]) / self.cell).floor() as i64);
         let mut best = limit;
-        let mut seen = std::collections::HashSet::new();
+        // The cells around p, nearest first, so that the nearest triangle found early lets
+        // the farther cells and triangles be skipped by their boxes.
+        let mut cells = Vec::with_capacity(((2 * r + 1) as usize).pow(3));
         for x in c[0] - r..=c[0] + r {
             for y in c[1] - r..=c[1] + r {
                 for z in c[2] - r..=c[2] + r {
@@ -178,14 +188,35 @@ impl Oracle {
                     {
                         continue;
                     }
-                    for &t in &self.buckets
-                        [((x as usize) * self.dims[1] + y as usize) * self.dims[2] + z as usize]
-                    {
-                        if seen.insert(t) {
-                            best =
-                                best.min(point_triangle_distance(p, &self.triangles[t as usize]));
-                        }
-                    }
+                    let lo = Point3::new(
+                        self.min.x + x as f64 * self.cell,
+                        self.min.y + y as f64 * self.cell,
+                        self.min.z + z as f64 * self.cell,
+                    );
+                    let hi = lo + Vector3::repeat(self.cell);
+                    let gap = (lo - p)
+                        .sup(&(p - hi))
+                        .sup(&Vector3::zeros())
+                        .norm_squared();
+                    cells.push((
+                        gap,
+                        ((x as usize) * self.dims[1] + y as usize) * self.dims[2] + z as usize,
+                    ));
+                }
+            }
+        }
+        cells.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for (gap, cell) in cells {
+            if gap >= best * best {
+                break;
+            }
+            for &t in &self.buckets[cell] {
+                // A triangle in several cells is measured again: harmless for a minimum, and
+                // cheaper than remembering it.
+                let (lo, hi) = &self.boxes[t as usize];
+                let outside = (lo - p).sup(&(p - hi)).sup(&Vector3::zeros());
+                if outside.norm_squared() < best * best {
+                    best = best.min(point_triangle_distance(p, &self.triangles[t as usize]));
                 }
             }
         }
