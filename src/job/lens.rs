@@ -189,8 +189,14 @@ pub struct PieglTillerReport {
     pub tolerance: f64,
     /// Offset samples along u and v.
     pub samples: [usize; 2],
-    /// Control points of the interpolating bicubic (before any knot removal).
+    /// Control points of the interpolating bicubic.
+    pub interpolated_control_points: usize,
+    /// Knots removed within ε.
+    pub knots_removed: usize,
+    /// Control points left.
     pub control_points: usize,
+    /// Largest distance of the final surface from an offset sample (mm).
+    pub sample_error: f64,
     /// Largest second-derivative bounds `M₁, M₂, M₃` over the Bézier patches.
     pub bounds: [f64; 3],
     /// Largest |z − z_exact| over the grid (mm).
@@ -443,7 +449,10 @@ fn seed_route(
         PieglTillerReport {
             tolerance,
             samples: [offset.samples.0, offset.samples.1],
+            interpolated_control_points: offset.interpolated_control_points,
+            knots_removed: offset.knots_removed,
             control_points: offset.control_points(),
+            sample_error: offset.sample_error,
             bounds: offset.bounds,
             max_error,
             rms_error: (sum / heights.len().max(1) as f64).sqrt(),

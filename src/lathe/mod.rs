@@ -9,7 +9,7 @@
 //!   programmed point is the nose centre, at ρ from the surface along its normal);
 //! * [`grid`]: the seed's polar grid (R vector, θ vector, Z matrix) with what the tool meets
 //!   (concave radii, descent against the clearance angle);
-//! * [`spiral`]: the spiral program, points spaced by the form tolerance, posted in inverse
+//! * [`mod@spiral`]: the spiral program, points spaced by the form tolerance, posted in inverse
 //!   time;
 //! * [`offset_surface`]: the seed's own route for comparison, an approximate Piegl–Tiller
 //!   offset surface onto which the grid is projected;

@@ -643,27 +643,7 @@ mod tests {
         spacing: f64,
         tolerance: f64,
     ) -> f64 {
-        // A block just around the move (a truncated sweep fails the closed forms, so it
-        // cannot pass unnoticed): far fewer dexels than the shared 60 mm cube at 0.1 mm.
-        // Its corners snap to the cube's lattice, so every dexel is one of the cube's and the
-        // volumes are the cube's to the last bit.
-        let reach = cutter.flute_length() + cutter.diameter() + 1.0;
-        let (a, b) = (from.tip, to.tip);
-        let snap_down = |x: f64| -30.0 + ((x + 30.0) / spacing).floor() * spacing;
-        let snap_up = |x: f64| -30.0 + ((x + 30.0) / spacing).ceil() * spacing;
-        let bounds = Aabb::from_points(&[
-            Point3::new(
-                snap_down(a.x.min(b.x) - reach),
-                snap_down(a.y.min(b.y) - reach),
-                snap_down(a.z.min(b.z) - reach),
-            ),
-            Point3::new(
-                snap_up(a.x.max(b.x) + reach),
-                snap_up(a.y.max(b.y) + reach),
-                snap_up(a.z.max(b.z) + reach),
-            ),
-        ]);
-        let mut s = Stock::block(&bounds, spacing, DEFAULT_MAX_DEXELS).unwrap();
+        let mut s = block(spacing);
         RevolvedCutter::of(cutter)
             .sweep(from, to, tolerance)
             .iter()
