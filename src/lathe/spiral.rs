@@ -165,6 +165,16 @@ pub fn spiral(surface: &LensSurface, options: &SpiralOptions) -> Result<Spiral, 
             o.feed_per_rev, o.outer_radius
         )));
     }
+    // Every step is at most `max_step`, so at least this many points: refuse a program no
+    // control would take before computing it.
+    let fewest_points = revolutions * std::f64::consts::TAU / o.max_step;
+    if fewest_points > 5e7 {
+        return Err(SpiralError::Parameter(format!(
+            "at least {fewest_points:.0} program points ({revolutions:.0} turns at up to {:.3}° a \
+             step): raise the feed per revolution or the largest step",
+            o.max_step.to_degrees()
+        )));
+    }
     let end = std::f64::consts::TAU * revolutions;
     let radius_at =
         |angle: f64| (o.outer_radius - o.feed_per_rev * angle / std::f64::consts::TAU).max(0.0);
@@ -381,6 +391,24 @@ mod tests {
         )
         .unwrap();
         assert!(finer.points.len() > s.points.len());
+    }
+
+    #[test]
+    fn a_program_too_long_for_any_control_is_refused_before_it_is_computed() {
+        let options = SpiralOptions {
+            nose_radius: 0.5,
+            outer_radius: 20.0,
+            feed_per_rev: 1e-4,
+            form_tolerance: 1e-4,
+            max_step: 0.1f64.to_radians(),
+            speed: SpindleSpeed::ConstantRpm(300.0),
+        };
+        match spiral(&toric(), &options) {
+            Err(SpiralError::Parameter(message)) => {
+                assert!(message.contains("program points"), "{message}")
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]
