@@ -19,7 +19,7 @@ use super::render::{Canvas, encode_rgb};
 use rayon::prelude::*;
 
 use crate::cad::iges::write_surfaces;
-use crate::error::{Error, Result};
+use crate::error::{Error, JobError, Result};
 use crate::lathe::check::{
     DistanceCheck, ProgramCheck, ProgramSample, centre_errors, check_program, read_grid_csv,
     summarise,
@@ -101,7 +101,7 @@ pub fn load_lens(path: &Path, face: Option<usize>) -> Result<LoadedLens> {
     }
     if face.is_some() {
         return Err(Error::Usage(format!(
-            "{file}: --face applies to IGES files only"
+            "{file}: a face (DE number) can only be chosen in an IGES file"
         )));
     }
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
@@ -254,22 +254,29 @@ fn lens_error(file: &str, reason: impl std::fmt::Display) -> Error {
 pub fn lens(path: &Path, options: &LensOptions) -> Result<LensOutput> {
     let file = path.display().to_string();
     let o = options;
-    for (name, value, min) in [
-        ("--feed-per-rev", o.feed_per_rev, 0.0),
-        ("--form-tolerance", o.form_tolerance, 0.0),
-        ("--max-step", o.max_step_degrees, 0.0),
-        ("--clearance-height", o.clearance_height, 0.0),
-        ("--plunge-feed", o.plunge_feed, 0.0),
+    // Option errors name the option (the CLI names its flag in their place).
+    let invalid = |key: &str, reason: String| {
+        Error::JobFile(JobError::Invalid {
+            key: key.to_string(),
+            reason,
+        })
+    };
+    for (key, value) in [
+        ("feed_per_rev", o.feed_per_rev),
+        ("form_tolerance", o.form_tolerance),
+        ("max_step_degrees", o.max_step_degrees),
+        ("clearance_height", o.clearance_height),
+        ("plunge_feed", o.plunge_feed),
     ] {
-        if !(value.is_finite() && value > min) {
-            return Err(Error::Usage(format!("{name} {value}: must be positive")));
+        if !(value.is_finite() && value > 0.0) {
+            return Err(invalid(key, format!("{value}: must be positive")));
         }
     }
     if !(o.clearance_angle_degrees > 0.0 && o.clearance_angle_degrees < 90.0) {
-        return Err(Error::Usage(format!(
-            "--clearance-angle {}: must be between 0° and 90°",
-            o.clearance_angle_degrees
-        )));
+        return Err(invalid(
+            "clearance_angle_degrees",
+            format!("{}: must be between 0° and 90°", o.clearance_angle_degrees),
+        ));
     }
     let start = Instant::now();
     let loaded = load_lens(path, o.face)?;

@@ -110,7 +110,19 @@ pub fn run(args: &LensArgs) -> Result<()> {
         offset_tolerance: args.piegl_tiller,
         timings: !args.no_timings,
     };
-    let output = job::lens(&args.surface, &options)?;
+    let output = job::lens(&args.surface, &options).map_err(|e| {
+        crate::cli::name_flags(
+            e,
+            &[
+                ("feed_per_rev", "--feed-per-rev"),
+                ("form_tolerance", "--form-tolerance"),
+                ("max_step_degrees", "--max-step"),
+                ("clearance_height", "--clearance-height"),
+                ("plunge_feed", "--plunge-feed"),
+                ("clearance_angle_degrees", "--clearance-angle"),
+            ],
+        )
+    })?;
     job::write_lens_outputs(&args.out, &output)?;
     let r = &output.report;
     say!(
