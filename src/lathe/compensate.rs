@@ -216,12 +216,6 @@ pub fn nose_centre(
     })
 }
 
-/// The surface parameters to start the solve over `(x, y)` from when nothing nearby has been
-/// solved: the point vertically below.
-pub fn first_guess(surface: &LensSurface, x: f64, y: f64) -> Option<(f64, f64)> {
-    surface.parameters_over(x, y)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

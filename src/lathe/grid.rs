@@ -13,7 +13,7 @@
 
 use rayon::prelude::*;
 
-use super::compensate::{Contact, ContactError, first_guess, nose_centre};
+use super::compensate::{Contact, ContactError, nose_centre};
 use super::surface::LensSurface;
 
 /// How the radii are spaced.
@@ -75,15 +75,16 @@ impl PolarGrid {
                 options.diameter
             )));
         }
-        let radii: Vec<f64> = match options.radial {
+        // The count first, in floating point: a tiny step or a huge count must be refused
+        // before a vector of that length is asked for.
+        let count = match options.radial {
             RadialSpacing::Step(step) => {
                 if !(step.is_finite() && step > 0.0 && step <= outer) {
                     return Err(GridError::Parameter(format!(
                         "radial step {step}: must be positive and at most the outer radius {outer}"
                     )));
                 }
-                let steps = (outer / step + 1e-9).floor() as usize;
-                (0..=steps).map(|i| i as f64 * step).collect()
+                (outer / step + 1e-9).floor() + 1.0
             }
             RadialSpacing::Count(n) => {
                 if n < 2 {
@@ -91,19 +92,25 @@ impl PolarGrid {
                         "{n} radii: at least 2 (the centre and the rim)"
                     )));
                 }
-                (0..n).map(|i| outer * i as f64 / (n - 1) as f64).collect()
+                n as f64
             }
         };
         if options.ticks == 0 {
             return Err(GridError::Parameter("0 ticks: at least 1 angle".into()));
         }
-        if radii.len().saturating_mul(options.ticks) > 200_000_000 {
+        if count * options.ticks as f64 > 200_000_000.0 {
             return Err(GridError::Parameter(format!(
-                "{} × {} points: more than 200 million",
-                radii.len(),
+                "{count} × {} points: more than 200 million",
                 options.ticks
             )));
         }
+        let count = count as usize;
+        let radii: Vec<f64> = match options.radial {
+            RadialSpacing::Step(step) => (0..count).map(|i| i as f64 * step).collect(),
+            RadialSpacing::Count(_) => (0..count)
+                .map(|i| outer * i as f64 / (count - 1) as f64)
+                .collect(),
+        };
         let angles = (0..options.ticks)
             .map(|j| std::f64::consts::TAU * j as f64 / options.ticks as f64)
             .collect();
@@ -264,7 +271,9 @@ fn march(
             let solved = nose_centre(surface, nose_radius, line, guess).or_else(|_| {
                 // The prediction overshot (an edge, a kink in the parametrisation): restart
                 // from the point below.
-                let guess = first_guess(surface, line.0, line.1).unwrap_or(previous.parameters);
+                let guess = surface
+                    .parameters_over(line.0, line.1)
+                    .unwrap_or(previous.parameters);
                 nose_centre(surface, nose_radius, line, guess)
             });
             solved.map_err(|e| (i, e))?
@@ -308,7 +317,8 @@ pub fn compensated_grid(
         angle_degrees: 0.0,
         reason,
     };
-    let guess = first_guess(surface, 0.0, 0.0)
+    let guess = surface
+        .parameters_over(0.0, 0.0)
         .ok_or_else(|| centre_error(ContactError::OffSurface { x: 0.0, y: 0.0 }))?;
     let centre = nose_centre(surface, rho, (0.0, 0.0), guess).map_err(centre_error)?;
     let columns: Vec<_> = grid
@@ -392,6 +402,9 @@ mod tests {
         assert!((g.radii[180] - 20.0).abs() < 1e-12);
         assert!(PolarGrid::new(&options(RadialSpacing::Step(0.0))).is_err());
         assert!(PolarGrid::new(&options(RadialSpacing::Count(1))).is_err());
+        // Refused by their count before any vector of that length is asked for.
+        assert!(PolarGrid::new(&options(RadialSpacing::Step(1e-300))).is_err());
+        assert!(PolarGrid::new(&options(RadialSpacing::Count(1 << 62))).is_err());
     }
 
     /// A paraboloid `z = r²/(2R)` (conic −1): the nose centre over radius `r_c` comes from the

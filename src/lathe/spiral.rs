@@ -12,7 +12,7 @@
 //! Feeds are written in inverse time (`G93`): a block's time follows from the spindle speed,
 //! constant (rpm) or from a constant surface speed capped by a maximum rpm.
 
-use super::compensate::{Contact, ContactError, first_guess, nose_centre};
+use super::compensate::{Contact, ContactError, nose_centre};
 use super::surface::LensSurface;
 
 /// Spindle speed of the turning.
@@ -185,7 +185,7 @@ pub fn spiral(surface: &LensSurface, options: &SpiralOptions) -> Result<Spiral, 
         let line = (r * angle.cos(), r * angle.sin());
         nose_centre(surface, o.nose_radius, line, guess)
             .or_else(|_| {
-                let below = first_guess(surface, line.0, line.1).unwrap_or(guess);
+                let below = surface.parameters_over(line.0, line.1).unwrap_or(guess);
                 nose_centre(surface, o.nose_radius, line, below)
             })
             .map_err(|reason| SpiralError::Point {
@@ -195,14 +195,16 @@ pub fn spiral(surface: &LensSurface, options: &SpiralOptions) -> Result<Spiral, 
             })
     };
     let start_line = (o.outer_radius, 0.0);
-    let guess = first_guess(surface, start_line.0, start_line.1).ok_or(SpiralError::Point {
-        radius: o.outer_radius,
-        angle_degrees: 0.0,
-        reason: ContactError::OffSurface {
-            x: start_line.0,
-            y: start_line.1,
-        },
-    })?;
+    let guess = surface
+        .parameters_over(start_line.0, start_line.1)
+        .ok_or(SpiralError::Point {
+            radius: o.outer_radius,
+            angle_degrees: 0.0,
+            reason: ContactError::OffSurface {
+                x: start_line.0,
+                y: start_line.1,
+            },
+        })?;
     let mut here = solve(0.0, guess)?;
     let mut angle = 0.0;
     let mut points = vec![SpiralPoint {
