@@ -185,7 +185,10 @@ impl LensDescription {
             }
             SagShape::Toric { conic_y, .. } => conic_y.is_finite(),
             SagShape::XyPolynomial { conic, terms, .. } => {
-                conic.is_finite() && terms.iter().all(|t| t.2.is_finite() && t.0 + t.1 <= 40)
+                conic.is_finite()
+                    && terms
+                        .iter()
+                        .all(|t| t.2.is_finite() && u64::from(t.0) + u64::from(t.1) <= 40)
             }
             SagShape::Zernike {
                 conic,
@@ -324,6 +327,12 @@ pub fn lens_from_iges(
             face.de, face.line
         ));
     };
+    if !(u.0 < u.1 && v.0 < v.1) {
+        return Err(format!(
+            "face DE {} (line {}): empty parameter range u {:?}, v {:?}",
+            face.de, face.line, u, v
+        ));
+    }
     let lens = NurbsLens::new(surface.clone(), (*u, *v)).ok_or_else(|| {
         format!(
             "face DE {} (line {}): too many Bézier patches to evaluate",

@@ -53,11 +53,17 @@ impl OffsetSurface {
     }
 }
 
+/// Most offset samples the interpolation takes.
+const MAX_SAMPLES: usize = 4_000_000;
+
 /// Samples per side of a patch by eq. 3.20 (pow 0.34, the non-linear case).
+
 fn samples_for(bounds: [f64; 3], tolerance: f64, degree: usize) -> usize {
     let [m1, m2, m3] = bounds;
     let n = (1.0 / tolerance).powf(0.34) * ((m1 + 2.0 * m2 + m3) / 8.0).sqrt();
-    (n.ceil() as usize).max(degree + 1)
+    // Capped where the grid's own limit refuses anyway (a net of huge second differences
+    // must not ask for billions of samples before that).
+    (n.ceil().min(MAX_SAMPLES as f64) as usize).max(degree + 1)
 }
 
 /// Knots for interpolating at `parameters` with degree `p` (Piegl & Tiller eq. 9.8).
@@ -145,6 +151,19 @@ pub fn piegl_tiller_offset(
             per_v[k] = per_v[k].max(n);
         }
     }
+    // At most this many along each side (spans outside the range are skipped below): one
+    // side alone asking for more than the whole grid may hold is refused before it is laid
+    // out.
+    let (most_u, most_v) = (
+        per_u.iter().fold(1usize, |a, &n| a.saturating_add(n)),
+        per_v.iter().fold(1usize, |a, &n| a.saturating_add(n)),
+    );
+    if most_u.max(most_v) > MAX_SAMPLES {
+        return Err(format!(
+            "up to {most_u} × {most_v} offset samples: more than 4 million (loosen the offset \
+             tolerance)"
+        ));
+    }
     let sample_parameters = |spans: &[(f64, f64)], per: &[usize], range: (f64, f64)| {
         let mut t = Vec::new();
         for (s, &n) in spans.iter().zip(per) {
@@ -161,7 +180,7 @@ pub fn piegl_tiller_offset(
     };
     let us = sample_parameters(&spans_u, &per_u, domain.0);
     let vs = sample_parameters(&spans_v, &per_v, domain.1);
-    if us.len() * vs.len() > 4_000_000 {
+    if us.len().saturating_mul(vs.len()) > MAX_SAMPLES {
         return Err(format!(
             "{} × {} offset samples: more than 4 million (loosen the offset tolerance)",
             us.len(),

@@ -28,6 +28,11 @@ pub use distance::{Closest, SegmentSearch, SurfaceDistance};
 pub use section::{DrivePoint, SectionCurve, level_section, plane_section};
 
 pub use pieces::{Piece, PieceSplit, StrayPieceRule, set_aside_warning, split_stray_pieces};
+
+/// The largest coordinate magnitude a part may have, in millimetres (1000 km): beyond it a
+/// file is in the wrong units or broken, and counts derived from the part's extent (grid
+/// cells, layers) would overflow.
+pub const MAX_COORDINATE_MM: f64 = 1e9;
 pub use prepare::{
     MAX_LISTED_PIECES, MeshReport, PrepareError, PrepareOptions, UnitsGuess, prepare,
     prepare_without_stray_pieces,
@@ -127,16 +132,19 @@ impl Mesh {
             .sum()
     }
 
-    /// Every index in range and every coordinate finite: what the rest of the planner assumes.
+    /// Every index in range and every coordinate a finite length within
+    /// [`MAX_COORDINATE_MM`]: what the rest of the planner assumes (grids sized by the part's
+    /// extent must not overflow).
     pub fn check_indices_and_coordinates(&self) -> Result<(), String> {
         if let Some((i, p)) = self
             .positions
             .iter()
             .enumerate()
-            .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+            .find(|(_, p)| !p.iter().all(|c| c.abs() <= MAX_COORDINATE_MM))
         {
             return Err(format!(
-                "vertex {i} has a non-finite coordinate ({}, {}, {})",
+                "vertex {i} has a coordinate that is not a finite length within \
+                 ±{MAX_COORDINATE_MM} mm: ({}, {}, {})",
                 p.x, p.y, p.z
             ));
         }
@@ -322,6 +330,13 @@ mod tests {
             m.check_indices_and_coordinates()
                 .unwrap_err()
                 .contains("vertex 99")
+        );
+        let mut m = cuboid(1.0, 1.0, 1.0);
+        m.positions[3].y = 2e9;
+        assert!(
+            m.check_indices_and_coordinates()
+                .unwrap_err()
+                .contains("vertex 3 has a coordinate")
         );
     }
 }

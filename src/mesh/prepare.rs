@@ -521,7 +521,7 @@ mod tests {
         m.positions[2].x = f64::NAN;
         let e = prepare(&m, &PrepareOptions::default()).unwrap_err();
         assert!(
-            matches!(&e, PrepareError::BadMesh(m) if m.contains("non-finite")),
+            matches!(&e, PrepareError::BadMesh(m) if m.contains("not a finite length")),
             "{e}"
         );
         assert_eq!(

@@ -158,7 +158,7 @@ pub enum LayerMerge {
 
 /// From `stock_top` down, the lowest plane of `planes` (descending, `bottom` the last) in
 /// the window [above − max, above − min]; where the window holds none, the first plane
-/// below it (a slab the even split then divides). Descending, ending at `bottom`.
+/// below it (a slab the even split then divides). Strictly descending, ending at `bottom`.
 fn deepest_steps(planes: &[f64], stock_top: f64, bottom: f64, options: &LayerOptions) -> Vec<f64> {
     let mut kept = Vec::new();
     let mut above = stock_top;
@@ -167,7 +167,8 @@ fn deepest_steps(planes: &[f64], stock_top: f64, bottom: f64, options: &LayerOpt
         let next = planes
             .iter()
             .copied()
-            .filter(|&z| z >= low && z <= high)
+            // `z < above` also when the minimum depth is 0: the plane just cut is no step.
+            .filter(|&z| z >= low && z <= high && z < above)
             .reduce(f64::min)
             .or_else(|| planes.iter().copied().find(|&z| z < low))
             .unwrap_or(bottom);
@@ -402,6 +403,20 @@ impl BoxGrid {
 mod tests {
     use super::*;
     use crate::geom::{Direction, Move, MoveKind, Point3, ToolPose, Vector3};
+
+    /// A minimum depth of 0 lets the window reach the plane just cut: it must not be taken
+    /// again (the loop would never end); past an empty window the next plane below is taken.
+    #[test]
+    fn deepest_steps_descend_strictly_even_with_no_minimum_depth() {
+        let options = LayerOptions {
+            max_depth: 6.0,
+            min_depth: 0.0,
+            flat_band: 0.1,
+            flat_area: 1.0,
+        };
+        let steps = deepest_steps(&[30.0, 20.0, 17.0, 4.0, 0.0], 40.0, 0.0, &options);
+        assert_eq!(steps, [30.0, 20.0, 17.0, 4.0, 0.0]);
+    }
 
     fn patch_box(min: [f64; 3], max: [f64; 3]) -> Aabb {
         Aabb {

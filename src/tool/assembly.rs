@@ -185,10 +185,9 @@ impl ToolAssembly {
             )));
         }
         for (i, s) in self.holder.iter().enumerate() {
-            positive(
-                &format!("holder section {i} diameter"),
-                s.diameter.min(s.top()),
-            )?;
+            // Each on its own: `min` would pass a NaN beside a good value.
+            positive(&format!("holder section {i} diameter"), s.diameter)?;
+            positive(&format!("holder section {i} top diameter"), s.top())?;
             positive(&format!("holder section {i} length"), s.length)?;
         }
         Ok(())

@@ -335,6 +335,15 @@ pub fn program_toolpath(
         let curvature = machine.curvature_bound(&j0, &j1, 0.0, block.tool);
         let n =
             ((curvature / (8.0 * max_error.max(1e-9))).sqrt().ceil() as usize).clamp(1, MAX_PIECES);
+        if moves.len() + n > MAX_MOVES {
+            return Err(ProgramError {
+                line: block.line,
+                reason: format!(
+                    "the program runs to more than {MAX_MOVES} moves at a {max_error} mm \
+                     tolerance (rotary moves this long are not a part's program)"
+                ),
+            });
+        }
         for k in 1..=n {
             let t = k as f64 / n as f64;
             let j: [f64; 5] = std::array::from_fn(|i| j0[i] + (j1[i] - j0[i]) * t);
@@ -406,6 +415,10 @@ pub struct PostedClearance {
 /// Most pieces one block may be cut into; a block that needs more is measured with the error
 /// this leaves, which is reported.
 const MAX_PIECES: usize = 100_000;
+
+/// Most moves a read-back program may expand to: bounds the memory a small file with huge
+/// rotary words could ask for.
+const MAX_MOVES: usize = 20_000_000;
 
 /// Reads `program` and measures the ball centre along every motion block against `part`.
 pub fn check_posted(

@@ -252,8 +252,10 @@ pub fn read_conversational(text: &str, axes: [char; 5]) -> Result<Vec<MotionBloc
                 let mut rapid = false;
                 let mut moved = false;
                 for w in words {
-                    let (letter, value) = w.split_at(1);
-                    let letter = letter.chars().next().unwrap_or(' ');
+                    // By characters: a word may begin with any letter a file holds.
+                    let mut chars = w.chars();
+                    let letter = chars.next().unwrap_or(' ');
+                    let value = chars.as_str();
                     match (letter, value) {
                         ('R', "0") => {}
                         ('F', "MAX") => rapid = true,
@@ -465,6 +467,7 @@ mod tests {
             (text.replace("6 L Z+10.0000 R0 F500", "6 L Z+10.0000 R0"), 7),
             (text.replace("9 END PGM W MM\n", ""), 9),
             (text.replace("R0 F500", "R0 F500 G1"), 7),
+            (text.replace("R0 F500", "R0 F500 Ä1"), 7),
         ] {
             let e = read_conversational(&edit, AC).unwrap_err();
             assert_eq!(e.line, line, "{e}");

@@ -12,6 +12,9 @@ use crate::cad::nurbs::{NurbsCurve, NurbsSurface};
 /// Deepest chain of transformation matrices or composite curves followed.
 const MAX_DEPTH: usize = 16;
 
+/// Most simple curves one composite curve (102) may expand to, nested members counted.
+const MAX_COMPOSITE_LEAVES: usize = 1_000_000;
+
 /// A rigid (or reflecting) map `x ↦ R·x + t` (entity 124).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
@@ -80,6 +83,14 @@ pub enum Curve {
 }
 
 impl Curve {
+    /// The number of simple curves (lines, arcs, NURBS) this curve is made of.
+    fn leaves(&self) -> usize {
+        match self {
+            Curve::Composite(members) => members.iter().map(Curve::leaves).sum(),
+            _ => 1,
+        }
+    }
+
     /// Points along the curve, ends included, at least `per_piece` intervals per member (more
     /// for a NURBS of many spans).
     pub fn sample(&self, per_piece: usize) -> Vec<Point3<f64>> {
@@ -272,6 +283,21 @@ impl<'a> Params<'a> {
             self.real(i + 2)?,
         ))
     }
+    /// `q`, read from parameter `i` on, placed by `place`: finite in the file may still be
+    /// infinite once transformed and scaled to millimetres.
+    fn placed(
+        &self,
+        place: &Transform,
+        q: Point3<f64>,
+        i: usize,
+    ) -> Result<Point3<f64>, IgesError> {
+        let q = place.apply(&q);
+        if q.iter().all(|c| c.is_finite()) {
+            Ok(q)
+        } else {
+            Err(self.error(i, "the point is not finite once placed in mm"))
+        }
+    }
     fn len(&self) -> usize {
         self.e.parameters.len().saturating_sub(1)
     }
@@ -369,8 +395,8 @@ impl<'a> Reader<'a> {
         };
         match e.entity_type {
             110 => Ok(Curve::Line {
-                start: place.apply(&p.point(1)?),
-                end: place.apply(&p.point(4)?),
+                start: p.placed(&place, p.point(1)?, 1)?,
+                end: p.placed(&place, p.point(4)?, 4)?,
             }),
             100 => {
                 let z = p.real(1)?;
@@ -385,8 +411,8 @@ impl<'a> Reader<'a> {
                 }
                 let normal = place.rotation * Vector3::z();
                 Ok(Curve::Arc {
-                    centre: place.apply(&centre),
-                    start: place.apply(&start),
+                    centre: p.placed(&place, centre, 2)?,
+                    start: p.placed(&place, start, 4)?,
                     sweep,
                     normal: Unit::try_new(normal, 1e-12)
                         .ok_or_else(|| p.error(0, "a degenerate transformation"))?,
@@ -433,12 +459,24 @@ impl<'a> Reader<'a> {
                     return Err(p.error(1, "composite curves nested too deep"));
                 }
                 let n = p.count(1, p.len())?;
-                let members = (0..n)
-                    .map(|i| {
-                        let member = p.count(2 + i, usize::MAX)?;
-                        self.curve(member, e, model, depth + 1)
-                    })
-                    .collect::<Result<Vec<_>, _>>()?;
+                // A member may be referenced many times over, and nested: counted as it is
+                // read, so a small file cannot expand into billions of curves.
+                let mut members = Vec::with_capacity(n);
+                let mut leaves = 0;
+                for i in 0..n {
+                    let member = self.curve(p.count(2 + i, usize::MAX)?, e, model, depth + 1)?;
+                    leaves += member.leaves();
+                    if leaves > MAX_COMPOSITE_LEAVES {
+                        return Err(p.error(
+                            2 + i,
+                            format!(
+                                "the composite curve expands to more than \
+                                 {MAX_COMPOSITE_LEAVES} simple curves"
+                            ),
+                        ));
+                    }
+                    members.push(member);
+                }
                 Ok(Curve::Composite(members))
             }
             other => Err(p.error(
@@ -511,15 +549,15 @@ impl<'a> Reader<'a> {
                 .map_err(|err| p.error(1, err))?;
                 let ((u0, u1), (v0, v1)) = surface.domain();
                 let r = pbase + 3 * c;
-                let range = |lo: Result<f64, IgesError>,
-                             hi: Result<f64, IgesError>,
-                             a: f64,
-                             b: f64| {
-                    match (lo, hi) {
-                        (Ok(lo), Ok(hi)) if hi > lo => (lo.max(a), hi.min(b)),
-                        _ => (a, b),
-                    }
-                };
+                let range =
+                    |lo: Result<f64, IgesError>, hi: Result<f64, IgesError>, a: f64, b: f64| {
+                        // A stated range outside the knot domain (or crossing it) says nothing
+                        // usable: the whole domain is the surface then.
+                        match (lo, hi) {
+                            (Ok(lo), Ok(hi)) if lo.max(a) < hi.min(b) => (lo.max(a), hi.min(b)),
+                            _ => (a, b),
+                        }
+                    };
                 Ok(Surface::Nurbs {
                     u: range(p.real(r), p.real(r + 1), u0, u1),
                     v: range(p.real(r + 2), p.real(r + 3), v0, v1),

@@ -410,6 +410,29 @@ mod tests {
         assert!(e.contains("124 expected"), "{e}");
     }
 
+    /// Composite curves that each list the one below forty times expand to 40⁶ lines: refused
+    /// by their count, read member by member, not after billions of curves were built.
+    #[test]
+    fn a_composite_curve_bomb_is_refused() {
+        let mut b = Builder::new();
+        let surface = b.add(
+            128,
+            0,
+            "00010000",
+            "1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.,0.,0.,0.,10.,0.,0.,0.,20.,0.,10.,\
+             20.,0.,0.,1.,0.,1.",
+        );
+        let mut curve = b.add(110, 0, "00010500", "0.,0.,0.,0.5,0.,0.");
+        for _ in 0..6 {
+            let members = vec![curve.to_string(); 40].join(",");
+            curve = b.add(102, 0, "00010500", &format!("40,{members}"));
+        }
+        let on_surface = b.add(142, 0, "00010500", &format!("1,{surface},{curve},0,1"));
+        b.add(144, 0, "00000000", &format!("{surface},1,0,{on_surface}"));
+        let e = read_iges(&b.text()).unwrap_err().to_string();
+        assert!(e.contains("more than 1000000 simple curves"), "{e}");
+    }
+
     /// The plane face of the first test and the cone of the second in one file.
     fn rich_file() -> String {
         let mut b = Builder::new();

@@ -160,8 +160,13 @@ pub enum MeshIoError {
         format: Format,
         message: String,
     },
-    /// A vertex coordinate is NaN or infinite (after transforms and unit scaling).
-    #[error("{name}: vertex {vertex} ({location}) has a non-finite coordinate {value:?}")]
+    /// A vertex coordinate is NaN, infinite or beyond [`MAX_COORDINATE_MM`](crate::mesh::MAX_COORDINATE_MM)
+    /// (after transforms and unit scaling).
+    #[error(
+        "{name}: vertex {vertex} ({location}) has a coordinate that is not a finite length within \
+         ±{} mm: {value:?}",
+        crate::mesh::MAX_COORDINATE_MM
+    )]
     NonFinite {
         name: String,
         /// Index into [`RawMesh::mesh`]`.positions` that the vertex would have had.
@@ -239,12 +244,13 @@ pub fn read_mesh_bytes(
             detail,
         });
     }
-    debug_assert!(check_raw(&raw.mesh).is_ok());
+    debug_assert!(raw.mesh.check_indices_and_coordinates().is_ok());
     Ok(raw)
 }
 
-/// Converts a point to millimetres and checks it is finite. `vertex` and `location` only
-/// feed the error.
+/// Converts a point to millimetres and checks it is a usable coordinate (finite, within
+/// [`MAX_COORDINATE_MM`](crate::mesh::MAX_COORDINATE_MM)). `vertex` and `location` only feed
+/// the error.
 fn scaled_point(
     p: [f64; 3],
     scale: f64,
@@ -253,7 +259,7 @@ fn scaled_point(
     location: impl FnOnce() -> String,
 ) -> Result<nalgebra::Point3<f64>, MeshIoError> {
     let q = [p[0] * scale, p[1] * scale, p[2] * scale];
-    if q.iter().all(|c| c.is_finite()) {
+    if q.iter().all(|c| c.abs() <= crate::mesh::MAX_COORDINATE_MM) {
         Ok(nalgebra::Point3::new(q[0], q[1], q[2]))
     } else {
         Err(MeshIoError::NonFinite {
@@ -263,26 +269,6 @@ fn scaled_point(
             value: q,
         })
     }
-}
-
-/// The raw-mesh invariant every loader guarantees: finite positions, indices in range.
-fn check_raw(mesh: &Mesh) -> Result<(), String> {
-    if let Some(v) = mesh
-        .positions
-        .iter()
-        .position(|p| !p.iter().all(|c| c.is_finite()))
-    {
-        return Err(format!("vertex {v} is not finite"));
-    }
-    let n = mesh.positions.len();
-    if let Some(f) = mesh
-        .triangles
-        .iter()
-        .position(|t| t.iter().any(|&i| i as usize >= n))
-    {
-        return Err(format!("face {f} has an index out of range"));
-    }
-    Ok(())
 }
 
 /// Shortens text taken from a file for an error message.

@@ -156,10 +156,19 @@ fn units_scale_positions() {
         let r = read_mesh_bytes(&b, Format::Stl, "t.stl", None, u).unwrap();
         assert_eq!(r.mesh.positions[2], Point3::new(s, 0.0, 0.0));
     }
-    // Finite in the file, infinite in mm.
-    let big = "solid x\nfacet outer loop vertex 1e306 0 0 vertex 0 1 0 vertex 0 0 1 endloop \
+    // Within 1000 km in the file, beyond it in mm; and finite but beyond it.
+    let big = "solid x\nfacet outer loop vertex 1e7 0 0 vertex 0 1 0 vertex 0 0 1 endloop \
                endfacet endsolid";
     assert!(load(big.as_bytes()).is_ok());
     let e = read_mesh_bytes(big.as_bytes(), Format::Stl, "t.stl", None, Units::Metres);
+    assert!(matches!(e, Err(MeshIoError::NonFinite { vertex: 0, .. })));
+    let huge = big.replace("1e7", "1e306");
+    let e = read_mesh_bytes(
+        huge.as_bytes(),
+        Format::Stl,
+        "t.stl",
+        None,
+        Units::Millimetres,
+    );
     assert!(matches!(e, Err(MeshIoError::NonFinite { vertex: 0, .. })));
 }
