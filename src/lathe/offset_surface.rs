@@ -57,7 +57,6 @@ impl OffsetSurface {
 const MAX_SAMPLES: usize = 4_000_000;
 
 /// Samples per side of a patch by eq. 3.20 (pow 0.34, the non-linear case).
-
 fn samples_for(bounds: [f64; 3], tolerance: f64, degree: usize) -> usize {
     let [m1, m2, m3] = bounds;
     let n = (1.0 / tolerance).powf(0.34) * ((m1 + 2.0 * m2 + m3) / 8.0).sqrt();
