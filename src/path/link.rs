@@ -49,12 +49,17 @@ pub struct LinkOptions {
     pub chord_tolerance: f64,
 }
 
-/// How far up the axis a short link lifts, tried in order, in multiples of the ball radius.
-const SHORT_LINK_LIFTS: [f64; 3] = [0.5, 1.5, 5.0];
+/// How far up the axis a short link lifts, tried in order, in multiples of the ball radius:
+/// low over a flank, high enough to pass over a blade's edge within an impeller's passage.
+const SHORT_LINK_LIFTS: [f64; 4] = [0.5, 1.5, 5.0, 12.0];
 
-/// Largest axis turn along a short link, degrees: beyond it the control's interpolation of
-/// the rotary axes strays too far from the turn checked here.
-const SHORT_LINK_MAX_TURN_DEG: f64 = 30.0;
+/// Largest axis turn along a short link, degrees. The turn is checked at every degree along
+/// the great circle, and the post makes the control follow that circle within its angle
+/// tolerance (`post::linearise`); beyond a right angle the axis would swing the holder
+/// through a half-space the link was never meant to visit. (At 30° on the sample impeller
+/// 191 of 252 safe-plane retracts were for a turn of 33–57° between segments 0.1–2 mm apart,
+/// where the chooser had turned the axis round an obstacle.)
+const SHORT_LINK_MAX_TURN_DEG: f64 = 90.0;
 
 /// What linking changed.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -69,6 +74,12 @@ pub struct LinkReport {
     pub links_across: usize,
     pub short_links: usize,
     pub safe_plane_retracts: usize,
+    /// Why the safe plane: the next segment started farther than the longest short link,
+    /// its axis turned more than a short link may, or every short link's moves touched the
+    /// part (ball within the rapid margin, or shank, holder or table).
+    pub safe_plane_far: usize,
+    pub safe_plane_turn: usize,
+    pub safe_plane_blocked: usize,
 }
 
 /// Links `segments` in order into one toolpath for `tool`.
@@ -111,11 +122,11 @@ pub fn link(
         .filter(|(_, (start, end))| end - start >= 2)
         .map(|(segment, &(start, end))| (segment.poses[start], segment.poses[end - 1]))
         .collect();
-    let short: Vec<Option<Link>> = (0..ends.len())
+    let short: Vec<Result<Link, NoShortLink>> = (0..ends.len())
         .into_par_iter()
-        .map(|i| {
-            let next = ends.get(i + 1)?;
-            short_link(part, tool, &ends[i].1, &next.0, options)
+        .map(|i| match ends.get(i + 1) {
+            Some(next) => short_link(part, tool, &ends[i].1, &next.0, options),
+            None => Err(NoShortLink::Last),
         })
         .collect();
     let mut arriving: Option<Link> = None;
@@ -145,6 +156,15 @@ pub fn link(
                     MoveKind::Retract,
                     options.retract_feed,
                 ));
+                // Down the checked axis at the retract feed to the clearance above the entry,
+                // then in at the approach feed, as from the safe plane.
+                if lift > options.clearance {
+                    path.moves.push(mv(
+                        along(&entry, options.clearance),
+                        MoveKind::Approach,
+                        options.retract_feed,
+                    ));
+                }
                 path.moves
                     .push(mv(entry, MoveKind::Approach, options.approach_feed));
             }
@@ -157,8 +177,8 @@ pub fn link(
             path.moves.push(mv(*pose, MoveKind::Cut, options.cut_feed));
         }
         match short[k] {
-            Some(Link::Across) => arriving = Some(Link::Across),
-            Some(Link::Lifted(lift)) => {
+            Ok(Link::Across) => arriving = Some(Link::Across),
+            Ok(Link::Lifted(lift)) => {
                 path.moves.push(mv(
                     along(&exit, lift),
                     MoveKind::Retract,
@@ -166,7 +186,15 @@ pub fn link(
                 ));
                 arriving = Some(Link::Lifted(lift));
             }
-            None => path.moves.extend(safe.exit(&exit)),
+            Err(why) => {
+                match why {
+                    NoShortLink::Far => report.safe_plane_far += 1,
+                    NoShortLink::Turn => report.safe_plane_turn += 1,
+                    NoShortLink::Blocked => report.safe_plane_blocked += 1,
+                    NoShortLink::Last => {}
+                }
+                path.moves.extend(safe.exit(&exit))
+            }
         }
         k += 1;
     }
@@ -327,6 +355,19 @@ enum Link {
     Lifted(f64),
 }
 
+/// Why a segment is left by way of the safe plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum NoShortLink {
+    /// The next segment starts farther than the longest short link.
+    Far,
+    /// The axis turns more than a short link may.
+    Turn,
+    /// Every lift's moves came too near the part.
+    Blocked,
+    /// No next segment.
+    Last,
+}
+
 /// The lift of a short link from `exit` to `entry`, if one is short enough and clear: up
 /// `lift` along the exit's axis, straight across to `lift` above the entry along its axis
 /// (the axis turning evenly), down to the entry. The ball keeps the rapid margin from the part
@@ -339,13 +380,16 @@ fn short_link(
     exit: &ToolPose,
     entry: &ToolPose,
     options: &LinkOptions,
-) -> Option<Link> {
+) -> Result<Link, NoShortLink> {
     let r = tool.ball_radius;
     let centre = |p: &ToolPose, lift: f64| p.tip + p.axis.into_inner() * (r + lift);
     let turn = angle_between(&exit.axis, &entry.axis).to_degrees();
     let distance = (centre(exit, 0.0) - centre(entry, 0.0)).norm();
-    if distance > options.max_short_link || turn > SHORT_LINK_MAX_TURN_DEG {
-        return None;
+    if distance > options.max_short_link {
+        return Err(NoShortLink::Far);
+    }
+    if turn > SHORT_LINK_MAX_TURN_DEG {
+        return Err(NoShortLink::Turn);
     }
     let bodies_clear = |a: &Point3, b: &Point3| {
         let steps = ((b - a).norm() / (0.2 * r)).max(turn).ceil().max(1.0) as usize;
@@ -371,7 +415,7 @@ fn short_link(
             .segment_within(&a, &b, r - options.chord_tolerance)
         && bodies_clear(&a, &b)
     {
-        return Some(Link::Across);
+        return Ok(Link::Across);
     }
     SHORT_LINK_LIFTS
         .iter()
@@ -388,6 +432,7 @@ fn short_link(
                 && bodies_clear(&a, &b)
         })
         .map(Link::Lifted)
+        .ok_or(NoShortLink::Blocked)
 }
 
 /// How far up the axis from `pose` the ball must be fed before the rest of the way, up to
@@ -409,4 +454,97 @@ fn feed_lift(part: &PartCollider, pose: &ToolPose, r: f64, to_safe: f64, margin:
         }
     }
     0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collide::{Margins, PartCollider, PreparedTool};
+    use crate::geom::{Direction, Vector3};
+
+    fn pose(tip: [f64; 3], axis: [f64; 3]) -> ToolPose {
+        ToolPose {
+            tip: Point3::from(tip),
+            axis: Direction::new_normalize(Vector3::from(axis)),
+        }
+    }
+
+    /// Two passes on a plate's top, 4 mm apart, the second with its axis turned 45°: linked by
+    /// a short lift (not the safe plane), every move of the link keeps the ball the rapid
+    /// margin off the plate except the approach's last clearance, and a lift above the
+    /// clearance comes down at the retract feed before the approach feed takes over.
+    #[test]
+    fn a_turned_axis_a_few_millimetres_on_is_reached_by_a_short_link() {
+        let plate = crate::mesh::fixtures::cuboid(100.0, 100.0, 20.0);
+        let part = PartCollider::new(&plate).expect("plate");
+        let margins = Margins {
+            shank: 0.5,
+            holder: 2.0,
+        };
+        let tool = PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins);
+        let (r, tilt) = (3.0, std::f64::consts::FRAC_1_SQRT_2);
+        let segment = |poses: Vec<ToolPose>| CutSegment {
+            pass_directions: vec![Vector3::x(); poses.len()],
+            poses,
+        };
+        let first = segment(vec![
+            pose([30.0, 50.0, 20.0], [0.0, 0.0, 1.0]),
+            pose([40.0, 50.0, 20.0], [0.0, 0.0, 1.0]),
+        ]);
+        // The ball (centre 3 above the top) touching the plate under a tilted axis.
+        let tilted = |x: f64| pose([x - r * tilt, 50.0, 23.0 - r * tilt], [tilt, 0.0, tilt]);
+        let second = segment(vec![tilted(44.0), tilted(54.0)]);
+        let options = LinkOptions {
+            pivot: Point3::new(50.0, 50.0, 0.0),
+            safe_distance: 200.0,
+            clearance: 1.0,
+            cut_feed: 1000.0,
+            approach_feed: 300.0,
+            retract_feed: 2000.0,
+            rapid_feed: 10000.0,
+            rapid_margin: 0.5,
+            max_short_link: 20.0,
+            chord_tolerance: 0.01,
+        };
+        let (path, report) = link(&[first, second], &part, &tool, 1, &options);
+        assert_eq!(
+            (
+                report.short_links,
+                report.safe_plane_retracts,
+                report.safe_plane_turn
+            ),
+            (1, 1, 0),
+            "{report:?}"
+        );
+        // The link: the moves between the first pass's last cut and the second's first.
+        let from = path
+            .moves
+            .iter()
+            .position(|m| m.pose == pose([40.0, 50.0, 20.0], [0.0, 0.0, 1.0]))
+            .expect("first pass's end");
+        let to = path.moves[from..]
+            .iter()
+            .position(|m| m.kind == MoveKind::Approach && m.feed == options.approach_feed)
+            .expect("approach")
+            + from;
+        let lift = (path.moves[from + 1].pose.tip - path.moves[from].pose.tip).norm();
+        assert!(lift > options.clearance, "lifted {lift}");
+        let centre = |m: &Move| m.pose.tip + m.pose.axis.into_inner() * r;
+        for m in &path.moves[from + 1..to] {
+            // Top of the plate at z = 20: the ball's lowest point keeps the margin up to the
+            // clearance above the entry (along the 45° axis: clearance / √2 higher).
+            let least = (options.clearance * tilt).min(options.rapid_margin);
+            assert!(centre(m).z - r >= 20.0 + least - 1e-9, "{m:?}");
+        }
+        let slow_down = &path.moves[to - 1];
+        assert_eq!(
+            (slow_down.kind, slow_down.feed),
+            (MoveKind::Approach, options.retract_feed)
+        );
+        assert!(
+            (slow_down.pose.tip - path.moves[to].pose.tip).norm() - options.clearance < 1e-9,
+            "the approach feed takes the last clearance only"
+        );
+        assert_eq!(path.moves[to].pose, tilted(44.0));
+    }
 }
