@@ -156,12 +156,13 @@ pub fn link(
                     MoveKind::Retract,
                     options.retract_feed,
                 ));
-                // Down the checked axis at the retract feed to the clearance above the entry,
-                // then in at the approach feed, as from the safe plane.
+                // Down the checked axis at the retract feed to the clearance above the entry
+                // (a move in the air, like the one across), then in at the approach feed, as
+                // from the safe plane.
                 if lift > options.clearance {
                     path.moves.push(mv(
                         along(&entry, options.clearance),
-                        MoveKind::Approach,
+                        MoveKind::Retract,
                         options.retract_feed,
                     ));
                 }
@@ -539,7 +540,7 @@ mod tests {
         let slow_down = &path.moves[to - 1];
         assert_eq!(
             (slow_down.kind, slow_down.feed),
-            (MoveKind::Approach, options.retract_feed)
+            (MoveKind::Retract, options.retract_feed)
         );
         assert!(
             (slow_down.pose.tip - path.moves[to].pose.tip).norm() - options.clearance < 1e-9,
