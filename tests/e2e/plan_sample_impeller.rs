@@ -1,13 +1,11 @@
 //! End to end on the bundled sample impeller: plan it, then check the outputs with code that
 //! shares nothing with the planner's own queries.
 
-mod common;
-
-use common::plan_checks::{
+use crate::common::plan_checks::{
     a_real_control_reads_the_program_as_the_tests_do, passes_never_step_backwards,
     posted_program_keeps_the_ball_within_the_tolerance,
 };
-use common::{Oracle, parse_cl, repo_file, surface_samples};
+use crate::common::{Oracle, parse_cl, repo_file, surface_samples};
 use nalgebra::Point3;
 use wavemill::job::{self, Job, Quiet};
 
@@ -16,7 +14,7 @@ use wavemill::job::{self, Job, Quiet};
 fn coarse_job() -> Job {
     let mut job = Job::load(&repo_file("data/impeller.toml")).expect("data/impeller.toml");
     job.strategy.scallop_height = 0.4;
-    // Finishing only: the part is taken as roughed (tests/plan_stock.rs roughs it).
+    // Finishing only: the part is taken as roughed (tests/e2e/plan_stock.rs roughs it).
     job.stock.blank = None;
     job.strategy.max_step = 2.0;
     job

@@ -3,12 +3,10 @@
 //! G-code read back and interpolated as the control does). Skipped, saying so, without
 //! `../shared/testdata`.
 
-mod common;
-
-use common::plan_checks::{
+use crate::common::plan_checks::{
     passes_never_step_backwards, posted_program_keeps_the_ball_within_the_tolerance,
 };
-use common::{Oracle, parse_cl, testdata};
+use crate::common::{Oracle, parse_cl, testdata};
 use wavemill::job::{self, Job, Quiet};
 
 #[test]

@@ -5,8 +5,7 @@
 //! posted program keeps out of every box and off the part, the tri-dexel run finds no gouge,
 //! the uniform route is planned beside it, and a single-threaded run posts the same program.
 
-mod common;
-
+use crate::common;
 use std::process::Command;
 
 use serde_json::Value;

@@ -5,8 +5,7 @@
 //! Prints the per-shape table (allowance, min clearance − allowance, mean/max excess, bound,
 //! triangles, build and verify time).
 
-mod common;
-
+use crate::common;
 use nalgebra::{Rotation3, Vector3};
 use wavemill::job::{self, OffsetsOutput};
 use wavemill::mesh::{Mesh, PrepareOptions, prepare};

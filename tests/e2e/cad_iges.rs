@@ -4,8 +4,7 @@
 //! (sampled densely) — which checks the 126 and 128 layouts, the net order, the rational
 //! evaluation and the surfaces of revolution's parameters at once.
 
-mod common;
-
+use crate::common;
 use nalgebra::Point3;
 use wavemill::cad::iges::{Curve, read_iges};
 

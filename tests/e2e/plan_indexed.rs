@@ -6,8 +6,7 @@
 //! The clearance of every indexed move's tool axis is measured here by the exact distance to
 //! the part's twelve triangles, sharing nothing with the planner or its checks.
 
-mod common;
-
+use crate::common;
 use nalgebra::Point3;
 use wavemill::geom::MoveKind;
 use wavemill::job::{self, Job, Quiet};

@@ -8,9 +8,8 @@
 //! rest-roughed and finished with the ball's shank and holder kept off the material the
 //! roughing left.
 
-mod common;
-
-use common::repo_file;
+use crate::common;
+use crate::common::repo_file;
 use wavemill::job::{self, Job, PlanOutput, Quiet};
 
 fn coarse_job(blank: &str) -> Job {
@@ -94,6 +93,9 @@ fn a_finishing_program_run_on_a_raw_box_fails_with_its_collisions() {
     );
     // Finishing alone, as listed: a box blank would otherwise be roughed first.
     let mut job = coarse_job(&blank);
+    // Coarser still: the failure is the point, not the finish.
+    job.strategy.scallop_height = 1.0;
+    job.strategy.max_step = 3.0;
     job.operations = toml::from_str::<Job>("[[operation]]\nkind = \"finish\"\n")
         .expect("operations")
         .operations;

@@ -3,8 +3,7 @@
 //! round-off, and non-manifold input is refused with a message that says where. Prints, per
 //! mesh, the base size, level count, fit to the input, reconstruction error and time.
 
-mod common;
-
+use crate::common;
 use std::time::Instant;
 
 use wavemill::job;

@@ -10,8 +10,7 @@
 //! * LinuxCNC's interpreter (`rs274`, when installed) reads the LinuxCNC and Fanuc joint
 //!   programs with the same motions.
 
-mod common;
-
+use crate::common;
 use nalgebra::{Point3, Unit, Vector3};
 use wavemill::geom::MoveKind;
 use wavemill::job::{self, Job, Quiet};

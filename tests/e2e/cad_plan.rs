@@ -4,16 +4,14 @@
 //! build (the part has eleven blades and 146k drive points at a 1 mm scallop), the posted
 //! program read back and interpolated by the tests' own code against the tessellated part.
 
-mod common;
-
-use common::plan_checks::posted_program_keeps_the_ball_within_the_tolerance;
-use common::{Oracle, parse_cl, testdata};
+use crate::common::plan_checks::posted_program_keeps_the_ball_within_the_tolerance;
+use crate::common::{Oracle, parse_cl, testdata};
 use wavemill::cad::tessellate::TessellateOptions;
 use wavemill::job::{self, Job, Quiet};
 
 #[test]
 #[ignore = "70 s in a release build and several minutes in a debug one, beyond the CI budget: \
-            cargo test --release --test cad_plan -- --ignored"]
+            cargo test --release --test e2e cad_plan -- --ignored"]
 fn the_iges_impeller_plans_end_to_end_without_a_gouge() {
     let Some(dir) = testdata() else { return };
     let path = dir.join("cad/impeller_solidworks__pyvista_pyiges.igs");
@@ -45,7 +43,7 @@ fn the_iges_impeller_plans_end_to_end_without_a_gouge() {
 /// every box and off the part, and the stock run finds no gouge.
 #[test]
 #[ignore = "two minutes in a release build, beyond the CI budget: \
-            cargo test --release --test cad_plan -- --ignored"]
+            cargo test --release --test e2e cad_plan -- --ignored"]
 fn the_iges_impeller_roughs_to_its_hull_boxes_in_a_job() {
     let Some(dir) = testdata() else { return };
     let path = dir.join("cad/impeller_solidworks__pyvista_pyiges.igs");

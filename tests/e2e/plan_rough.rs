@@ -7,8 +7,7 @@
 //! pose's distance to it can be measured from those sections: no code of the planner or of its
 //! own checks is used to judge it.
 
-mod common;
-
+use crate::common;
 use nalgebra::Point3;
 use wavemill::geom::MoveKind;
 use wavemill::job::{self, Job, Quiet};

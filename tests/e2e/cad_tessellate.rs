@@ -4,8 +4,7 @@
 //! dense surface samples), with an inside/outside that agrees with ray parity, identically on
 //! every run.
 
-mod common;
-
+use crate::common;
 use std::collections::BTreeSet;
 
 use nalgebra::Point3;

@@ -4,8 +4,7 @@
 //! are refused. Each symmetry is checked on the surface by the recognition itself; on the
 //! sample it is checked again here by the tests' own distance oracle.
 
-mod common;
-
+use crate::common;
 use wavemill::impeller::{
     HubPassage, NotAnImpeller, PassageOptions, RecogniseOptions, Region, blade_loops, recognise,
 };

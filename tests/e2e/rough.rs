@@ -3,14 +3,31 @@
 //! shape and run on the tri-dexel blank with the whole tool. A coarse stock model (1 mm) keeps
 //! the run short; the checks do not depend on it.
 
-mod common;
-
-use common::repo_file;
+use crate::common;
+use crate::common::repo_file;
 use wavemill::job::{self, RoughOptions};
 use wavemill::tool::ToolLibrary;
 
 fn library() -> ToolLibrary {
     ToolLibrary::read(&repo_file("data/tools.toml")).expect("data/tools.toml")
+}
+
+/// The flat D10 alone on a 1 mm stock model, every other option at its default: the run two
+/// of the tests below compare against (the looped slots, the offsets layering), made once.
+fn the_d10_alone() -> &'static job::RoughReport {
+    static REPORT: std::sync::OnceLock<job::RoughReport> = std::sync::OnceLock::new();
+    REPORT.get_or_init(|| {
+        let raw = job::load_part(&repo_file("data/impeller.glb"), "mm").expect("sample");
+        let options = RoughOptions {
+            tool_id: Some(3),
+            rest_tools: 0,
+            resolution: Some(1.0),
+            ..Default::default()
+        };
+        let out = job::rough(&raw, "data/impeller.glb", "mm", &library(), &options).expect("rough");
+        assert_eq!(out.failure, None);
+        out.report
+    })
 }
 
 #[test]
@@ -258,7 +275,8 @@ fn slots_and_corners_are_looped_within_the_engagement_bound() {
             .map(|l| l.max_engagement_mm)
             .fold(0.0, f64::max)
     };
-    let (straight, looped) = (run(1.0), run(0.5));
+    assert_eq!(RoughOptions::default().max_engagement, 0.5);
+    let (straight, looped) = (run(1.0), the_d10_alone().tools[0].clone());
     let d = 10.0;
     assert!(widest(&straight) > 0.95 * d, "{}", widest(&straight));
     assert!(straight.layers.iter().all(|l| l.looped_stretches == 0));
@@ -312,8 +330,12 @@ fn wavelet_layers_rough_the_sample_as_cleanly() {
         assert_eq!(out.failure, None);
         out.report
     };
+    assert_eq!(
+        RoughOptions::default().layer_paths,
+        wavemill::rough::LayerPaths::Offsets
+    );
     let (offsets, wavelet) = (
-        run(wavemill::rough::LayerPaths::Offsets),
+        the_d10_alone().clone(),
         run(wavemill::rough::LayerPaths::Wavelet),
     );
     let t = &wavelet.tools[0];

@@ -5,8 +5,7 @@
 //! (sampled densely here, not solved), the program's X/Z/C as LinuxCNC's interpreter reads them,
 //! the form error between points, identical bytes for one thread and many, and clear refusals.
 
-mod common;
-
+use crate::common;
 use std::path::Path;
 use std::process::Command;
 

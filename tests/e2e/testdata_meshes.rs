@@ -2,8 +2,7 @@
 //! the validation report says what is wrong with the dirty ones. Skips (with a message) when
 //! the shared folder is absent, as on a newcomer's clone.
 
-mod common;
-
+use crate::common;
 use wavemill::mesh::io::{Units, read_mesh};
 use wavemill::mesh::{MeshReport, PrepareOptions, prepare, prepare_without_stray_pieces};
 

@@ -1,11 +1,10 @@
 //! The command-line tool as a script would use it: help, exit codes, errors that name the
 //! file, the four outputs, regenerated sample data, byte-identical runs.
 
-mod common;
-
+use crate::common;
 use std::process::{Command, Output};
 
-use common::repo_file;
+use crate::common::repo_file;
 use wavemill::job::{SamplePart, sample_files};
 
 fn wavemill(args: &[&str]) -> Output {

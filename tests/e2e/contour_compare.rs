@@ -4,8 +4,7 @@
 //! library. Both methods must never cut into the part, and the new one must leave no more
 //! material than the baseline.
 
-mod common;
-
+use crate::common;
 use std::process::Command;
 
 use wavemill::job::{

@@ -2,11 +2,9 @@
 //! independent oracle (grid + brute-force point–triangle distances, ray-parity inside tests),
 //! and `wavemill tools` writes the same bytes for any thread count and names bad libraries.
 
-mod common;
-
 use std::process::Command;
 
-use common::{Oracle, repo_file};
+use crate::common::{Oracle, repo_file};
 use nalgebra::{Point3, Vector3};
 use wavemill::geom::orthonormal_frame;
 use wavemill::job;

@@ -6,8 +6,7 @@
 //! sides and the ends. Its distance is the least of its three boxes' (closed form), so every
 //! ball centre is measured without the planner's distance queries.
 
-mod common;
-
+use crate::common;
 use nalgebra::{Point3, Vector3};
 use wavemill::geom::MoveKind;
 use wavemill::job::{self, Job, Layering, Quiet};

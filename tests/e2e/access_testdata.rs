@@ -4,11 +4,9 @@
 //! a few hundred vertices × 642 directions; the 10242-direction figures are in
 //! `benches/access.rs`.
 
-mod common;
-
 use std::path::Path;
 
-use common::{repo_file, testdata};
+use crate::common::{repo_file, testdata};
 use wavemill::access::{
     DirectionSet, RayScene, Refine, SurfacePoint, VisibilityOptions, vertex_points,
     visibility_brute_force, visibility_hierarchical,

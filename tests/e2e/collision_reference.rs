@@ -4,9 +4,7 @@
 //! (The closed-form cases — a ball in a spherical cavity, bodies above a plate — are unit tests
 //! of `collide`.)
 
-mod common;
-
-use common::{repo_file, surface_samples};
+use crate::common::{repo_file, surface_samples};
 use nalgebra::{Point3, Unit, Vector3};
 use wavemill::collide::{Collision, F32_SLACK, Margins, PartCollider, PreparedTool};
 use wavemill::geom::ToolPose;
