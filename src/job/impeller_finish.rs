@@ -348,7 +348,12 @@ pub fn finish_impeller(
         region: Some(&region),
         ..*ctx
     };
-    let planes = path::finishing_passes(drive, &planes_ctx, options, advance);
+    let mut planes = path::finishing_passes(drive, &planes_ctx, options, advance);
+    // What the planes take here is pieces round the rim, the bore and the blade tips, not
+    // whole planes: in plane order, one piece's end is seldom near the next one's start (on
+    // the blower on a fixture, 356 of 357 safe-plane retracts were links too long for a short
+    // one). Nearest first, either way round (the planes zig-zag already), links them short.
+    planes.segments = path::nearest_order(std::mem::take(&mut planes.segments), true);
     summary.plane_points_left_to_impeller = planes.points_left_to_others;
     finishing.merge(planes);
     (finishing, summary)
