@@ -14,7 +14,9 @@
 
 use rayon::prelude::*;
 
-use crate::geom::{Point3, Toolpath, closest_points_of_segments};
+use crate::contour::geometry::Segment;
+use crate::contour::segops::point_distance;
+use crate::geom::{Point2, Point3, Toolpath, closest_points_of_segments};
 use crate::mesh::Mesh;
 
 /// A move the check found too close to the shape.
@@ -128,15 +130,15 @@ impl Buckets {
 
 /// Distance in the plane from `p` to the segment ab.
 fn planar_point_segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let length2 = dx * dx + dy * dy;
-    let t = if length2 > 0.0 {
-        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / length2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (x, y) = (a.0 + t * dx - p.0, a.1 + t * dy - p.1);
-    (x * x + y * y).sqrt()
+    let point = |q: (f64, f64)| Point2::new(q.0, q.1);
+    point_distance(
+        point(p),
+        &Segment::Line {
+            start: point(a),
+            end: point(b),
+        },
+    )
+    .0
 }
 
 /// A lower bound of the planar distance from the segment ab to anything in the box lo–hi: the
