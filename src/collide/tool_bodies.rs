@@ -242,10 +242,12 @@ impl PartCollider {
     /// when parry's test must decide.
     ///
     /// The body is cut along its axis into pieces about its radius long; each lies in the
-    /// capsule around its stretch of the axis with its larger radius. When no triangle comes
-    /// that close to any stretch, the body is clear. The points nearest the stretches of the
-    /// triangles that do come that close are tested: one inside the body, and they meet; none,
-    /// and parry decides. Most tested poses are decided here,
+    /// flat-ended cylinder around its stretch of the axis with its larger radius. When no
+    /// triangle comes into any of those cylinders, the body is clear. The points nearest the
+    /// stretches of the triangles that do are tested: one inside the body, and they meet;
+    /// none, and parry decides. (Flat ends, not a capsule's round ones: the flutes start at
+    /// the ball's equator, and a capsule round their first stretch holds the ball's top half,
+    /// which touches the part wherever the ball cuts with its side.) Most tested poses are decided here,
     /// without parry's f32 GJK over every triangle under a tilted body's loose box. (Like
     /// parry's, it is a test against the surface: a body wholly inside the part passes both.)
     fn capsule_verdict(&self, body: &Revolved, pose: &ToolPose) -> Option<bool> {
@@ -273,7 +275,7 @@ impl PartCollider {
             // Touching is not clear: the radius is taken a hair larger.
             let radius = radius_at(h0).max(radius_at(h1)) * (1.0 + 1e-12) + 1e-9;
             let (a, b) = (pose.tip + h0 * k, pose.tip + h1 * k);
-            match self.part.surface.segment_search(&a, &b, radius, inside) {
+            match self.part.surface.cylinder_search(&a, &b, radius, inside) {
                 SegmentSearch::Accepted => return Some(true),
                 SegmentSearch::Near => near = true,
                 SegmentSearch::Clear => {}

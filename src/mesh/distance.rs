@@ -335,6 +335,53 @@ impl SurfaceDistance {
         found
     }
 
+    /// Like [`SurfaceDistance::segment_search`], for the solid cylinder of `radius` around
+    /// `ab` with flat ends: only the part of each triangle between the planes through `a` and
+    /// `b` square to `ab` counts, and the point handed to `accept` lies there. Those pieces
+    /// of a tool body are what the body occupies; the capsule's round ends reach past them,
+    /// where a ball-end tool's flutes start at the ball, which touches the part.
+    pub fn cylinder_search(
+        &self,
+        a: &Point3,
+        b: &Point3,
+        radius: f64,
+        mut accept: impl FnMut(&Point3) -> bool,
+    ) -> SegmentSearch {
+        let axis = b - a;
+        let length = axis.norm();
+        if !(length > 0.0) {
+            return self.segment_search(a, b, radius, accept);
+        }
+        let k = axis / length;
+        let r2 = radius * radius;
+        // The slab a hair wider than the segment: widening only keeps more triangles near.
+        let slack = 1e-9 * (1.0 + length);
+        let mut found = SegmentSearch::Clear;
+        let segment_box = Aabb::from_points([a, b]);
+        self.visit_leaves(
+            |node| node.distance_squared_to_box(&segment_box) < r2,
+            |[p, q, r]| {
+                if segment_triangle_distance_squared(a, b, &p, &q, &r) >= r2 {
+                    return false;
+                }
+                let Some(nearest) = slab_nearest(a, b, &k, length + slack, -slack, [p, q, r])
+                else {
+                    return false;
+                };
+                if (nearest.0 - nearest.1).norm_squared() >= r2 {
+                    return false;
+                }
+                if accept(&nearest.1) {
+                    found = SegmentSearch::Accepted;
+                    return true;
+                }
+                found = SegmentSearch::Near;
+                false
+            },
+        );
+        found
+    }
+
     /// Depth-first over the tree: the corners of every triangle in a leaf whose box passes
     /// `enter` go to `visit`, until `visit` answers `true` (stop).
     fn visit_leaves(
@@ -461,6 +508,57 @@ impl SurfaceDistance {
     }
 }
 
+/// The closest points `(on ab, on the triangle)` of segment `ab` (unit direction `k`) and
+/// the part of triangle `corners` between the planes `h = low` and `h = high` (`h` measured
+/// from `a` along `k`), or `None` when no part of the triangle lies there. The clipped
+/// triangle is a convex polygon of up to five corners, measured as a fan of triangles.
+fn slab_nearest(
+    a: &Point3,
+    b: &Point3,
+    k: &Vector3,
+    high: f64,
+    low: f64,
+    corners: [Point3; 3],
+) -> Option<(Point3, Point3)> {
+    let height = |p: &Point3| (p - a).dot(k);
+    if corners.iter().all(|p| (low..=high).contains(&height(p))) {
+        let [p, q, r] = corners;
+        return Some(closest_points_of_segment_and_triangle(a, b, &p, &q, &r));
+    }
+    // Sutherland–Hodgman against each plane in turn.
+    let mut polygon: smallvec::SmallVec<[Point3; 5]> = corners.into_iter().collect();
+    for (limit, keep_below) in [(high, true), (low, false)] {
+        let side = |p: &Point3| {
+            let h = height(p);
+            if keep_below { limit - h } else { h - limit }
+        };
+        let mut clipped = smallvec::SmallVec::<[Point3; 5]>::new();
+        for (i, p) in polygon.iter().enumerate() {
+            let q = &polygon[(i + 1) % polygon.len()];
+            let (sp, sq) = (side(p), side(q));
+            if sp >= 0.0 {
+                clipped.push(*p);
+            }
+            if (sp >= 0.0) != (sq >= 0.0) {
+                let t = sp / (sp - sq);
+                clipped.push(p + (q - p) * t);
+            }
+        }
+        if clipped.is_empty() {
+            return None;
+        }
+        polygon = clipped;
+    }
+    // A plane through a corner or along an edge may leave a point or an edge.
+    while polygon.len() < 3 {
+        polygon.push(polygon[polygon.len() - 1]);
+    }
+    let p = polygon[0];
+    (1..polygon.len() - 1)
+        .map(|i| closest_points_of_segment_and_triangle(a, b, &p, &polygon[i], &polygon[i + 1]))
+        .min_by(|x, y| (x.0 - x.1).norm_squared().total_cmp(&(y.0 - y.1).norm_squared()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -520,6 +618,68 @@ mod tests {
         assert!(!s.any_within(&on, 0.0));
         assert!(!s.any_within(&on, f64::NAN));
         assert!(s.any_within(&on, 1e-9));
+    }
+
+    /// `cylinder_search` against the triangles sampled densely: where it says clear, no
+    /// sample between the end planes comes within the radius of the axis; where it says near,
+    /// one comes within the radius plus the sampling's spacing; every point it hands over lies
+    /// between the end planes within the radius. Segments round a torus, some crossing it.
+    #[test]
+    fn cylinder_search_agrees_with_sampled_triangles() {
+        let m = torus(20.0, 6.0, 40, 20);
+        let s = SurfaceDistance::new(&m);
+        let (starts, ends) = (probe_points(240, 30.0), probe_points(480, 1.0));
+        let (radius, steps) = (2.5, 40);
+        let (mut clear, mut near) = (0, 0);
+        for (i, a) in starts.iter().enumerate() {
+            let b = a + (ends[2 * i + 1] - Point3::origin()).normalize() * 8.0;
+            let k = (b - a).normalize();
+            let in_cylinder = |p: &Point3, slack: f64| {
+                let h = (p - a).dot(&k);
+                let off = (p - a) - k * h;
+                (-slack..=8.0 + slack).contains(&h) && off.norm() < radius + slack
+            };
+            let mut handed = Vec::new();
+            let answer = s.cylinder_search(a, &b, radius, |p| {
+                handed.push(*p);
+                false
+            });
+            assert!(handed.iter().all(|p| in_cylinder(p, 1e-8)), "{a} {b}");
+            let mut spacing: f64 = 0.0;
+            let sampled_inside = |slack: f64, spacing: &mut f64| {
+                (0..m.triangles.len()).any(|t| {
+                    let [p, q, r] = m.corners(t);
+                    if segment_triangle_distance_squared(a, &b, &p, &q, &r) >= radius * radius {
+                        return false;
+                    }
+                    let longest = [(p - q).norm(), (q - r).norm(), (r - p).norm()]
+                        .into_iter()
+                        .fold(0.0, f64::max);
+                    *spacing = spacing.max(longest / steps as f64);
+                    (0..=steps).any(|u| {
+                        (0..=steps - u).any(|v| {
+                            let (u, v) = (u as f64 / steps as f64, v as f64 / steps as f64);
+                            let x = p + (q - p) * u + (r - p) * v;
+                            in_cylinder(&x, slack)
+                        })
+                    })
+                })
+            };
+            match answer {
+                SegmentSearch::Clear => {
+                    clear += 1;
+                    assert!(!sampled_inside(0.0, &mut spacing), "{a} {b}: clear");
+                }
+                SegmentSearch::Near => {
+                    near += 1;
+                    assert!(!handed.is_empty());
+                    let _ = sampled_inside(0.0, &mut spacing);
+                    assert!(sampled_inside(spacing, &mut spacing), "{a} {b}: near");
+                }
+                SegmentSearch::Accepted => panic!("nothing was accepted"),
+            }
+        }
+        assert!(clear > 20 && near > 20, "{clear} clear, {near} near");
     }
 
     /// Filtering by facing: from just inside a thin slab, the nearest face is the far side; the
