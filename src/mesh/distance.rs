@@ -45,6 +45,7 @@ impl NodeStack {
         }
     }
 
+    #[inline]
     fn push(&mut self, item: (f64, u32)) {
         if self.len < self.inline.len() {
             self.inline[self.len] = item;
@@ -54,6 +55,7 @@ impl NodeStack {
         }
     }
 
+    #[inline]
     fn pop(&mut self) -> Option<(f64, u32)> {
         if let Some(item) = self.overflow.pop() {
             return Some(item);
@@ -147,7 +149,7 @@ impl SurfaceDistance {
     }
 
     fn triangle_aabb(&self, t: u32) -> Aabb {
-        Aabb::from_points(&self.triangles[t as usize].map(|i| self.positions[i as usize]))
+        Aabb::from_points(&self.corners(t))
     }
 
     /// Builds the subtree over `order[start..end]` and returns its node index.
@@ -218,7 +220,7 @@ impl SurfaceDistance {
                     if !accept(t) {
                         continue;
                     }
-                    let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+                    let [a, b, c] = self.corners(t);
                     let (q, feature) = closest_point_on_triangle(p, &a, &b, &c);
                     let qd2 = (q - p).norm_squared();
                     let better = match &best {
@@ -258,7 +260,7 @@ impl SurfaceDistance {
         }
         let r2 = radius * radius;
         let near = |t: u32| {
-            let [a, b, c] = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+            let [a, b, c] = self.corners(t);
             (closest_point_on_triangle(p, &a, &b, &c).0 - p).norm_squared() < r2
         };
         if let Some(t) = *hint
@@ -382,6 +384,18 @@ impl SurfaceDistance {
         found
     }
 
+    /// The corners of triangle `t`. Indexed out one by one: the hot loops are built at
+    /// opt-level 1 in tests, where an array `map` stays a call.
+    #[inline]
+    fn corners(&self, t: u32) -> [Point3; 3] {
+        let [i, j, k] = self.triangles[t as usize];
+        [
+            self.positions[i as usize],
+            self.positions[j as usize],
+            self.positions[k as usize],
+        ]
+    }
+
     /// Depth-first over the tree: the corners of every triangle in a leaf whose box passes
     /// `enter` go to `visit`, until `visit` answers `true` (stop).
     fn visit_leaves(
@@ -404,7 +418,7 @@ impl SurfaceDistance {
                 continue;
             }
             for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                if visit(self.triangles[t as usize].map(|i| self.positions[i as usize])) {
+                if visit(self.corners(t)) {
                     return;
                 }
             }
@@ -413,6 +427,7 @@ impl SurfaceDistance {
 
     /// Queues an inner node's children with their box distances, the nearer last so that it
     /// is popped first.
+    #[inline]
     fn push_children(&self, node: &Node, p: &Point3, stack: &mut NodeStack) {
         let (l, r) = (node.left, node.right);
         let (dl, dr) = (
