@@ -58,7 +58,7 @@ impl Aabb {
     }
 
     /// Squared distance between this box and `other` (0 where they overlap).
-    #[inline]
+    #[inline(always)]
     pub fn distance_squared_to_box(&self, other: &Aabb) -> f64 {
         (0..3)
             .map(|i| {
@@ -80,7 +80,7 @@ impl Aabb {
     }
 
     /// Squared distance from `p` to the box (0 inside).
-    #[inline]
+    #[inline(always)]
     pub fn distance_squared(&self, p: &Point3) -> f64 {
         let mut d = 0.0;
         for i in 0..3 {

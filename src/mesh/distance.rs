@@ -45,7 +45,7 @@ impl NodeStack {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn push(&mut self, item: (f64, u32)) {
         if self.len < self.inline.len() {
             self.inline[self.len] = item;
@@ -55,7 +55,7 @@ impl NodeStack {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn pop(&mut self) -> Option<(f64, u32)> {
         if let Some(item) = self.overflow.pop() {
             return Some(item);
@@ -386,7 +386,7 @@ impl SurfaceDistance {
 
     /// The corners of triangle `t`. Indexed out one by one: the hot loops are built at
     /// opt-level 1 in tests, where an array `map` stays a call.
-    #[inline]
+    #[inline(always)]
     fn corners(&self, t: u32) -> [Point3; 3] {
         let [i, j, k] = self.triangles[t as usize];
         [
@@ -427,7 +427,7 @@ impl SurfaceDistance {
 
     /// Queues an inner node's children with their box distances, the nearer last so that it
     /// is popped first.
-    #[inline]
+    #[inline(always)]
     fn push_children(&self, node: &Node, p: &Point3, stack: &mut NodeStack) {
         let (l, r) = (node.left, node.right);
         let (dl, dr) = (
