@@ -9,16 +9,19 @@
 //!   and visibility maps as bitsets, intersected into region maps.
 //! * [`visibility`]: per-point maps, by brute force or coarse-to-fine over the direction
 //!   hierarchy (the hierarchy's speed-up; measured in `benches/access.rs`).
+//! * [`region`]: one axis for a region of points from their maps (the impeller passages').
 //!
 //! The tool-axis choice (`orient`) still screens its candidates with single rays; accessibility
 //! for a whole tool assembly is the exact body test in `collide`.
 
 pub mod directions;
+pub mod region;
 pub mod visibility;
 
 pub use directions::{
     BadDirectionCount, DirectionSet, LEVEL_COUNTS, MAX_LEVEL, VisibilityMap, level_for_count,
 };
+pub use region::{RegionAxis, region_axis};
 pub use visibility::{
     PointMaps, Refine, SurfacePoint, VisibilityError, VisibilityOptions, vertex_points,
     visibility_brute_force, visibility_hierarchical,

@@ -58,8 +58,11 @@ pub struct ImpellerSection {
     /// the rest); `false`: the parallel planes everywhere.
     pub finishing: bool,
     /// The tool axes on the hub: `"passage"`, one per passage (the mean of its walls' span
-    /// directions: the rotary axes stand still along the passes), or `"walls"`, the walls'
-    /// span directions interpolated across the passage, leaning toward the feed.
+    /// directions: the rotary axes stand still along the passes); `"visibility"`, one per
+    /// passage too, the direction with the most room among those every point of the passage
+    /// sees (from the points' visibility maps, nearest the walls' mean among equals); or
+    /// `"walls"`, the walls' span directions interpolated across the passage, leaning toward
+    /// the feed.
     pub hub_axes: HubAxes,
     /// The tool axes around a blade: `"blade"`, the passages' axis turned to the blade (the
     /// rotary axes stand still round each loop), or `"lean"`, the blade's rising direction
@@ -83,6 +86,7 @@ pub enum BladeAxes {
 #[serde(rename_all = "kebab-case")]
 pub enum HubAxes {
     Passage,
+    Visibility,
     Walls,
 }
 

@@ -19,6 +19,9 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::config::{BladeAxes, HubAxes};
+use crate::access::{
+    DirectionSet, RayScene, SurfacePoint, VisibilityOptions, region_axis, visibility_hierarchical,
+};
 use crate::geom::{Point3, Vector3};
 use crate::impeller::{HubPassage, Impeller, PassageOptions, blade_loops};
 use crate::mesh::Mesh;
@@ -63,6 +66,26 @@ pub struct HubSummary {
     pub flow_lines: usize,
     pub partial_lines: usize,
     pub axes: HubAxes,
+    /// How the passage's axis came from the visibility maps (`hub_axes = "visibility"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility: Option<PassageVisibility>,
+}
+
+/// The passage's axis from its points' visibility maps.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassageVisibility {
+    /// Points of the passage whose maps were computed, and how many of them see the axis.
+    pub points: usize,
+    pub seen_by: usize,
+    /// Directions (of 2,562, ≈ 4° apart) every point sees.
+    pub common_directions: usize,
+    /// Angle from the axis to the nearest direction not every point sees (or not as many),
+    /// degrees, to the set's spacing.
+    pub room_deg: f64,
+    /// Angle between the axis and the walls' mean span direction, degrees.
+    pub from_walls_deg: f64,
+    pub rays_cast: u64,
+    pub ms: f64,
 }
 
 /// What the blade finishing planned (for one blade; the others are its copies).
@@ -138,6 +161,7 @@ pub fn finish_impeller(
         plane_points_left_to_impeller: 0,
     };
     let mut handled = vec![false; part.triangles.len()];
+    let mut summary_visibility = None;
     match HubPassage::new(part, impeller, &passage_options) {
         Ok(passage) => {
             let t = Instant::now();
@@ -158,6 +182,20 @@ pub fn finish_impeller(
             let lead = ctx.chooser.options().lead_deg;
             let (mean, middle) = passage.mean_wall_axis();
             let hub_axes = impeller_options.hub_axes;
+            let hub_mean = if hub_axes == HubAxes::Visibility {
+                let (axis, figures, _) = visible_passage_axis(
+                    &passage,
+                    mean,
+                    middle,
+                    ctx.rays,
+                    ctx.tool.ball_radius,
+                    ctx.tool.reach,
+                );
+                summary_visibility = Some(figures);
+                axis
+            } else {
+                mean
+            };
             let hub_field = |p: &Point3, _normal: &Vector3, feed: &Vector3| {
                 let axis = match hub_axes {
                     HubAxes::Passage => {
@@ -168,6 +206,14 @@ pub fn finish_impeller(
                         passage.frame.axis * mean[0]
                             + radial * mean[1]
                             + passage.frame.axis.cross(&radial) * mean[2]
+                    }
+                    HubAxes::Visibility => {
+                        let (_, angle, _) = passage.frame.cylindrical(p);
+                        let k = ((angle - middle) / passage.pitch).round();
+                        let radial = passage.frame.radial(middle + k * passage.pitch);
+                        passage.frame.axis * hub_mean[0]
+                            + radial * hub_mean[1]
+                            + passage.frame.axis.cross(&radial) * hub_mean[2]
                     }
                     HubAxes::Walls => preferred_axis(&passage.wall_axis(p), feed, lead, 0.0),
                 };
@@ -185,7 +231,7 @@ pub fn finish_impeller(
             // feed does not.
             hub.segments = path::nearest_order(
                 std::mem::take(&mut hub.segments),
-                hub_axes == HubAxes::Passage,
+                hub_axes != HubAxes::Walls,
             );
 
             // The blade passage 0 starts at: loops from the tip down.
@@ -324,6 +370,7 @@ pub fn finish_impeller(
                 flow_lines: lines.len(),
                 partial_lines: lines.iter().filter(|l| l.runs != lines[0].runs).count(),
                 axes: hub_axes,
+                visibility: summary_visibility.take(),
             });
             summary.blade = Some(BladeSummary {
                 levels: loops.levels,
@@ -357,6 +404,79 @@ pub fn finish_impeller(
     summary.plane_points_left_to_impeller = planes.points_left_to_others;
     finishing.merge(planes);
     (finishing, summary)
+}
+
+/// Level of the direction set the passage's maps are over: 2,562 directions, ≈ 4° apart.
+const VISIBILITY_LEVEL: usize = 4;
+
+/// Stations between the points the passage's maps are computed at, and fractions of the
+/// passage's width across: enough to catch every wall and the shroud's overhang, few enough
+/// that the maps cost milliseconds.
+const VISIBILITY_STATION_STRIDE: usize = 4;
+const VISIBILITY_FRACTIONS: [f64; 7] = [0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95];
+
+/// The passage's one axis from the visibility maps of points across it (seed 004 ch. 5 step
+/// 4): the ball centres over the hub's surface of revolution, rays up to the tool's reach;
+/// the direction with the most room among those all of them see, ties to the walls' mean.
+/// Returned in the passage frame at `middle` (along the axis, radial, tangential), like
+/// [`HubPassage::mean_wall_axis`] (the walls' mean where nothing is seen), with the figures
+/// and the surface points the maps were computed at.
+pub fn visible_passage_axis(
+    passage: &HubPassage,
+    walls: [f64; 3],
+    middle: f64,
+    rays: &RayScene,
+    ball_radius: f64,
+    reach: f64,
+) -> ([f64; 3], PassageVisibility, Vec<SurfacePoint>) {
+    let t = Instant::now();
+    let radial = passage.frame.radial(middle);
+    let tangent = passage.frame.axis.cross(&radial);
+    let from_frame = |c: [f64; 3]| passage.frame.axis * c[0] + radial * c[1] + tangent * c[2];
+    let to_frame = |v: &Vector3| [v.dot(&passage.frame.axis), v.dot(&radial), v.dot(&tangent)];
+    let walls_axis = from_frame(walls);
+    let points: Vec<SurfacePoint> = passage
+        .stations
+        .iter()
+        .enumerate()
+        .step_by(VISIBILITY_STATION_STRIDE)
+        .flat_map(|(j, station)| {
+            VISIBILITY_FRACTIONS.iter().filter_map(move |&f| {
+                let angle = station.angle_at(f)?;
+                let drive = passage.point(j, angle);
+                Some(SurfacePoint {
+                    point: drive.point,
+                    normal: drive.normal,
+                })
+            })
+        })
+        .collect();
+    let set = DirectionSet::new(VISIBILITY_LEVEL);
+    let options = VisibilityOptions {
+        level: VISIBILITY_LEVEL,
+        lift: Some(ball_radius),
+        max_distance: reach,
+        ..VisibilityOptions::default()
+    };
+    let (maps, rays_cast) = match visibility_hierarchical(rays, &set, &points, &options) {
+        Ok(maps) => (maps.maps, maps.rays_cast),
+        Err(_) => (Vec::new(), 0),
+    };
+    let chosen = region_axis(&set, VISIBILITY_LEVEL, &maps, &walls_axis);
+    let spacing_deg = set.directions()[set.neighbours(VISIBILITY_LEVEL, 0)[0] as usize]
+        .angle(&set.directions()[0])
+        .to_degrees();
+    let direction = chosen.map_or(walls_axis, |c| c.direction);
+    let figures = PassageVisibility {
+        points: points.len(),
+        seen_by: chosen.map_or(0, |c| c.seen_by),
+        common_directions: chosen.map_or(0, |c| c.region_directions),
+        room_deg: chosen.map_or(0.0, |c| c.room_steps as f64 * spacing_deg),
+        from_walls_deg: direction.angle(&walls_axis).to_degrees(),
+        rays_cast,
+        ms: round_ms(t),
+    };
+    (to_frame(&direction), figures, points)
 }
 
 fn round_ms(since: Instant) -> f64 {

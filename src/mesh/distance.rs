@@ -571,7 +571,11 @@ fn slab_nearest(
     let p = polygon[0];
     (1..polygon.len() - 1)
         .map(|i| closest_points_of_segment_and_triangle(a, b, &p, &polygon[i], &polygon[i + 1]))
-        .min_by(|x, y| (x.0 - x.1).norm_squared().total_cmp(&(y.0 - y.1).norm_squared()))
+        .min_by(|x, y| {
+            (x.0 - x.1)
+                .norm_squared()
+                .total_cmp(&(y.0 - y.1).norm_squared())
+        })
 }
 
 #[cfg(test)]
