@@ -655,18 +655,33 @@ mod tests {
     /// at 0.1 mm and shrinking from 0.4 mm (the representation's error is its lines' spacing
     /// across the body's surface).
     fn converges(what: &str, exact: f64, bound: f64, volume: impl Fn(f64) -> f64) {
-        let errors: Vec<f64> = [0.4, 0.2, 0.1]
+        converges_at(what, exact, bound, &[0.4, 0.2, 0.1], volume);
+    }
+
+    /// [`converges`] over the given spacings, coarsest first: within `bound` at the last.
+    fn converges_at(
+        what: &str,
+        exact: f64,
+        bound: f64,
+        spacings: &[f64],
+        volume: impl Fn(f64) -> f64,
+    ) {
+        let errors: Vec<f64> = spacings
             .iter()
             .map(|&spacing| (volume(spacing) - exact).abs() / exact)
             .collect();
-        eprintln!("{what}: relative errors at 0.4, 0.2, 0.1 mm: {errors:?}");
-        assert!(errors[2] < bound, "{what}: {errors:?}");
-        assert!(errors[2] < errors[0], "{what}: no convergence: {errors:?}");
+        eprintln!("{what}: relative errors at {spacings:?} mm: {errors:?}");
+        let last = errors[errors.len() - 1];
+        assert!(last < bound, "{what}: {errors:?}");
+        assert!(last < errors[0], "{what}: no convergence: {errors:?}");
     }
 
     /// A translated body sweeps its volume plus the move's length times its shadow across the
     /// move: for a flat end (radius R, flutes F) at angle φ to the move, πR²F + L(πR²|cos φ| +
-    /// 2RF sin φ): a slot (φ = 90°), a plunge (φ = 0) and a tilted move.
+    /// 2RF sin φ): a slot (φ = 90°), a plunge (φ = 0) and a tilted move. The slot and the
+    /// tilted move are within the bound at 0.2 mm already (0.16 % and 0.09 %, against 0.56 %
+    /// for the plunge, whose flat faces lie across the lines); 0.1 mm is where this test spent
+    /// its minute, so only the plunge goes there.
     #[test]
     fn a_flat_end_sweeps_the_closed_form_volume() {
         use crate::tool::Cutter;
@@ -675,13 +690,15 @@ mod tests {
             diameter: 2.0 * r,
             flute_length: f,
         };
-        for (what, axis, direction) in [
-            ("flat-end slot", Vector3::z(), Vector3::x()),
-            ("flat-end plunge", Vector3::z(), -Vector3::z()),
+        let (coarse, fine) = (&[0.4, 0.2][..], &[0.4, 0.2, 0.1][..]);
+        for (what, axis, direction, spacings) in [
+            ("flat-end slot", Vector3::z(), Vector3::x(), coarse),
+            ("flat-end plunge", Vector3::z(), -Vector3::z(), fine),
             (
                 "flat-end tilted move",
                 Vector3::new(0.5, 0.0, 1.0),
                 Vector3::new(1.0, 0.3, 0.0),
+                coarse,
             ),
         ] {
             let (k, d) = (axis.normalize(), direction.normalize());
@@ -696,7 +713,7 @@ mod tests {
             );
             let (cos, sin) = (k.dot(&d).abs(), k.cross(&d).norm());
             let exact = PI * r * r * f + length * (PI * r * r * cos + 2.0 * r * f * sin);
-            converges(what, exact, 0.005, |spacing| {
+            converges_at(what, exact, 0.005, spacings, |spacing| {
                 removed(&cutter, &from, &to, spacing)
             });
         }
