@@ -351,7 +351,7 @@ impl SurfaceDistance {
     ) -> SegmentSearch {
         let axis = b - a;
         let length = axis.norm();
-        if !(length > 0.0) {
+        if length.is_nan() || length <= 0.0 {
             return self.segment_search(a, b, radius, accept);
         }
         let k = axis / length;
