@@ -198,16 +198,8 @@ pub fn finish_impeller(
             };
             let hub_field = |p: &Point3, _normal: &Vector3, feed: &Vector3| {
                 let axis = match hub_axes {
-                    HubAxes::Passage => {
+                    HubAxes::Passage | HubAxes::Visibility => {
                         // The passage's own axis, turned to the passage `p` is in.
-                        let (_, angle, _) = passage.frame.cylindrical(p);
-                        let k = ((angle - middle) / passage.pitch).round();
-                        let radial = passage.frame.radial(middle + k * passage.pitch);
-                        passage.frame.axis * mean[0]
-                            + radial * mean[1]
-                            + passage.frame.axis.cross(&radial) * mean[2]
-                    }
-                    HubAxes::Visibility => {
                         let (_, angle, _) = passage.frame.cylindrical(p);
                         let k = ((angle - middle) / passage.pitch).round();
                         let radial = passage.frame.radial(middle + k * passage.pitch);

@@ -7,7 +7,7 @@
 
 use crate::geom::{
     Aabb, ClosestFeature, Point3, Vector3, closest_point_on_triangle,
-    closest_points_of_segment_and_triangle, segment_triangle_distance_squared,
+    closest_points_of_segment_and_triangle,
 };
 use crate::mesh::Mesh;
 use crate::mesh::topology::edges;
@@ -311,30 +311,9 @@ impl SurfaceDistance {
         a: &Point3,
         b: &Point3,
         radius: f64,
-        mut accept: impl FnMut(&Point3) -> bool,
+        accept: impl FnMut(&Point3) -> bool,
     ) -> SegmentSearch {
-        if self.nodes.is_empty() || radius.is_nan() || radius <= 0.0 {
-            return SegmentSearch::Clear;
-        }
-        let r2 = radius * radius;
-        let segment_box = Aabb::from_points([a, b]);
-        let mut found = SegmentSearch::Clear;
-        self.visit_leaves(
-            |b| b.distance_squared_to_box(&segment_box) < r2,
-            |[p, q, r]| {
-                // The plain distance first: most triangles under the box are farther.
-                if segment_triangle_distance_squared(a, b, &p, &q, &r) >= r2 {
-                    return false;
-                }
-                if accept(&closest_points_of_segment_and_triangle(a, b, &p, &q, &r).1) {
-                    found = SegmentSearch::Accepted;
-                    return true;
-                }
-                found = SegmentSearch::Near;
-                false
-            },
-        );
-        found
+        self.search_near(a, b, radius, accept, |_, pair| Some(pair))
     }
 
     /// Like [`SurfaceDistance::segment_search`], for the solid cylinder of `radius` around
@@ -347,7 +326,7 @@ impl SurfaceDistance {
         a: &Point3,
         b: &Point3,
         radius: f64,
-        mut accept: impl FnMut(&Point3) -> bool,
+        accept: impl FnMut(&Point3) -> bool,
     ) -> SegmentSearch {
         let axis = b - a;
         let length = axis.norm();
@@ -355,25 +334,46 @@ impl SurfaceDistance {
             return self.segment_search(a, b, radius, accept);
         }
         let k = axis / length;
-        let r2 = radius * radius;
         // The slab a hair wider than the segment: widening only keeps more triangles near.
         let slack = 1e-9 * (1.0 + length);
-        let mut found = SegmentSearch::Clear;
+        self.search_near(a, b, radius, accept, |corners, _| {
+            slab_nearest(a, b, &k, length + slack, -slack, corners)
+        })
+    }
+
+    /// The search behind [`SurfaceDistance::segment_search`] and
+    /// [`SurfaceDistance::cylinder_search`]: every triangle within `radius` of the segment
+    /// (the closest pair of points of the two) goes to `nearest`, which may narrow the pair to
+    /// the part of the triangle that counts, or say none does.
+    fn search_near(
+        &self,
+        a: &Point3,
+        b: &Point3,
+        radius: f64,
+        mut accept: impl FnMut(&Point3) -> bool,
+        nearest: impl Fn([Point3; 3], (Point3, Point3)) -> Option<(Point3, Point3)>,
+    ) -> SegmentSearch {
+        if self.nodes.is_empty() || radius.is_nan() || radius <= 0.0 {
+            return SegmentSearch::Clear;
+        }
+        let r2 = radius * radius;
         let segment_box = Aabb::from_points([a, b]);
+        let mut found = SegmentSearch::Clear;
         self.visit_leaves(
-            |node| node.distance_squared_to_box(&segment_box) < r2,
+            |b| b.distance_squared_to_box(&segment_box) < r2,
             |[p, q, r]| {
-                if segment_triangle_distance_squared(a, b, &p, &q, &r) >= r2 {
+                // The plain distance first: most triangles under the box are farther.
+                let pair = closest_points_of_segment_and_triangle(a, b, &p, &q, &r);
+                if (pair.0 - pair.1).norm_squared() >= r2 {
                     return false;
                 }
-                let Some(nearest) = slab_nearest(a, b, &k, length + slack, -slack, [p, q, r])
-                else {
+                let Some((on_segment, on_triangle)) = nearest([p, q, r], pair) else {
                     return false;
                 };
-                if (nearest.0 - nearest.1).norm_squared() >= r2 {
+                if (on_segment - on_triangle).norm_squared() >= r2 {
                     return false;
                 }
-                if accept(&nearest.1) {
+                if accept(&on_triangle) {
                     found = SegmentSearch::Accepted;
                     return true;
                 }
@@ -668,7 +668,9 @@ mod tests {
             let sampled_inside = |slack: f64, spacing: &mut f64| {
                 (0..m.triangles.len()).any(|t| {
                     let [p, q, r] = m.corners(t);
-                    if segment_triangle_distance_squared(a, &b, &p, &q, &r) >= radius * radius {
+                    if crate::geom::segment_triangle_distance_squared(a, &b, &p, &q, &r)
+                        >= radius * radius
+                    {
                         return false;
                     }
                     let longest = [(p - q).norm(), (q - r).norm(), (r - p).norm()]

@@ -2,7 +2,10 @@
 //! finishing (issue 4 point 5). The CL data of each semi-finishing operation is checked with
 //! the independent oracle of `common` (uniform grid + brute force, ray parity): every ball
 //! centre at least r + aⱼ − tolerance from the part and outside it; `report.json` names the
-//! shapes used; the outputs are byte-identical for 1 and 2 threads.
+//! shapes used. (Its outputs for 1 and 2 threads are not compared here: semi-finishing runs no
+//! parallel code of its own — its shapes are the offsets, its passes the finishing passes,
+//! each compared across thread counts by `cli::offsets_writes_verified_shapes_identically_…`
+//! and `cli::plan_writes_four_identical_outputs_…`; the second plan was 40 % of this test.)
 
 use crate::common::{Oracle, parse_cl, repo_file};
 use wavemill::job::{self, Job, Quiet};
@@ -20,10 +23,10 @@ fn semi_job() -> Job {
     job
 }
 
-fn plan_with_threads(threads: usize) -> job::PlanOutput {
+fn plan_with_two_threads() -> job::PlanOutput {
     let path = repo_file("data/blade.glb");
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
+        .num_threads(2)
         .build()
         .unwrap();
     pool.install(|| {
@@ -34,13 +37,7 @@ fn plan_with_threads(threads: usize) -> job::PlanOutput {
 
 #[test]
 fn semi_finishing_leaves_each_allowance_on_the_sample_blade() {
-    // The one-thread plan runs beside the two-thread one: on two cores the pair takes about
-    // as long as the one-thread plan alone, not the sum of both.
-    let (out, again) = std::thread::scope(|scope| {
-        let one = scope.spawn(|| plan_with_threads(1));
-        let two = plan_with_threads(2);
-        (two, one.join().expect("the one-thread plan"))
-    });
+    let out = plan_with_two_threads();
     let job = semi_job();
     let r = job.tool.diameter / 2.0;
     let tolerance = job.strategy.tolerance;
@@ -88,8 +85,4 @@ fn semi_finishing_leaves_each_allowance_on_the_sample_blade() {
     let finishing = out.operations.last().unwrap();
     assert_eq!(finishing.stock_to_leave_mm, 0.0);
     assert_eq!(finishing.moves.end, rows.len());
-
-    assert_eq!(out.gcode, again.gcode);
-    assert_eq!(out.cl_csv, again.cl_csv);
-    assert_eq!(out.report.to_json(false), again.report.to_json(false));
 }
