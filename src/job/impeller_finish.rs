@@ -85,6 +85,9 @@ pub struct PassageVisibility {
     /// Angle between the axis and the walls' mean span direction, degrees.
     pub from_walls_deg: f64,
     pub rays_cast: u64,
+    /// Time of the maps and the choice, ms (part of the report's `impeller_first_passage`
+    /// timing; left out of the report's figures, which must not change from run to run).
+    #[serde(skip)]
     pub ms: f64,
 }
 
