@@ -336,8 +336,8 @@ impl SurfaceDistance {
         let k = axis / length;
         // The slab a hair wider than the segment: widening only keeps more triangles near.
         let slack = 1e-9 * (1.0 + length);
-        self.search_near(a, b, radius, accept, |corners, _| {
-            slab_nearest(a, b, &k, length + slack, -slack, corners)
+        self.search_near(a, b, radius, accept, |corners, whole| {
+            slab_nearest(a, b, &k, length + slack, -slack, corners, whole)
         })
     }
 
@@ -526,7 +526,8 @@ impl SurfaceDistance {
 /// The closest points `(on ab, on the triangle)` of segment `ab` (unit direction `k`) and
 /// the part of triangle `corners` between the planes `h = low` and `h = high` (`h` measured
 /// from `a` along `k`), or `None` when no part of the triangle lies there. The clipped
-/// triangle is a convex polygon of up to five corners, measured as a fan of triangles.
+/// triangle is a convex polygon of up to five corners, measured as a fan of triangles; a
+/// triangle wholly between the planes keeps `whole`, the pair measured on all of it.
 fn slab_nearest(
     a: &Point3,
     b: &Point3,
@@ -534,11 +535,11 @@ fn slab_nearest(
     high: f64,
     low: f64,
     corners: [Point3; 3],
+    whole: (Point3, Point3),
 ) -> Option<(Point3, Point3)> {
     let height = |p: &Point3| (p - a).dot(k);
     if corners.iter().all(|p| (low..=high).contains(&height(p))) {
-        let [p, q, r] = corners;
-        return Some(closest_points_of_segment_and_triangle(a, b, &p, &q, &r));
+        return Some(whole);
     }
     // Sutherland–Hodgman against each plane in turn.
     let mut polygon: smallvec::SmallVec<[Point3; 5]> = corners.into_iter().collect();
