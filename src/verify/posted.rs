@@ -400,7 +400,8 @@ pub struct PostedOptions {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PostedClearance {
     pub motion_blocks: usize,
-    /// Straight pieces measured (blocks are cut so each stays within its error bound).
+    /// Chords measured: whole blocks, the runs of pieces they were halved into, and pieces
+    /// (each within its error bound), where they could go below the least clearance.
     pub pieces: usize,
     /// Least ball clearance (distance of the ball centre − r) along G1 blocks, a certified lower
     /// bound; negative = the ball cuts into the part by that much.
