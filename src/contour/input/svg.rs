@@ -824,9 +824,7 @@ mod tests {
 
     use super::*;
     use crate::contour::geometry::{Contour, Segment};
-    use crate::contour::input::curves::Curve;
-    use crate::contour::input::segmath::dist_point_segment;
-    use crate::contour::input::test_util::total_area;
+    use crate::contour::input::test_util::{curve_to_shape_distance, total_area};
     use crate::contour::input::{CrossingKind, read_svg_str};
 
     fn doc(body: &str) -> String {
@@ -860,23 +858,6 @@ mod tests {
 
     fn close(a: [f64; 4], b: [f64; 4], eps: f64) -> bool {
         a.iter().zip(b).all(|(x, y)| (x - y).abs() <= eps)
-    }
-
-    /// Largest distance from dense samples of `curve` to the contours of `s`.
-    fn curve_distance(curve: &dyn Curve, s: &Shape) -> f64 {
-        let segs: Vec<Segment> = s
-            .contours
-            .iter()
-            .flat_map(|c| c.segments().collect::<Vec<_>>())
-            .collect();
-        (0..=20_000)
-            .map(|i| {
-                let q = curve.eval(i as f64 / 20_000.0).p;
-                segs.iter()
-                    .map(|sg| dist_point_segment(q, sg))
-                    .fold(f64::INFINITY, f64::min)
-            })
-            .fold(0.0, f64::max)
     }
 
     #[test]
@@ -917,7 +898,7 @@ mod tests {
             theta0: -FRAC_PI_2,
             dtheta: FRAC_PI_2,
         };
-        assert!(curve_distance(&e, &s) <= 0.001);
+        assert!(curve_to_shape_distance(&e, 0.0, 1.0, &s) <= 0.001);
         let expected = 50.0 * 30.0 - (4.0 - PI) * 10.0 * 4.0;
         assert!((s.contours[0].signed_area() - expected).abs() < 0.001 * 200.0);
     }
@@ -958,7 +939,7 @@ mod tests {
                 theta0: 0.0,
                 dtheta: 2.0 * PI,
             };
-            let d = curve_distance(&e, &s);
+            let d = curve_to_shape_distance(&e, 0.0, 1.0, &s);
             assert!(d <= 0.001, "{body}: {d}");
             let area = PI * m[(0, 0)] * m[(1, 1)].abs();
             let c = &s.contours[0];
@@ -1021,7 +1002,7 @@ mod tests {
             theta0: 0.0,
             dtheta: 2.0 * PI,
         };
-        assert!(curve_distance(&e, &s) <= 0.001);
+        assert!(curve_to_shape_distance(&e, 0.0, 1.0, &s) <= 0.001);
     }
 
     #[test]
@@ -1031,13 +1012,13 @@ mod tests {
             p: [(10.0, 80.0), (40.0, 10.0), (65.0, 10.0), (95.0, 80.0)]
                 .map(|(x, y)| Point2::new(x, -y)),
         };
-        assert!(curve_distance(&cubic, &s) <= 0.001);
+        assert!(curve_to_shape_distance(&cubic, 0.0, 1.0, &s) <= 0.001);
         let quad = Cubic::from_quadratic(
             Point2::new(95.0, -80.0),
             Point2::new(50.0, -120.0),
             Point2::new(10.0, -80.0),
         );
-        assert!(curve_distance(&quad, &s) <= 0.001);
+        assert!(curve_to_shape_distance(&quad, 0.0, 1.0, &s) <= 0.001);
     }
 
     #[test]
@@ -1356,7 +1337,7 @@ mod tests {
                 ..Default::default()
             };
             let s = read_svg_str(&doc(body), "t.svg", &o).unwrap();
-            assert!(curve_distance(&e, &s) <= tol);
+            assert!(curve_to_shape_distance(&e, 0.0, 1.0, &s) <= tol);
             counts.push(s.contours[0].vertices.len());
         }
         assert!(counts[0] > counts[1] && counts[1] > counts[2], "{counts:?}");

@@ -36,6 +36,20 @@ pub fn curve_to_approx_distance(
         .fold(0.0, f64::max)
 }
 
+/// Largest distance from 20,001 evenly spaced points of `curve` over `[t0, t1]` to the
+/// contours of `s`.
+pub fn curve_to_shape_distance(curve: &dyn Curve, t0: f64, t1: f64, s: &Shape) -> f64 {
+    let segs: Vec<Segment> = s.contours.iter().flat_map(|c| c.segments()).collect();
+    (0..=20_000)
+        .map(|i| {
+            let q = curve.eval(t0 + (t1 - t0) * i as f64 / 20_000.0).p;
+            segs.iter()
+                .map(|sg| dist_point_segment(q, sg))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Largest distance from points along the approximation to a dense polyline of the curve.
 pub fn approx_to_curve_distance(
     c: &dyn Curve,

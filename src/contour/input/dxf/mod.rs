@@ -15,7 +15,7 @@
 //!
 //! The file is read by our own group-code reader (`groups`, `drawing`): an outline needs seven
 //! entity types and one header variable, and the general-purpose `dxf` crate, with its image
-//! library for thumbnails, was a sixth of the dependencies' build time on 2-core CI and
+//! library for thumbnails, was a quarter of the dependencies' build time on 2-core CI and
 //! panicked on some malformed files.
 
 mod drawing;

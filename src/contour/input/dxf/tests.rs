@@ -5,10 +5,9 @@ use std::f64::consts::PI;
 
 use super::*;
 use crate::contour::geometry::Segment;
-use crate::contour::input::curves::{Cubic, Curve};
+use crate::contour::input::curves::Cubic;
 use crate::contour::input::read_dxf_bytes;
-use crate::contour::input::segmath::dist_point_segment;
-use crate::contour::input::test_util::total_area;
+use crate::contour::input::test_util::{curve_to_shape_distance, total_area};
 
 /// A value as a writer puts it in a pair.
 #[derive(Clone)]
@@ -161,22 +160,6 @@ fn lwpolyline(d: &mut Dxf, pts: &[(f64, f64, f64)], closed: bool) {
     d.entity("LWPOLYLINE", &pairs);
 }
 
-fn max_dist(curve: &dyn Curve, t0: f64, t1: f64, s: &Shape) -> f64 {
-    let segs: Vec<Segment> = s
-        .contours
-        .iter()
-        .flat_map(|c| c.segments().collect::<Vec<_>>())
-        .collect();
-    (0..=20_000)
-        .map(|i| {
-            let q = curve.eval(t0 + (t1 - t0) * i as f64 / 20_000.0).p;
-            segs.iter()
-                .map(|sg| dist_point_segment(q, sg))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn lines_and_arcs_chain_into_a_slot() {
     let (l, r) = (30.0, 4.0);
@@ -326,7 +309,7 @@ fn partial_ellipse_closed_by_a_line() {
         theta0: 0.0,
         dtheta: PI,
     };
-    assert!(max_dist(&truth, 0.0, 1.0, &s) <= 0.001);
+    assert!(curve_to_shape_distance(&truth, 0.0, 1.0, &s) <= 0.001);
     // Upper half: y from 5 to 15.
     assert!(
         c.vertices.iter().all(|v| v.point.y >= 5.0 - 1e-9),
@@ -389,7 +372,7 @@ fn splines_bezier_form_and_rational_circle() {
     let bez = Cubic {
         p: ctrl.map(|(x, y)| Point2::new(x, y)),
     };
-    assert!(max_dist(&bez, 0.0, 1.0, &s) <= 0.001);
+    assert!(curve_to_shape_distance(&bez, 0.0, 1.0, &s) <= 0.001);
     // Rational quadratic full circle of radius 10 (9 control points), closed spline.
     let w = std::f64::consts::FRAC_1_SQRT_2;
     let pts = [
