@@ -37,18 +37,14 @@ impl Entity {
     pub fn real(&self, code: i32, default: f64) -> Result<f64, String> {
         match self.group(code) {
             None => Ok(default),
-            Some(g) => g
-                .real()
-                .ok_or_else(|| format!("{}: group {code} is not a number", g.place)),
+            Some(g) => g.number(),
         }
     }
 
     pub fn integer(&self, code: i32, default: i64) -> Result<i64, String> {
         match self.group(code) {
             None => Ok(default),
-            Some(g) => g
-                .integer()
-                .ok_or_else(|| format!("{}: group {code} is not an integer", g.place)),
+            Some(g) => g.whole_number(),
         }
     }
 

@@ -75,6 +75,18 @@ impl Group {
             _ => None,
         }
     }
+
+    /// The real, or an error naming the pair.
+    pub fn number(&self) -> Result<f64, String> {
+        self.real()
+            .ok_or_else(|| format!("{}: group {} is not a number", self.place, self.code))
+    }
+
+    /// The integer, or an error naming the pair.
+    pub fn whole_number(&self) -> Result<i64, String> {
+        self.integer()
+            .ok_or_else(|| format!("{}: group {} is not an integer", self.place, self.code))
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -242,11 +242,7 @@ fn entity_piece(e: &Entity, k: f64, tol: f64, file: &str) -> Result<Option<Piece
             // Each 10 starts a vertex; the 20 and 42 after it are its y and bulge.
             let mut vs: Vec<(f64, f64, f64)> = Vec::new();
             for g in &e.groups {
-                let number = || {
-                    g.real().ok_or_else(|| {
-                        invalid(format!("{}: group {} is not a number", g.place, g.code))
-                    })
-                };
+                let number = || g.number().map_err(invalid);
                 match (g.code, vs.last_mut()) {
                     (10, _) => vs.push((number()?, 0.0, 0.0)),
                     (20, Some(v)) => v.1 = number()?,
@@ -296,11 +292,7 @@ fn entity_piece(e: &Entity, k: f64, tol: f64, file: &str) -> Result<Option<Piece
             let mut control: Vec<Point2> = Vec::new();
             let (mut knots, mut weights) = (Vec::new(), Vec::new());
             for g in &e.groups {
-                let number = || {
-                    g.real().ok_or_else(|| {
-                        invalid(format!("{}: group {} is not a number", g.place, g.code))
-                    })
-                };
+                let number = || g.number().map_err(invalid);
                 match g.code {
                     10 => control.push(Point2::new(number()?, 0.0)),
                     20 => {
