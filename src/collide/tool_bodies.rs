@@ -579,10 +579,39 @@ pub struct PreparedTool {
     cutter: Cutter,
     end: Vec<EndSolid>,
     bodies: Vec<PreparedBody>,
+    /// What it was prepared from, for [`PreparedTool::with_flute_dip`].
+    assembly: ToolAssembly,
+    margins: Margins,
+    /// How far the flutes may dip into the part in the planning test, mm.
+    flute_dip: f64,
 }
 
 impl PreparedTool {
     pub fn new(tool: &ToolAssembly, margins: &Margins) -> Self {
+        Self::prepared(tool, margins, F32_SLACK)
+    }
+
+    /// The same tool with its flutes allowed to dip `dip` mm into the part (at least the f32
+    /// slack), where they cut with their side as the ball does (swarf milling): the planning
+    /// test shrinks them by that much instead of the slack.
+    pub fn with_flute_dip(&self, dip: f64) -> Self {
+        Self::prepared(&self.assembly, &self.margins, dip.max(F32_SLACK))
+    }
+
+    /// How far the flutes may dip into the part in the planning test, mm.
+    pub fn flute_dip(&self) -> f64 {
+        self.flute_dip
+    }
+
+    /// The cutting length above the ball's centre (flutes from the ball's equator up), and
+    /// their radius at the top; `None` for cutters without a ball.
+    pub fn flutes_above_ball(&self) -> Option<(f64, f64)> {
+        let body = self.bodies.iter().find(|b| b.role == BodyRole::Flutes)?;
+        let g = &body.geometry;
+        Some((g.to - self.ball_radius, g.radius_from.max(g.radius_to)))
+    }
+
+    fn prepared(tool: &ToolAssembly, margins: &Margins, flute_dip: f64) -> Self {
         let bodies = tool
             .bodies()
             .iter()
@@ -590,7 +619,7 @@ impl PreparedTool {
                 let geometry = Revolved::of(b);
                 let flutes = b.role == BodyRole::Flutes;
                 let check_grow = match b.role {
-                    BodyRole::Flutes => -F32_SLACK,
+                    BodyRole::Flutes => -flute_dip,
                     BodyRole::Shank => margins.shank + F32_SLACK,
                     BodyRole::Holder => margins.holder + F32_SLACK,
                 };
@@ -617,6 +646,9 @@ impl PreparedTool {
             cutter: tool.cutter,
             end: end_solids(&tool.cutter),
             bodies,
+            assembly: tool.clone(),
+            margins: *margins,
+            flute_dip,
         }
     }
 

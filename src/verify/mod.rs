@@ -23,6 +23,8 @@ pub use posted::{
 pub use program::{MotionBlock, ProgramError, read_conversational, read_program};
 pub use scallop::{AreaSplit, ScallopOptions, ScallopReport, measure_scallop, ray_capsule_entry};
 pub use segment_distance::SegmentDistance;
+#[cfg(test)]
+pub(crate) use segment_distance::point_triangle_distance;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -40,8 +42,10 @@ pub struct Verification {
     pub min_cutter_clearance: f64,
     /// The same at the midpoints of cut moves (the chord error, negative = inside by that much).
     pub min_chord_clearance: f64,
-    /// Flutes (the cylinder above the ball): ≈0 where the ball touches with its side, < 0 if
-    /// they cut into the part.
+    /// Flutes (the cylinder above the ball): ≈0 where the ball touches with its side or they
+    /// cut along a flank (swarf), < 0 where they are inside the part. For a ball-end tool the
+    /// distance from their axis (from the ball's centre up) to the part less their radius,
+    /// exact in f64; else parry's.
     pub min_flutes_clearance: f64,
     pub min_shank_clearance: f64,
     pub min_holder_clearance: f64,
@@ -73,7 +77,8 @@ impl Verification {
                 tolerance,
             });
         }
-        if self.min_flutes_clearance < 0.0 {
+        // The flutes cut with their side like the ball: within the tolerance of the part.
+        if self.min_flutes_clearance < -tolerance - 1e-6 {
             problems.push(Problem::Flutes {
                 depth: -self.min_flutes_clearance,
             });
@@ -111,7 +116,7 @@ pub enum Problem {
     Gouge { depth: f64 },
     #[error("a straight move cuts {depth:.6} mm into the part (tolerance {tolerance})")]
     Chord { depth: f64, tolerance: f64 },
-    #[error("the flutes cut into the part above the ball")]
+    #[error("the flutes cut {depth:.6} mm into the part above the ball, beyond the tolerance")]
     Flutes { depth: f64 },
     #[error("shank clearance {clearance:.4} mm is below its margin {margin}")]
     Shank { clearance: f64, margin: f64 },
@@ -126,6 +131,33 @@ pub enum Problem {
 #[error("{}", .problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("; "))]
 pub struct VerificationFailure {
     pub problems: Vec<Problem>,
+}
+
+/// The clearance of the flutes round the segment `from to` (their axis, from the ball's
+/// centre up) of `radius` when it is below `upto`, else `upto`: one "anything nearer?" query,
+/// and bisection on the distance only when there is (branch and bound over a chunk's running
+/// minimum). Only the part between the planes square to the axis through its ends counts
+/// (a flat-ended cylinder): below the ball's equator is the ball's. With the axis wholly
+/// inside the part the clearance is `-radius`.
+fn flutes_below(part: &PartCollider, from: &Point3, to: &Point3, radius: f64, upto: f64) -> f64 {
+    let surface = part.surface();
+    let within = |distance: f64| {
+        surface.cylinder_search(from, to, distance, |_| true) != crate::mesh::SegmentSearch::Clear
+    };
+    let limit = radius + upto;
+    if limit <= 0.0 || !within(limit) {
+        return upto;
+    }
+    let (mut near, mut far) = (0.0, limit);
+    for _ in 0..40 {
+        let mid = 0.5 * (near + far);
+        if within(mid) {
+            far = mid;
+        } else {
+            near = mid;
+        }
+    }
+    near - radius
 }
 
 /// Checks every cut and approach pose of `path`. Body clearances are searched up to
@@ -149,6 +181,7 @@ pub fn verify(
             .signed_distance(c)
             .map_or(f64::NEG_INFINITY, |(d, _)| d - r)
     };
+    let flutes_axis = tool.flutes_above_ball();
     let cutting: Vec<usize> = (0..path.moves.len())
         .filter(|&i| matches!(path.moves[i].kind, MoveKind::Cut | MoveKind::Approach))
         .collect();
@@ -162,11 +195,31 @@ pub fn verify(
                 holder: search,
             };
             let mut table = f64::INFINITY;
+            let mut flutes = search;
             for &i in chunk {
                 let pose = &path.moves[i].pose;
                 ball = ball.min(ball_clearance(&centre(pose)));
-                bodies = part.clearances(tool, pose, &bodies);
+                match flutes_axis {
+                    Some((length, radius)) => {
+                        // Only the parry bodies above them; the flutes exactly.
+                        let upto = BodyClearance {
+                            flutes: 0.0,
+                            ..bodies
+                        };
+                        bodies = BodyClearance {
+                            flutes: search,
+                            ..part.clearances(tool, pose, &upto)
+                        };
+                        let from = centre(pose);
+                        let to = from + pose.axis.into_inner() * length;
+                        flutes = flutes_below(part, &from, &to, radius, flutes);
+                    }
+                    None => bodies = part.clearances(tool, pose, &bodies),
+                }
                 table = table.min(part.table_clearance(tool, pose, 0.0));
+            }
+            if flutes_axis.is_some() {
+                bodies.flutes = flutes;
             }
             (ball, bodies, table)
         })
