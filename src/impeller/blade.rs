@@ -48,24 +48,7 @@ pub fn blade_loops(
     stepover: f64,
     overlap: f64,
 ) -> BladeLoops {
-    let triangles: Vec<[u32; 3]> = mesh
-        .triangles
-        .iter()
-        .zip(&impeller.regions)
-        .filter(
-            |(_, r)| matches!(r, Region::Blade(k) | Region::Splitter(k) if *k as usize == piece),
-        )
-        .map(|(t, _)| *t)
-        .collect();
-    let blade = Mesh::compacted(&mesh.positions, triangles);
-    let height: Vec<f64> = blade
-        .positions
-        .iter()
-        .map(|p| passage.above_hub(p).0)
-        .collect();
-    let normals: Vec<Vector3> = (0..blade.triangles.len())
-        .map(|t| blade.face_normal(t))
-        .collect();
+    let (blade, height, normals) = blade_heights(mesh, impeller, passage, piece);
 
     // The surface gradient of the height on each triangle, weighted by area.
     let mut gradients: Vec<(f64, f64)> = blade
@@ -162,9 +145,60 @@ pub fn blade_loops(
     }
 }
 
+/// Blade (or splitter) `piece` of `impeller` as a mesh of its own, with each vertex's height
+/// above the hub and each triangle's normal.
+fn blade_heights(
+    mesh: &Mesh,
+    impeller: &Impeller,
+    passage: &HubPassage,
+    piece: usize,
+) -> (Mesh, Vec<f64>, Vec<Vector3>) {
+    let triangles: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .zip(&impeller.regions)
+        .filter(
+            |(_, r)| matches!(r, Region::Blade(k) | Region::Splitter(k) if *k as usize == piece),
+        )
+        .map(|(t, _)| *t)
+        .collect();
+    let blade = Mesh::compacted(&mesh.positions, triangles);
+    let height: Vec<f64> = blade
+        .positions
+        .iter()
+        .map(|p| passage.above_hub(p).0)
+        .collect();
+    let normals: Vec<Vector3> = (0..blade.triangles.len())
+        .map(|t| blade.face_normal(t))
+        .collect();
+    (blade, height, normals)
+}
+
+/// The longest closed loop round blade (or splitter) `piece` at `level` mm above the hub.
+pub fn blade_loop_at(
+    mesh: &Mesh,
+    impeller: &Impeller,
+    passage: &HubPassage,
+    piece: usize,
+    level: f64,
+) -> Option<SectionCurve> {
+    let (blade, height, normals) = blade_heights(mesh, impeller, passage, piece);
+    let shifted: Vec<f64> = height.iter().map(|h| h - level).collect();
+    let length = |c: &SectionCurve| {
+        c.points
+            .windows(2)
+            .map(|w| (w[1].point - w[0].point).norm())
+            .sum::<f64>()
+    };
+    level_section(&blade, &normals, &shifted)
+        .into_iter()
+        .filter(|c| c.closed)
+        .max_by(|a, b| length(a).total_cmp(&length(b)))
+}
+
 /// The stretches of `curve` where `needed`, each run on by `overlap` (arc length) both ways, as
 /// open curves; the whole curve when it is needed all round.
-fn needed_stretches(curve: &SectionCurve, needed: &[bool], overlap: f64) -> Vec<SectionCurve> {
+pub fn needed_stretches(curve: &SectionCurve, needed: &[bool], overlap: f64) -> Vec<SectionCurve> {
     let n = curve.points.len();
     if n < 2 || !needed.iter().any(|&k| k) {
         return Vec::new();

@@ -9,11 +9,13 @@ pub mod frame;
 pub mod passage;
 pub mod picture;
 pub mod recognise;
+pub mod swarf;
 
-pub use blade::{BladeLoops, blade_loops};
+pub use blade::{BladeLoops, blade_loop_at, blade_loops};
 pub use frame::AxisFrame;
 pub use passage::{FlowLine, HubPassage, PassageOptions, stepover_on_convex};
 pub use picture::impeller_glb;
+pub use swarf::{NotSwarf, Ruling, SwarfOptions, SwarfPlan, SwarfRun, swarf_runs};
 
 pub use recognise::{
     Impeller, NotAnImpeller, Piece, PieceKind, RecogniseOptions, Region, recognise,

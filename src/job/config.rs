@@ -71,6 +71,12 @@ pub struct ImpellerSection {
     /// How far the tool leans off a blade's surface with `blade_axes = "lean"`, degrees (0:
     /// along the blade, cutting with the ball's equator; 90: square to the surface).
     pub blade_lean_deg: f64,
+    /// Swarf a blade where its flanks are ruled within the strategy's tolerance and no taller
+    /// than the flutes: passes round its root with the tool along the rulings, the flutes
+    /// cutting the flank; the loops finish the rest (`report.json` says where and why).
+    /// Off by default until the back-simulation of the posted program follows the flutes
+    /// between blocks as it follows the ball.
+    pub swarf: bool,
 }
 
 /// How the tool axes are set around a blade.
@@ -100,6 +106,7 @@ impl Default for ImpellerSection {
             hub_axes: HubAxes::Passage,
             blade_axes: BladeAxes::Blade,
             blade_lean_deg: 20.0,
+            swarf: false,
         }
     }
 }

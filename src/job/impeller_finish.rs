@@ -22,8 +22,13 @@ use super::config::{BladeAxes, HubAxes};
 use crate::access::{
     DirectionSet, RayScene, SurfacePoint, VisibilityOptions, region_axis, visibility_hierarchical,
 };
+use crate::geom::{Direction, ToolPose};
 use crate::geom::{Point3, Vector3};
-use crate::impeller::{HubPassage, Impeller, PassageOptions, blade_loops};
+use crate::impeller::blade::needed_stretches;
+use crate::impeller::{
+    HubPassage, Impeller, NotSwarf, PassageOptions, Region, Ruling, SwarfOptions, SwarfPlan,
+    blade_loop_at, blade_loops, swarf_runs,
+};
 use crate::mesh::Mesh;
 use crate::orient::{away_from_pole, preferred_axis};
 use crate::path::{self, Finishing, FinishingContext, FinishingOptions, TurnedCopy};
@@ -49,6 +54,8 @@ pub struct ImpellerFinishOptions {
     pub blade_axes: BladeAxes,
     /// How far the tool leans off a blade's surface, degrees.
     pub blade_lean_deg: f64,
+    /// Swarf a blade ruled within the tolerance (else the loops).
+    pub swarf: bool,
     /// The tool axis at which the machine's rotary axes are singular (part frame).
     pub pole: Vector3,
 }
@@ -105,6 +112,29 @@ pub struct BladeSummary {
     pub height_mm: f64,
     pub axes: BladeAxes,
     pub lean_deg: f64,
+    /// The swarf pass that finishes the blade in place of the loops, when it is ruled.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub swarf: Option<SwarfSummary>,
+    /// Why the blade is finished by the loops rather than swarfed (swarf asked for).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_swarfed: Option<NotSwarf>,
+}
+
+/// The swarf pass round one blade.
+#[derive(Clone, Debug, Serialize)]
+pub struct SwarfSummary {
+    /// Stretches of the root swarfed, and the rulings the tool stands along in them.
+    pub runs: usize,
+    pub rulings: usize,
+    /// Points of the root tried, and the ones refused by reason (the loops finish there).
+    pub root_points: usize,
+    pub refused: std::collections::BTreeMap<String, usize>,
+    /// Largest deviation between the flutes and the flank, either way, mm.
+    pub deviation_mm: f64,
+    /// Longest stretch of flank along a ruling above the ball's centre, mm.
+    pub flank_length_mm: f64,
+    /// Height of the root loop above the hub, mm.
+    pub root_height_mm: f64,
 }
 
 /// What the impeller finishing planned, by strategy.
@@ -277,19 +307,69 @@ pub fn finish_impeller(
                 axis_field: Some(&blade_field),
                 ..*ctx
             };
-            let plan_loops = |loops: &crate::impeller::BladeLoops, piece_ctx: &FinishingContext| {
-                let mut finishing = Finishing::default();
-                let curves: Vec<_> = loops.curves.iter().chain(&loops.partial).cloned().collect();
-                for result in path::curve_passes(&curves, piece_ctx, options, advance) {
-                    finishing.merge(result);
-                }
-                finishing.segments = path::nearest_order(
-                    std::mem::take(&mut finishing.segments),
-                    blade_axes == BladeAxes::Blade,
-                );
-                finishing
+            // The loops' curves, less what `covered` says another strategy sweeps (each
+            // stretch left run on by the partial loops' overlap).
+            let plan_loops =
+                |loops: &crate::impeller::BladeLoops,
+                 piece_ctx: &FinishingContext,
+                 covered: Option<&(dyn Fn(&Point3) -> bool + Sync)>| {
+                    let mut finishing = Finishing::default();
+                    let all = loops.curves.iter().chain(&loops.partial);
+                    let curves: Vec<_> = match covered {
+                        None => all.cloned().collect(),
+                        Some(covered) => all
+                            .flat_map(|curve| {
+                                let needed: Vec<bool> =
+                                    curve.points.iter().map(|p| !covered(&p.point)).collect();
+                                needed_stretches(
+                                    curve,
+                                    &needed,
+                                    PARTIAL_LOOP_OVERLAP_STEPOVERS * stepover,
+                                )
+                            })
+                            .collect(),
+                    };
+                    for result in path::curve_passes(&curves, piece_ctx, options, advance) {
+                        finishing.merge(result);
+                    }
+                    finishing.segments = path::nearest_order(
+                        std::mem::take(&mut finishing.segments),
+                        blade_axes == BladeAxes::Blade,
+                    );
+                    finishing
+                };
+            // Swarf where the blade is ruled: the tool along the rulings, its flutes dipping
+            // no more than the tolerance into the flank (the loops keep them off it); the
+            // loops finish what the swarf runs do not sweep (the tip's rounding, unruled ends).
+            let swarf_tool = ctx.tool.with_flute_dip(options.tolerance);
+            let swarf_ctx = FinishingContext {
+                tool: &swarf_tool,
+                ..blade_ctx
             };
-            let blade = plan_loops(&loops, &blade_ctx);
+            let swarfed = if impeller_options.swarf {
+                Some(swarf_blade(
+                    part,
+                    impeller,
+                    &passage,
+                    passage.first_blade,
+                    &swarf_ctx,
+                    options,
+                    pole,
+                ))
+            } else {
+                None
+            };
+            let (swarf, blade, swarf_summary, not_swarfed) = match swarfed {
+                Some(Ok((finishing, plan, summary))) => {
+                    let reach = radius + 2.0 * options.tolerance;
+                    let below = summary.root_height_mm;
+                    let covered = |p: &Point3| plan.sweeps(p, reach, below);
+                    let loops = plan_loops(&loops, &blade_ctx, Some(&covered));
+                    (Some(finishing), loops, Some(summary), None)
+                }
+                Some(Err(why)) => (None, plan_loops(&loops, &blade_ctx, None), None, Some(why)),
+                None => (None, plan_loops(&loops, &blade_ctx, None), None, None),
+            };
 
             // The splitters in the passage: loops round each, both its sides, like the blade.
             let splitter_pieces = passage.splitters(impeller);
@@ -313,7 +393,7 @@ pub fn finish_impeller(
                     axis_field: Some(field),
                     ..*ctx
                 };
-                splitters.push((plan_loops(&piece_loops, &piece_ctx), piece_ctx));
+                splitters.push((plan_loops(&piece_loops, &piece_ctx, None), piece_ctx));
             }
             summary.first_passage_ms = round_ms(t);
 
@@ -330,6 +410,12 @@ pub fn finish_impeller(
                 summary.copies.merge(&blade_stats);
                 copies.push(hub_copy);
                 copies.push(blade_copy);
+                if let Some(swarf) = &swarf {
+                    let (copy, stats) =
+                        path::turned_copy(swarf, &rotation, &centre, &swarf_ctx, options);
+                    summary.copies.merge(&stats);
+                    copies.push(copy);
+                }
                 for (splitter, piece_ctx) in &splitters {
                     let (copy, stats) =
                         path::turned_copy(splitter, &rotation, &centre, piece_ctx, options);
@@ -342,6 +428,9 @@ pub fn finish_impeller(
             summary.splitters = splitter_pieces.len();
             summary.splitter_loops = splitter_loops;
             finishing.merge(hub);
+            if let Some(swarf) = swarf {
+                finishing.merge(swarf);
+            }
             finishing.merge(blade);
             for (splitter, _) in splitters {
                 finishing.merge(splitter);
@@ -375,6 +464,8 @@ pub fn finish_impeller(
                 height_mm: loops.top,
                 axes: blade_axes,
                 lean_deg: impeller_options.blade_lean_deg,
+                swarf: swarf_summary,
+                not_swarfed,
             });
         }
         Err(reason) => summary.not_planned = Some(reason),
@@ -476,4 +567,127 @@ pub fn visible_passage_axis(
 
 fn round_ms(since: Instant) -> f64 {
     (since.elapsed().as_secs_f64() * 1e4).round() / 10.0
+}
+
+/// The swarf runs round blade `piece` (of the part as recognised), every pose checked
+/// exactly on the part: the ball and the flutes within the tolerance of it, shank, holder and
+/// table by `ctx`'s tool (whose flutes may dip the tolerance), the machine's limits.
+fn swarf_blade(
+    part: &Mesh,
+    impeller: &Impeller,
+    passage: &HubPassage,
+    piece: usize,
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    pole: Vector3,
+) -> Result<(Finishing, SwarfPlan, SwarfSummary), NotSwarf> {
+    let r = ctx.tool.ball_radius;
+    let Some((flutes_above_ball, _)) = ctx.tool.flutes_above_ball() else {
+        return Err(NotSwarf::NoRoot);
+    };
+    // The ball sits on the hub with its equator on the flank; the hub's fitted meridian is off
+    // the facets by up to its fit, so the root is lifted by that and half the tolerance.
+    let root_height = r + passage.profile_fit_mm + 0.5 * options.tolerance;
+    let root =
+        blade_loop_at(part, impeller, passage, piece, root_height).ok_or(NotSwarf::NoRoot)?;
+    let on_blade = |t: u32| {
+        matches!(impeller.regions[t as usize], Region::Blade(k) | Region::Splitter(k)
+            if k as usize == piece)
+    };
+    let rising = |p: &Point3| passage.above_hub(p).1;
+    let accept = |ruling: &Ruling| -> Result<(), String> {
+        let centre = ruling.centre;
+        ctx.part
+            .check_ball(&centre, r, options.tolerance)
+            .map_err(|c| format!("{c:?}"))?;
+        let top = centre + ruling.axis * flutes_above_ball;
+        if ctx
+            .part
+            .surface()
+            .segment_within(&centre, &top, r - options.tolerance)
+        {
+            return Err("the flutes gouge".into());
+        }
+        if !(ctx.reachable)(&ruling.axis) {
+            return Err("beyond the machine's limits".into());
+        }
+        ctx.part
+            .check_bodies(ctx.tool, &swarf_pose(ruling, r))
+            .map_err(|c| format!("{c:?}"))
+    };
+    let plan = swarf_runs(
+        ctx.part.surface(),
+        &on_blade,
+        &rising,
+        &accept,
+        &root,
+        &SwarfOptions {
+            ball_radius: r,
+            flutes_above_ball,
+            tolerance: options.tolerance,
+            max_step: options.max_step,
+            max_axis_turn_deg: options.max_axis_turn_deg,
+            snap_to: Some(pole),
+        },
+    )?;
+    if plan.runs.is_empty() {
+        return Err(plan.refused.first().cloned().unwrap_or(NotSwarf::NoRoot));
+    }
+    let mut finishing = Finishing {
+        drive_points: plan.root_points,
+        ..Finishing::default()
+    };
+    for run in &plan.runs {
+        let n = run.rulings.len();
+        let mut poses: Vec<ToolPose> = run.rulings.iter().map(|g| swarf_pose(g, r)).collect();
+        let mut directions: Vec<Vector3> = (0..n)
+            .map(|i| {
+                let (before, after) = if run.closed {
+                    (&run.rulings[(i + n - 1) % n], &run.rulings[(i + 1) % n])
+                } else {
+                    (
+                        &run.rulings[i.saturating_sub(1)],
+                        &run.rulings[(i + 1).min(n - 1)],
+                    )
+                };
+                (after.centre - before.centre)
+                    .try_normalize(1e-12)
+                    .unwrap_or_else(Vector3::zeros)
+            })
+            .collect();
+        if run.closed {
+            poses.push(poses[0]);
+            directions.push(directions[0]);
+        }
+        finishing.segments.push(path::CutSegment {
+            poses,
+            pass_directions: directions,
+        });
+    }
+    let mut by_reason = std::collections::BTreeMap::new();
+    for why in &plan.refused {
+        let name = serde_json::to_value(why)
+            .ok()
+            .and_then(|v| v.get("reason").and_then(|r| r.as_str().map(String::from)))
+            .unwrap_or_default();
+        *by_reason.entry(name).or_insert(0) += 1;
+    }
+    let summary = SwarfSummary {
+        runs: plan.runs.len(),
+        rulings: plan.rulings().count(),
+        root_points: plan.root_points,
+        refused: by_reason,
+        deviation_mm: plan.deviation(),
+        flank_length_mm: plan.rulings().map(|g| g.flank_length).fold(0.0, f64::max),
+        root_height_mm: root_height,
+    };
+    Ok((finishing, plan, summary))
+}
+
+/// The tool standing along `ruling`, ball of radius `r`.
+fn swarf_pose(ruling: &Ruling, r: f64) -> ToolPose {
+    ToolPose {
+        tip: ruling.centre - ruling.axis * r,
+        axis: Direction::new_normalize(ruling.axis),
+    }
 }

@@ -342,6 +342,7 @@ pub fn plan_operation(
                             hub_axes: setup.impeller.hub_axes,
                             blade_axes: setup.impeller.blade_axes,
                             blade_lean_deg: setup.impeller.blade_lean_deg,
+                            swarf: setup.impeller.swarf,
                             pole: setup.pole(),
                         },
                         advance,

@@ -1,0 +1,650 @@
+//! Swarf (flank) milling of ruled blades (issue 21 item 2): passes round the blade's root
+//! with the tool standing along the blade's rulings, so the flutes finish the flank from the
+//! root up in one go where point milling needs a loop per stepover of height.
+//!
+//! A flank is ruled within the tolerance where, through a root point, some straight line runs
+//! up it without leaving the surface by more than the tolerance. The tool there is placed as
+//! point milling places it — the ball pushed out to touch at the root point — and stands along
+//! that line; its flutes, a cylinder of the ball's radius round the axis, then lie along the
+//! flank. Nothing is assumed of the surface's form: the axis is searched by its angle off the
+//! rising direction in the tangent plane at the ball's contact, each candidate brought onto
+//! the surface the ball's centre keeps at its far end (a drafted flank leans its rulings toward
+//! the normal), and what decides is the flutes' distance to the part, exact nearest-point
+//! queries every [`SAMPLE_STEP`] up the axis. The flank is the unbroken stretch from the ball's
+//! centre up where that distance stays within the tolerance of the radius both ways (closer is
+//! a gouge, farther leaves material) on this blade; above it (the tip's rounding) the flutes
+//! only must not gouge. Where many lines keep within the tolerance (a nearly flat flank) the
+//! one nearest the rising direction is taken, so neighbouring rulings agree; a direction to
+//! snap to (the machine's pole) is taken where it does as well.
+//!
+//! The root is the loop a ball's radius above the hub (the ball sits on the hub, its equator
+//! on the flank). Root points whose ruling holds and whose tool the job accepts (shank,
+//! holder, table, machine) form runs; between neighbours rulings are inserted where the axis
+//! turns more than allowed or the ball's chord or the flutes half-way would gouge. The
+//! single-point offset of the swarf literature: a developable flank is cut exactly, a twisted
+//! one leaves what its deviation says. [`SwarfPlan::sweeps`] tells the loops what is left to
+//! them.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::geom::{Point3, Vector3, angle_between, closest_point_on_segment};
+use crate::mesh::distance::SurfaceDistance;
+use crate::mesh::{DrivePoint, SectionCurve};
+use crate::path::place_ball;
+
+/// Distance between the flutes' samples up the axis, mm.
+const SAMPLE_STEP: f64 = 0.2;
+
+/// Widest angle the axis is searched off the flank's rising direction, degrees.
+const SEARCH_DEG: f64 = 45.0;
+
+/// How near a ruling must be to [`SwarfOptions::snap_to`] to be snapped to it, degrees.
+const SNAP_DEG: f64 = 2.0;
+
+/// Steps of the walk out from the rising direction, each way, over [`SEARCH_DEG`].
+const WALK_STEPS: i32 = 45;
+
+/// Coarse scan step of the angle before the golden-section refinement, degrees.
+const SCAN_STEP_DEG: f64 = 5.0;
+
+/// Deepest halving between two rulings (an axis turn or a gouge in between).
+const MAX_REFINE_DEPTH: u32 = 6;
+
+/// Fewest rulings in a run: shorter stretches are left to the loops.
+const MIN_RUN_RULINGS: usize = 3;
+
+/// Shortest flank above the ball's centre worth a swarf pass, mm.
+const MIN_FLANK: f64 = 1.0;
+
+/// How the swarf pass is asked to run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwarfOptions {
+    pub ball_radius: f64,
+    /// The flutes' length above the ball's centre, mm (their radius is the ball's).
+    pub flutes_above_ball: f64,
+    /// Deviation allowed both ways between the flutes and the flank, mm.
+    pub tolerance: f64,
+    /// Longest step between rulings along the root, mm.
+    pub max_step: f64,
+    /// Largest turn of the axis between two neighbouring rulings, degrees.
+    pub max_axis_turn_deg: f64,
+    /// A direction taken instead of a ruling within [`SNAP_DEG`] of it wherever the flutes
+    /// along it keep within half the tolerance of the same flank: the machine's pole, where a
+    /// tilt of hundredths of a degree swings the rotary table half a turn.
+    pub snap_to: Option<Vector3>,
+}
+
+/// The tool standing along one ruling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ruling {
+    /// The root point and its normal.
+    pub contact: DrivePoint,
+    /// The ball's centre.
+    pub centre: Point3,
+    /// Unit tool axis, up the flank.
+    pub axis: Vector3,
+    /// Largest distance between the flutes and the flank off the ball's radius, either way, mm.
+    pub deviation: f64,
+    /// How far up the axis from the ball's centre the flank reaches, mm.
+    pub flank_length: f64,
+}
+
+/// A stretch of the root the tool sweeps with its flutes along the flank: the whole loop
+/// (`closed`) or part of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SwarfRun {
+    pub rulings: Vec<Ruling>,
+    pub closed: bool,
+}
+
+/// What the search round a blade's root found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SwarfPlan {
+    pub runs: Vec<SwarfRun>,
+    /// Root points tried, and the ones refused with the reason.
+    pub root_points: usize,
+    pub refused: Vec<NotSwarf>,
+}
+
+impl SwarfPlan {
+    /// The largest deviation of any ruling kept, mm.
+    pub fn deviation(&self) -> f64 {
+        self.rulings().map(|r| r.deviation).fold(0.0, f64::max)
+    }
+
+    pub fn rulings(&self) -> impl Iterator<Item = &Ruling> {
+        self.runs.iter().flat_map(|run| &run.rulings)
+    }
+
+    /// Whether the flutes of a run pass within `radius` of `p`, anywhere between two
+    /// neighbouring rulings, their axis extended down `below` mm past the ball's centre (the
+    /// corner under the ball's equator, which no ball of this radius reaches, counts as theirs).
+    pub fn sweeps(&self, p: &Point3, radius: f64, below: f64) -> bool {
+        const SUBDIVISIONS: usize = 4;
+        self.runs.iter().any(|run| {
+            let n = run.rulings.len();
+            let pairs = if run.closed { n } else { n.saturating_sub(1) };
+            (0..pairs).any(|i| {
+                let (a, b) = (&run.rulings[i], &run.rulings[(i + 1) % n]);
+                (0..=SUBDIVISIONS).any(|k| {
+                    let t = k as f64 / SUBDIVISIONS as f64;
+                    let centre = a.centre + (b.centre - a.centre) * t;
+                    let axis = (a.axis * (1.0 - t) + b.axis * t).normalize();
+                    let length = a.flank_length + (b.flank_length - a.flank_length) * t;
+                    let (from, to) = (centre - axis * below, centre + axis * length);
+                    (p - closest_point_on_segment(p, &from, &to)).norm() <= radius
+                })
+            })
+        })
+    }
+}
+
+/// Why a root point (or the whole blade) is not swarfed.
+#[derive(Clone, Debug, PartialEq, Serialize, thiserror::Error)]
+#[serde(rename_all = "snake_case", tag = "reason")]
+pub enum NotSwarf {
+    /// No closed loop round the blade a ball's radius above the hub (or no flutes above a
+    /// ball to swarf with).
+    #[error("no loop round the blade's root a ball's radius above the hub")]
+    NoRoot,
+    /// The flank leaves the best line through a root point by more than the tolerance within
+    /// [`MIN_FLANK`] of the ball's centre (a rounded or leaning blade end, a twisted flank).
+    #[error("not ruled within the tolerance: {deviation_mm:.4} mm off the best line at {at:?}")]
+    NotRuled { deviation_mm: f64, at: [f64; 3] },
+    /// The flank goes on above the top of the flutes.
+    #[error("the flank at {at:?} is taller than the flutes")]
+    TallerThanFlutes { at: [f64; 3] },
+    /// The surface at the root faces up or down the blade, not across it.
+    #[error("the root at {at:?} is not on a flank")]
+    NotAFlank { at: [f64; 3] },
+    /// The tool standing along the ruling at `at` is refused (`why`: the ball does not fit,
+    /// the ball or flutes gouge elsewhere, shank, holder or table, the machine's limits, or
+    /// the axis turns too fast between two rulings).
+    #[error("the tool along the ruling at {at:?} is refused: {why}")]
+    Refused { at: [f64; 3], why: String },
+}
+
+/// The swarf runs round `root` (a closed loop on the blade a ball's radius above the hub), on
+/// the part `surface`, whose triangles `on_blade` says are this blade's; `rising` gives the
+/// direction a point's height above the hub grows in, and `accept` says whether the tool may
+/// stand along a ruling (the job's checks of shank, holder, table and machine; `Err` says
+/// why not). Runs are the stretches where every ruling is within the tolerance and accepted,
+/// and so is every one inserted between two of them.
+pub fn swarf_runs(
+    surface: &SurfaceDistance,
+    on_blade: &(dyn Fn(u32) -> bool + Sync),
+    rising: &(dyn Fn(&Point3) -> Vector3 + Sync),
+    accept: &(dyn Fn(&Ruling) -> Result<(), String> + Sync),
+    root: &SectionCurve,
+    options: &SwarfOptions,
+) -> Result<SwarfPlan, NotSwarf> {
+    if !root.closed || root.points.len() < 3 {
+        return Err(NotSwarf::NoRoot);
+    }
+    let points = root
+        .simplified(
+            options.ball_radius,
+            0.25 * options.tolerance,
+            options.max_step,
+        )
+        .resampled(options.max_step);
+    let find = |p: &DrivePoint| {
+        let found = ruling(surface, on_blade, rising, p, options)?;
+        accept(&found).map_err(|why| NotSwarf::Refused {
+            at: [p.point.x, p.point.y, p.point.z],
+            why,
+        })?;
+        Ok(found)
+    };
+    let found: Vec<Result<Ruling, NotSwarf>> = points.par_iter().map(find).collect();
+    let n = found.len();
+    let mut refused: Vec<NotSwarf> = found.iter().filter_map(|f| f.clone().err()).collect();
+    // Walk the loop from a refused point (if any), so no run wraps round the start.
+    let start = found.iter().position(|f| f.is_err());
+    let order: Vec<usize> = (0..n).map(|i| (start.unwrap_or(0) + i) % n).collect();
+    let mut runs = Vec::new();
+    let mut current: Vec<Ruling> = Vec::new();
+    let close = |current: &mut Vec<Ruling>, runs: &mut Vec<SwarfRun>| {
+        if current.len() >= MIN_RUN_RULINGS {
+            runs.push(SwarfRun {
+                rulings: std::mem::take(current),
+                closed: false,
+            });
+        }
+        current.clear();
+    };
+    for (k, &i) in order.iter().enumerate() {
+        let Ok(ruling) = &found[i] else {
+            close(&mut current, &mut runs);
+            continue;
+        };
+        if let Some(last) = current.last().copied() {
+            match between(&find, surface, &last, ruling, options, 0) {
+                Ok(inserted) => current.extend(inserted),
+                Err(why) => {
+                    refused.push(why);
+                    close(&mut current, &mut runs);
+                }
+            }
+        }
+        current.push(*ruling);
+        if k + 1 == n && start.is_none() {
+            // Every root point holds: the run closes round the loop.
+            match between(&find, surface, ruling, &current[0], options, 0) {
+                Ok(inserted) => {
+                    current.extend(inserted);
+                    runs.push(SwarfRun {
+                        rulings: std::mem::take(&mut current),
+                        closed: true,
+                    });
+                }
+                Err(why) => {
+                    refused.push(why);
+                    close(&mut current, &mut runs);
+                }
+            }
+        }
+    }
+    close(&mut current, &mut runs);
+    Ok(SwarfPlan {
+        runs,
+        root_points: n,
+        refused,
+    })
+}
+
+/// Rulings to insert between `a` and `b`, in order: halved where the axis turns too far, or
+/// the ball's chord or the flutes half-way between the two would gouge.
+fn between(
+    find: &(dyn Fn(&DrivePoint) -> Result<Ruling, NotSwarf> + Sync),
+    surface: &SurfaceDistance,
+    a: &Ruling,
+    b: &Ruling,
+    options: &SwarfOptions,
+    depth: u32,
+) -> Result<Vec<Ruling>, NotSwarf> {
+    let held = options.ball_radius - options.tolerance;
+    let turn = angle_between(&a.axis, &b.axis).to_degrees();
+    let centre = nalgebra::center(&a.centre, &b.centre);
+    let axis = (a.axis + b.axis).try_normalize(1e-12).unwrap_or(a.axis);
+    let clear = !surface.segment_within(&a.centre, &b.centre, held)
+        && !surface.segment_within(&centre, &(centre + axis * options.flutes_above_ball), held);
+    if turn <= options.max_axis_turn_deg && clear {
+        return Ok(Vec::new());
+    }
+    let at = [centre.x, centre.y, centre.z];
+    let Some(normal) = (a.contact.normal + b.contact.normal).try_normalize(1e-9) else {
+        return Err(NotSwarf::Refused {
+            at,
+            why: "the flank turns back between two rulings".into(),
+        });
+    };
+    if depth >= MAX_REFINE_DEPTH {
+        return Err(NotSwarf::Refused {
+            at,
+            why: format!("between two rulings the axis turns {turn:.1}° or the tool gouges"),
+        });
+    }
+    let mid = find(&DrivePoint {
+        point: nalgebra::center(&a.contact.point, &b.contact.point),
+        normal,
+    })?;
+    let mut out = between(find, surface, a, &mid, options, depth + 1)?;
+    out.push(mid);
+    out.extend(between(find, surface, &mid, b, options, depth + 1)?);
+    Ok(out)
+}
+
+/// The flutes' distance to the part off the ball's radius at the samples up the axis from
+/// `centre` (0 at the centre), and whether each sample's nearest point is on this blade.
+fn deviations(
+    surface: &SurfaceDistance,
+    on_blade: &(dyn Fn(u32) -> bool + Sync),
+    centre: &Point3,
+    axis: &Vector3,
+    length: f64,
+    radius: f64,
+) -> Vec<(f64, f64, bool)> {
+    let steps = (length / SAMPLE_STEP).ceil().max(1.0) as usize;
+    (0..=steps)
+        .map(|k| {
+            let s = length * k as f64 / steps as f64;
+            // Farther than this from everything, a sample neither gouges nor is on the flank.
+            match surface.closest(&(centre + axis * s), radius + 1.0) {
+                Some(near) => (s, near.distance - radius, on_blade(near.triangle)),
+                None => (s, 1.0, false),
+            }
+        })
+        .collect()
+}
+
+/// How far up the axis the flank follows the flutes within `tolerance`, from the ball's
+/// centre on: the last sample of the unbroken run of samples on the blade within it.
+fn flank_length(samples: &[(f64, f64, bool)], tolerance: f64) -> f64 {
+    samples
+        .iter()
+        .take_while(|(_, d, blade)| *blade && d.abs() <= tolerance)
+        .last()
+        .map_or(0.0, |(s, _, _)| *s)
+}
+
+/// The best ruling through root point `p`.
+///
+/// The axis is searched in the tangent plane at the ball's contact, by its angle off the
+/// rising direction. What is minimised is the largest deviation over a stretch of the axis
+/// that lies beside the flank, which is smooth in the angle (the flank's normal curvature
+/// along it): first over the shortest flank worth swarfing, then over the flank that axis
+/// finds, around the first answer. The flank is where the flutes follow the surface within
+/// the tolerance without a break; above it (a rounded tip) they only must not gouge.
+fn ruling(
+    surface: &SurfaceDistance,
+    on_blade: &(dyn Fn(u32) -> bool + Sync),
+    rising: &(dyn Fn(&Point3) -> Vector3 + Sync),
+    p: &DrivePoint,
+    options: &SwarfOptions,
+) -> Result<Ruling, NotSwarf> {
+    let at = [p.point.x, p.point.y, p.point.z];
+    let r = options.ball_radius;
+    // The ball as point milling places it: pushed out of every face nearer than its radius
+    // (a facetted flank's neighbouring facets lean a few degrees off the root point's).
+    let centre = place_ball(surface, p, r).ok_or(NotSwarf::Refused {
+        at,
+        why: "the ball does not fit".into(),
+    })?;
+    let n = surface
+        .closest(&centre, 2.0 * r)
+        .and_then(|c| (centre - c.point).try_normalize(1e-12))
+        .unwrap_or(p.normal);
+    let up = rising(&p.point);
+    let across = up - n * n.dot(&up);
+    if across.norm() < 0.3 {
+        return Err(NotSwarf::NotAFlank { at });
+    }
+    let u = across.normalize();
+    let w = n.cross(&u);
+    // The axis toward the point `length` up the line at angle `phi` in the tangent plane,
+    // brought onto the surface the ball's centre keeps (a radius off the part): the line
+    // then meets the flank's offset at both ends, whatever the tangent plane's error (a
+    // drafted flank leans its rulings toward the normal).
+    let axis_at = |phi: f64, length: f64| {
+        let mut axis = u * phi.cos() + w * phi.sin();
+        for _ in 0..2 {
+            let q = centre + axis * length;
+            let Some(near) = surface.closest(&q, 2.0 * r) else {
+                break;
+            };
+            let Some(out) = (q - near.point).try_normalize(1e-12) else {
+                break;
+            };
+            match (near.point + out * r - centre).try_normalize(1e-12) {
+                Some(a) => axis = a,
+                None => break,
+            }
+        }
+        axis
+    };
+    let worst = |phi: f64, length: f64| {
+        deviations(surface, on_blade, &centre, &axis_at(phi, length), length, r)
+            .iter()
+            .map(|(_, d, _)| d.abs())
+            .fold(0.0, f64::max)
+    };
+    // Over the shortest flank first, then over the flank that axis finds, while it grows.
+    // Where the flank is nearly flat many lines keep within the tolerance: the one nearest
+    // the rising direction is taken (the first within half the tolerance, walking out from
+    // it a degree at a time), so neighbouring rulings agree; where none is, the least
+    // deviation (a coarse scan, then golden section in the best cell).
+    let reach = options.flutes_above_ball;
+    let (mut best, mut baseline) = (0.0, MIN_FLANK);
+    let mut length = MIN_FLANK;
+    for _ in 0..4 {
+        let admissible = (0..=WALK_STEPS)
+            .flat_map(|k| [k, -k])
+            .map(|k| f64::from(k) * (SEARCH_DEG / f64::from(WALK_STEPS)).to_radians())
+            .find(|&phi| worst(phi, length) <= 0.5 * options.tolerance);
+        let found = admissible.unwrap_or_else(|| {
+            let step = SCAN_STEP_DEG.to_radians();
+            let cells = (2.0 * SEARCH_DEG / SCAN_STEP_DEG).round() as i32;
+            let mut scan = (0.0, f64::INFINITY);
+            for k in 0..=cells {
+                let phi = -SEARCH_DEG.to_radians() + step * f64::from(k);
+                let c = worst(phi, length);
+                if c < scan.1 {
+                    scan = (phi, c);
+                }
+            }
+            golden_section(&|phi| worst(phi, length), scan.0 - step, scan.0 + step)
+        });
+        let found_length = flank_length(
+            &deviations(
+                surface,
+                on_blade,
+                &centre,
+                &axis_at(found, length),
+                reach,
+                r,
+            ),
+            options.tolerance,
+        );
+        if found_length < length && length > MIN_FLANK {
+            break;
+        }
+        (best, baseline) = (found, length);
+        if found_length <= length {
+            break;
+        }
+        length = found_length;
+    }
+    let mut axis = axis_at(best, baseline);
+    let mut samples = deviations(surface, on_blade, &centre, &axis, reach, r);
+    let mut length = flank_length(&samples, options.tolerance);
+    if let Some(snap) = options.snap_to
+        && angle_between(&axis, &snap).to_degrees() <= SNAP_DEG
+    {
+        let snapped = deviations(surface, on_blade, &centre, &snap, reach, r);
+        let snapped_length = flank_length(&snapped, 0.5 * options.tolerance);
+        if snapped_length + SAMPLE_STEP >= length {
+            (axis, samples, length) = (snap, snapped, snapped_length);
+        }
+    }
+    if samples.last().is_some_and(|(s, _, _)| *s <= length) {
+        return Err(NotSwarf::TallerThanFlutes { at });
+    }
+    if length < MIN_FLANK {
+        let deviation_mm = samples
+            .iter()
+            .take_while(|(s, _, _)| *s <= MIN_FLANK)
+            .map(|(_, d, _)| d.abs())
+            .fold(0.0, f64::max);
+        return Err(NotSwarf::NotRuled { deviation_mm, at });
+    }
+    // Above the flank the flutes may leave material but not gouge.
+    if let Some((s, d, _)) = samples.iter().find(|(_, d, _)| *d < -options.tolerance) {
+        return Err(NotSwarf::Refused {
+            at,
+            why: format!("the flutes gouge {:.4} mm at {s:.2} mm up the axis", -d),
+        });
+    }
+    let deviation = samples
+        .iter()
+        .take_while(|(s, _, _)| *s <= length)
+        .map(|(_, d, _)| d.abs())
+        .fold(0.0, f64::max);
+    Ok(Ruling {
+        contact: *p,
+        centre,
+        axis,
+        deviation,
+        flank_length: length,
+    })
+}
+
+/// The least of `f` in `[lo, hi]` (taken single-troughed there), to 0.618¹⁶ of the width.
+fn golden_section(f: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    let ratio = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut x1, mut x2) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..16 {
+        if f1 <= f2 {
+            (hi, x2, f2) = (x2, x1, f1);
+            x1 = hi - ratio * (hi - lo);
+            f1 = f(x1);
+        } else {
+            (lo, x1, f1) = (x1, x2, f2);
+            x2 = lo + ratio * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    if f1 <= f2 { x1 } else { x2 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::fixtures::{box_between, joined};
+    use crate::mesh::{Mesh, plane_section};
+
+    const R: f64 = 2.0;
+    const TOLERANCE: f64 = 0.01;
+
+    fn options() -> SwarfOptions {
+        SwarfOptions {
+            ball_radius: R,
+            flutes_above_ball: 8.0,
+            tolerance: TOLERANCE,
+            max_step: 1.0,
+            max_axis_turn_deg: 5.0,
+            snap_to: None,
+        }
+    }
+
+    /// A plate (top at z = 0) with a blade standing on it, 20 × 2 × 8 mm, its x ends leaned
+    /// by `lean` (x grows with z by tan(lean)): the long flanks are planes, the ends ruled
+    /// along the leaning direction. The blade's triangles come after the plate's 12.
+    fn plate_and_blade(lean: f64) -> Mesh {
+        let mut blade = box_between(Point3::new(-10.0, -1.0, -1.0), Point3::new(10.0, 1.0, 8.0));
+        for p in &mut blade.positions {
+            p.x += p.z * lean.tan();
+        }
+        joined([
+            box_between(
+                Point3::new(-30.0, -30.0, -5.0),
+                Point3::new(30.0, 30.0, 0.0),
+            ),
+            blade,
+        ])
+    }
+
+    /// The root loop: the blade's section a ball's radius (and a hair) above the plate.
+    fn root(mesh: &Mesh) -> SectionCurve {
+        let blade = Mesh::compacted(&mesh.positions, mesh.triangles[12..].iter().copied());
+        let normals: Vec<Vector3> = (0..blade.triangles.len())
+            .map(|t| blade.face_normal(t))
+            .collect();
+        plane_section(&blade, &normals, &Vector3::z(), R + 0.5 * TOLERANCE)
+            .into_iter()
+            .next()
+            .expect("one loop round the blade")
+    }
+
+    /// Brute force over every triangle: the least distance from the flute axis of `ruling`
+    /// (sampled every 0.02 mm from the ball's centre up `length`) to the part.
+    fn flute_distance(mesh: &Mesh, ruling: &Ruling, length: f64) -> f64 {
+        let steps = (length / 0.02).ceil() as usize;
+        (0..=steps)
+            .map(|k| ruling.centre + ruling.axis * (length * k as f64 / steps as f64))
+            .map(|q| {
+                (0..mesh.triangles.len())
+                    .map(|t| {
+                        let [a, b, c] = mesh.corners(t);
+                        crate::verify::point_triangle_distance(&q, &a, &b, &c)
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn run(mesh: &Mesh, options: &SwarfOptions) -> SwarfPlan {
+        let surface = SurfaceDistance::new(mesh);
+        swarf_runs(
+            &surface,
+            &|t| t >= 12,
+            &|_| Vector3::z(),
+            &|_| Ok(()),
+            &root(mesh),
+            options,
+        )
+        .expect("a root loop")
+    }
+
+    #[test]
+    fn an_upright_blade_is_swarfed_in_one_closed_run_along_its_height() {
+        let mesh = plate_and_blade(0.0);
+        let plan = run(&mesh, &options());
+        assert_eq!(plan.runs.len(), 1, "refused: {:?}", plan.refused);
+        assert!(plan.runs[0].closed);
+        assert!(plan.refused.is_empty(), "{:?}", plan.refused);
+        for ruling in plan.rulings() {
+            assert!(ruling.axis.z > 1.0 - 1e-6, "axis {:?}", ruling.axis);
+            // The flank reaches from the ball's centre (z = 2) to the top (z = 8).
+            assert!(
+                (ruling.flank_length - 6.0).abs() <= SAMPLE_STEP + TOLERANCE,
+                "flank {}",
+                ruling.flank_length
+            );
+            let d = flute_distance(&mesh, ruling, ruling.flank_length);
+            assert!((d - R).abs() <= TOLERANCE, "flutes {d} from the part");
+        }
+        // Every point of the long flanks between the ball's equator and the top is swept.
+        for x in [-9.5, -3.3, 0.0, 4.1, 9.5] {
+            for z in [2.1, 4.0, 6.5, 7.9] {
+                for y in [-1.0, 1.0] {
+                    let p = Point3::new(x, y, z);
+                    assert!(plan.sweeps(&p, R + TOLERANCE, 0.0), "{p:?} not swept");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn leaning_ends_get_leaning_rulings_and_the_flutes_keep_the_tolerance() {
+        let lean = 12f64.to_radians();
+        let mesh = plate_and_blade(lean);
+        let plan = run(&mesh, &options());
+        assert!(!plan.runs.is_empty(), "refused: {:?}", plan.refused);
+        let leaning = Vector3::new(lean.sin(), 0.0, lean.cos());
+        let mut on_ends = 0;
+        for ruling in plan.rulings() {
+            // Nothing gouges, by an independent brute-force distance up the whole flutes.
+            let d = flute_distance(&mesh, ruling, options().flutes_above_ball);
+            assert!(d >= R - TOLERANCE - 1e-9, "flutes {d} from the part");
+            assert!(ruling.deviation <= TOLERANCE);
+            // On the +x end, square to the plate's rise the wall leans: the ruling with it.
+            if ruling.contact.normal.x > 0.9 {
+                on_ends += 1;
+                let off = angle_between(&ruling.axis, &leaning).to_degrees();
+                assert!(off < 0.5, "ruling {off}° off the leaning end");
+            }
+        }
+        assert!(on_ends > 0, "no ruling on the leaning end");
+    }
+
+    #[test]
+    fn a_blade_taller_than_the_flutes_is_refused() {
+        let mesh = plate_and_blade(0.0);
+        let short = SwarfOptions {
+            flutes_above_ball: 4.0,
+            ..options()
+        };
+        let plan = run(&mesh, &short);
+        assert!(plan.runs.is_empty());
+        assert!(
+            plan.refused
+                .iter()
+                .all(|why| matches!(why, NotSwarf::TallerThanFlutes { .. })),
+            "{:?}",
+            plan.refused
+        );
+    }
+}
