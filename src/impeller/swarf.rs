@@ -10,8 +10,8 @@
 //! rising direction in the tangent plane at the ball's contact, each candidate brought onto
 //! the surface the ball's centre keeps at its far end (a drafted flank leans its rulings toward
 //! the normal), and what decides is the flutes' distance to the part, exact nearest-point
-//! queries every [`SAMPLE_STEP`] up the axis. The flank is the unbroken stretch from the ball's
-//! centre up where that distance stays within the tolerance of the radius both ways (closer is
+//! queries every 0.2 mm (`SAMPLE_STEP`) up the axis. The flank is the unbroken stretch from
+//! the ball's centre up where that distance stays within the tolerance of the radius both ways (closer is
 //! a gouge, farther leaves material) on this blade; above it (the tip's rounding) the flutes
 //! only must not gouge. Where many lines keep within the tolerance (a nearly flat flank) the
 //! one nearest the rising direction is taken, so neighbouring rulings agree; a direction to
@@ -69,7 +69,7 @@ pub struct SwarfOptions {
     pub max_step: f64,
     /// Largest turn of the axis between two neighbouring rulings, degrees.
     pub max_axis_turn_deg: f64,
-    /// A direction taken instead of a ruling within [`SNAP_DEG`] of it wherever the flutes
+    /// A direction taken instead of a ruling within 2° (`SNAP_DEG`) of it wherever the flutes
     /// along it keep within half the tolerance of the same flank: the machine's pole, where a
     /// tilt of hundredths of a degree swings the rotary table half a turn.
     pub snap_to: Option<Vector3>,
@@ -149,7 +149,7 @@ pub enum NotSwarf {
     #[error("no loop round the blade's root a ball's radius above the hub")]
     NoRoot,
     /// The flank leaves the best line through a root point by more than the tolerance within
-    /// [`MIN_FLANK`] of the ball's centre (a rounded or leaning blade end, a twisted flank).
+    /// 1 mm (`MIN_FLANK`) of the ball's centre (a rounded or leaning blade end, a twisted flank).
     #[error("not ruled within the tolerance: {deviation_mm:.4} mm off the best line at {at:?}")]
     NotRuled { deviation_mm: f64, at: [f64; 3] },
     /// The flank goes on above the top of the flutes.

@@ -837,6 +837,7 @@ pub fn plan_with_surfaces(
                     spacing: SCALLOP_SAMPLE_SPACING,
                     reach: radius,
                     table_z: prepared.table_z,
+                    flutes_above_ball: (p.operation.tool.flute_length - radius).max(0.0),
                 },
                 labels.as_deref(),
             )

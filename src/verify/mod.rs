@@ -43,9 +43,10 @@ pub struct Verification {
     /// The same at the midpoints of cut moves (the chord error, negative = inside by that much).
     pub min_chord_clearance: f64,
     /// Flutes (the cylinder above the ball): ≈0 where the ball touches with its side or they
-    /// cut along a flank (swarf), < 0 where they are inside the part. For a ball-end tool the
-    /// distance from their axis (from the ball's centre up) to the part less their radius,
-    /// exact in f64; else parry's.
+    /// cut along a flank (swarf), < 0 where they are inside the part. parry's distance where
+    /// they keep off the part; where it finds them touching or inside, for a ball-end tool,
+    /// the distance from their axis (the ball's centre up, flat-ended) to the part less their
+    /// radius, exact in f64.
     pub min_flutes_clearance: f64,
     pub min_shank_clearance: f64,
     pub min_holder_clearance: f64,
@@ -195,31 +196,21 @@ pub fn verify(
                 holder: search,
             };
             let mut table = f64::INFINITY;
-            let mut flutes = search;
             for &i in chunk {
                 let pose = &path.moves[i].pose;
                 ball = ball.min(ball_clearance(&centre(pose)));
-                match flutes_axis {
-                    Some((length, radius)) => {
-                        // Only the parry bodies above them; the flutes exactly.
-                        let upto = BodyClearance {
-                            flutes: 0.0,
-                            ..bodies
-                        };
-                        bodies = BodyClearance {
-                            flutes: search,
-                            ..part.clearances(tool, pose, &upto)
-                        };
-                        let from = centre(pose);
-                        let to = from + pose.axis.into_inner() * length;
-                        flutes = flutes_below(part, &from, &to, radius, flutes);
-                    }
-                    None => bodies = part.clearances(tool, pose, &bodies),
+                let before = bodies.flutes;
+                bodies = part.clearances(tool, pose, &bodies);
+                // parry floors flutes it finds intersecting at 0 or −slack, however deep:
+                // those (flutes touching a wall, cutting a flank) are measured exactly.
+                if let Some((length, radius)) = flutes_axis
+                    && bodies.flutes <= 0.0
+                {
+                    let from = centre(pose);
+                    let to = from + pose.axis.into_inner() * length;
+                    bodies.flutes = flutes_below(part, &from, &to, radius, before);
                 }
                 table = table.min(part.table_clearance(tool, pose, 0.0));
-            }
-            if flutes_axis.is_some() {
-                bodies.flutes = flutes;
             }
             (ball, bodies, table)
         })

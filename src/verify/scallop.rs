@@ -84,6 +84,9 @@ pub struct ScallopOptions {
     pub reach: f64,
     /// The part stands on the plane z = `table_z`: samples there facing down are the table's.
     pub table_z: f64,
+    /// The flutes' length above the ball's centre (a cylinder of the ball's radius), mm; 0:
+    /// the balls alone.
+    pub flutes_above_ball: f64,
 }
 
 /// Measures the scallop `toolpath`'s cut moves leave on `part`; with `labels` (one per
@@ -100,14 +103,50 @@ pub fn measure_scallop(
         spacing,
         reach,
         table_z,
+        flutes_above_ball,
     } = *options;
+    let distance = SurfaceDistance::new(part);
+    // The flutes sweep too where they come within twice the target of the part (a flank cut
+    // with their side): as a stack of balls up the axis, close enough that the stack leaves
+    // at most a quarter of the target of the cylinder uncovered (s²/8r between two balls).
+    let flute_step = (2.0 * radius * target).sqrt().max(1e-3);
+    let flute_balls = if flutes_above_ball > 0.0 {
+        (flutes_above_ball / flute_step).ceil() as usize
+    } else {
+        0
+    };
     let capsules: Vec<(Point3, Point3)> = toolpath
         .moves
         .windows(2)
         .filter(|w| w[1].kind == MoveKind::Cut)
-        .map(|w| {
-            let centre = |m: &crate::geom::Move| m.pose.tip + m.pose.axis.into_inner() * radius;
-            (centre(&w[0]), centre(&w[1]))
+        .collect::<Vec<_>>()
+        .par_iter()
+        .flat_map_iter(|w| {
+            let along = |m: &crate::geom::Move, h: f64| {
+                m.pose.tip + m.pose.axis.into_inner() * (radius + h)
+            };
+            // Whether they do is asked of their axis a quarter and half way up, at both ends
+            // and every half radius between (a measure, not a safety check: a flank cut runs
+            // over many moves, and flutes leaning off the part keep those points away).
+            let between = ((w[1].pose.tip - w[0].pose.tip).norm() / (0.5 * radius)).ceil() as usize;
+            let flutes_cut = flute_balls > 0
+                && (0..=between.max(1)).any(|k| {
+                    let t = k as f64 / between.max(1) as f64;
+                    let tip = w[0].pose.tip + (w[1].pose.tip - w[0].pose.tip) * t;
+                    let axis = (w[0].pose.axis.into_inner() * (1.0 - t)
+                        + w[1].pose.axis.into_inner() * t)
+                        .try_normalize(1e-12)
+                        .unwrap_or_else(|| w[1].pose.axis.into_inner());
+                    [0.25, 0.5].iter().any(|f| {
+                        let q = tip + axis * (radius + f * flutes_above_ball);
+                        distance.any_within(&q, radius + 2.0 * target)
+                    })
+                });
+            let stack = if flutes_cut { flute_balls } else { 0 };
+            (0..=stack).map(move |j| {
+                let h = flutes_above_ball * j as f64 / stack.max(1) as f64;
+                (along(&w[0], h), along(&w[1], h))
+            })
         })
         .collect();
     let grid = Grid::new(&capsules, radius, (2.0 * radius).max(reach));
@@ -149,7 +188,6 @@ pub fn measure_scallop(
             }
         }
     }
-    let distance = SurfaceDistance::new(part);
     let narrow: Vec<bool> = samples
         .par_iter()
         .map(|(p, n, _, _)| distance.any_within(&(p + n * radius), radius - target))
@@ -456,6 +494,7 @@ mod tests {
             spacing: 0.05,
             reach: 2.0 * r,
             table_z: 0.0,
+            flutes_above_ball: 0.0,
         };
         let labels: Vec<&str> = (0..12)
             .map(|t| if t < 4 { "flat" } else { "sides" })
@@ -567,6 +606,7 @@ mod tests {
                 spacing: 0.05,
                 reach: 2.0 * r,
                 table_z: 0.0,
+                flutes_above_ball: 0.0,
             },
             Some(&labels),
         );
@@ -594,6 +634,66 @@ mod tests {
         assert!(
             (wall.open_over_target_mm2 - open_over).abs() < 20.0 * 0.1,
             "{wall:?} vs {open_over}"
+        );
+    }
+
+    /// An upright tool runs along a 10 mm wall with its ball's centre 2 mm up: the flutes
+    /// sweep the wall from there to its top within the target (their stack of balls leaves at
+    /// most a quarter of it), so only the strip under the ball's equator is over the target;
+    /// with the balls alone everything above the ball's reach is left.
+    #[test]
+    fn flutes_along_a_wall_sweep_it_from_the_ball_up() {
+        let (r, target) = (2.0, 0.01);
+        let block = crate::mesh::fixtures::cuboid(20.0, 20.0, 10.0);
+        // The face x = 20 is triangles 10 and 11.
+        let labels: Vec<&str> = (0..12)
+            .map(|t| if t >= 10 { "wall" } else { "rest" })
+            .collect();
+        let axis = Direction::new_normalize(Vector3::z());
+        let moves = [(-5.0, MoveKind::Approach), (25.0, MoveKind::Cut)]
+            .into_iter()
+            .map(|(y, kind)| Move {
+                pose: ToolPose {
+                    tip: Point3::new(20.0 + r, y, 0.0),
+                    axis,
+                },
+                kind,
+                feed: 1000.0,
+            })
+            .collect();
+        let path = Toolpath { tool_id: 1, moves };
+        let measure = |flutes_above_ball| {
+            measure_scallop(
+                &block,
+                &path,
+                &ScallopOptions {
+                    radius: r,
+                    target,
+                    spacing: 0.1,
+                    reach: r,
+                    table_z: 0.0,
+                    flutes_above_ball,
+                },
+                Some(&labels),
+            )
+            .by_region["wall"]
+                .clone()
+        };
+        let with_flutes = measure(10.0);
+        assert!((with_flutes.area_mm2 - 200.0).abs() < 1e-6);
+        assert!(with_flutes.unreached_mm2 < 1e-9, "{with_flutes:?}");
+        // Over the target: the strip below the ball's centre where its side stands more than
+        // the target off the wall, z < r − √(r² − (r − target)²), in closed form.
+        let strip = 20.0 * (r - (r * r - (r - target).powi(2)).sqrt());
+        assert!(
+            (with_flutes.over_target_mm2 - strip).abs() <= 2.0,
+            "{with_flutes:?} against {strip}"
+        );
+        let balls_alone = measure(0.0);
+        // Above z = 4 nothing of the ball reaches the wall within a radius.
+        assert!(
+            balls_alone.unreached_mm2 >= 20.0 * 6.0 - 1.0,
+            "{balls_alone:?}"
         );
     }
 }
