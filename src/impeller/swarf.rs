@@ -31,7 +31,6 @@ use serde::Serialize;
 use crate::geom::{Point3, Vector3, angle_between, closest_point_on_segment};
 use crate::mesh::distance::SurfaceDistance;
 use crate::mesh::{DrivePoint, SectionCurve};
-use crate::path::place_ball;
 
 /// Distance between the flutes' samples up the axis, mm.
 const SAMPLE_STEP: f64 = 0.2;
@@ -121,7 +120,8 @@ impl SwarfPlan {
     /// neighbouring rulings, their axis extended down `below` mm past the ball's centre (the
     /// corner under the ball's equator, which no ball of this radius reaches, counts as theirs).
     pub fn sweeps(&self, p: &Point3, radius: f64, below: f64) -> bool {
-        const SUBDIVISIONS: usize = 4;
+        // A point half-way between two interpolated axes is (Δ/16)²/2r off them: nothing.
+        const SUBDIVISIONS: usize = 8;
         self.runs.iter().any(|run| {
             let n = run.rulings.len();
             let pairs = if run.closed { n } else { n.saturating_sub(1) };
@@ -167,7 +167,9 @@ pub enum NotSwarf {
 
 /// The swarf runs round `root` (a closed loop on the blade a ball's radius above the hub), on
 /// the part `surface`, whose triangles `on_blade` says are this blade's; `rising` gives the
-/// direction a point's height above the hub grows in, and `accept` says whether the tool may
+/// direction a point's height above the hub grows in, `place` the ball's centre for a root
+/// point (the finishing's placement: pushed out of every face nearer than the radius, `None`
+/// where the ball does not fit), and `accept` says whether the tool may
 /// stand along a ruling (the job's checks of shank, holder, table and machine; `Err` says
 /// why not). Runs are the stretches where every ruling is within the tolerance and accepted,
 /// and so is every one inserted between two of them.
@@ -175,6 +177,7 @@ pub fn swarf_runs(
     surface: &SurfaceDistance,
     on_blade: &(dyn Fn(u32) -> bool + Sync),
     rising: &(dyn Fn(&Point3) -> Vector3 + Sync),
+    place: &(dyn Fn(&DrivePoint) -> Option<Point3> + Sync),
     accept: &(dyn Fn(&Ruling) -> Result<(), String> + Sync),
     root: &SectionCurve,
     options: &SwarfOptions,
@@ -190,7 +193,7 @@ pub fn swarf_runs(
         )
         .resampled(options.max_step);
     let find = |p: &DrivePoint| {
-        let found = ruling(surface, on_blade, rising, p, options)?;
+        let found = ruling(surface, on_blade, rising, place, p, options)?;
         accept(&found).map_err(|why| NotSwarf::Refused {
             at: [p.point.x, p.point.y, p.point.z],
             why,
@@ -205,6 +208,8 @@ pub fn swarf_runs(
     let order: Vec<usize> = (0..n).map(|i| (start.unwrap_or(0) + i) % n).collect();
     let mut runs = Vec::new();
     let mut current: Vec<Ruling> = Vec::new();
+    // Whether a move between two held rulings failed: then no run goes all the way round.
+    let mut broken = false;
     let close = |current: &mut Vec<Ruling>, runs: &mut Vec<SwarfRun>| {
         if current.len() >= MIN_RUN_RULINGS {
             runs.push(SwarfRun {
@@ -224,13 +229,14 @@ pub fn swarf_runs(
                 Ok(inserted) => current.extend(inserted),
                 Err(why) => {
                     refused.push(why);
+                    broken = true;
                     close(&mut current, &mut runs);
                 }
             }
         }
         current.push(*ruling);
-        if k + 1 == n && start.is_none() {
-            // Every root point holds: the run closes round the loop.
+        if k + 1 == n && start.is_none() && !broken {
+            // Every root point holds, and every move between: the run closes round the loop.
             match between(&find, surface, ruling, &current[0], options, 0) {
                 Ok(inserted) => {
                     current.extend(inserted);
@@ -297,7 +303,8 @@ fn between(
 }
 
 /// The flutes' distance to the part off the ball's radius at the samples up the axis from
-/// `centre` (0 at the centre), and whether each sample's nearest point is on this blade.
+/// `centre` (0 at the centre), and whether each sample's nearest point is on this blade (or
+/// the blade is as near as the nearest).
 fn deviations(
     surface: &SurfaceDistance,
     on_blade: &(dyn Fn(u32) -> bool + Sync),
@@ -310,9 +317,18 @@ fn deviations(
     (0..=steps)
         .map(|k| {
             let s = length * k as f64 / steps as f64;
+            let q = centre + axis * s;
             // Farther than this from everything, a sample neither gouges nor is on the flank.
-            match surface.closest(&(centre + axis * s), radius + 1.0) {
-                Some(near) => (s, near.distance - radius, on_blade(near.triangle)),
+            match surface.closest(&q, radius + 1.0) {
+                Some(near) => {
+                    // Where another face is as near (the hub under the ball), the blade's own
+                    // distance says whether the flank is there too.
+                    let on = on_blade(near.triangle)
+                        || surface
+                            .closest_where(&q, near.distance + 1e-9, on_blade)
+                            .is_some();
+                    (s, near.distance - radius, on)
+                }
                 None => (s, 1.0, false),
             }
         })
@@ -341,6 +357,7 @@ fn ruling(
     surface: &SurfaceDistance,
     on_blade: &(dyn Fn(u32) -> bool + Sync),
     rising: &(dyn Fn(&Point3) -> Vector3 + Sync),
+    place: &(dyn Fn(&DrivePoint) -> Option<Point3> + Sync),
     p: &DrivePoint,
     options: &SwarfOptions,
 ) -> Result<Ruling, NotSwarf> {
@@ -348,12 +365,14 @@ fn ruling(
     let r = options.ball_radius;
     // The ball as point milling places it: pushed out of every face nearer than its radius
     // (a facetted flank's neighbouring facets lean a few degrees off the root point's).
-    let centre = place_ball(surface, p, r).ok_or(NotSwarf::Refused {
+    let centre = place(p).ok_or(NotSwarf::Refused {
         at,
         why: "the ball does not fit".into(),
     })?;
+    // The flank's normal at the ball's contact with this blade (in the corner the ball
+    // touches the hub as well, as near).
     let n = surface
-        .closest(&centre, 2.0 * r)
+        .closest_where(&centre, 2.0 * r, on_blade)
         .and_then(|c| (centre - c.point).try_normalize(1e-12))
         .unwrap_or(p.normal);
     let up = rising(&p.point);
@@ -558,11 +577,24 @@ mod tests {
                 (0..mesh.triangles.len())
                     .map(|t| {
                         let [a, b, c] = mesh.corners(t);
-                        crate::verify::point_triangle_distance(&q, &a, &b, &c)
+                        (q - crate::geom::closest_point_on_triangle(&q, &a, &b, &c).0).norm()
                     })
                     .fold(f64::INFINITY, f64::min)
             })
             .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The ball a radius out along the normal, pushed away from whatever is nearer than
+    /// that (the plate, under a leaning end's root).
+    fn push_out(surface: &SurfaceDistance, p: &DrivePoint) -> Option<Point3> {
+        let mut centre = p.point + p.normal * R;
+        for _ in 0..32 {
+            let Some(near) = surface.closest(&centre, R - 1e-12) else {
+                break;
+            };
+            centre = near.point + (centre - near.point).try_normalize(1e-12)? * R;
+        }
+        Some(centre)
     }
 
     fn run(mesh: &Mesh, options: &SwarfOptions) -> SwarfPlan {
@@ -571,6 +603,7 @@ mod tests {
             &surface,
             &|t| t >= 12,
             &|_| Vector3::z(),
+            &|p| push_out(&surface, p),
             &|_| Ok(()),
             &root(mesh),
             options,
@@ -627,7 +660,11 @@ mod tests {
                 assert!(off < 0.5, "ruling {off}° off the leaning end");
             }
         }
-        assert!(on_ends > 0, "no ruling on the leaning end");
+        assert!(
+            on_ends > 0,
+            "no ruling on the leaning end: {:?}",
+            plan.refused
+        );
     }
 
     #[test]

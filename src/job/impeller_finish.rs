@@ -361,7 +361,8 @@ pub fn finish_impeller(
             };
             let (swarf, blade, swarf_summary, not_swarfed) = match swarfed {
                 Some(Ok((finishing, plan, summary))) => {
-                    let reach = radius + 2.0 * options.tolerance;
+                    // Swept where the flutes pass within the scallop target of the flank.
+                    let reach = radius + options.scallop_height;
                     let below = summary.root_height_mm;
                     let covered = |p: &Point3| plan.sweeps(p, reach, below);
                     let loops = plan_loops(&loops, &blade_ctx, Some(&covered));
@@ -615,10 +616,14 @@ fn swarf_blade(
             .check_bodies(ctx.tool, &swarf_pose(ruling, r))
             .map_err(|c| format!("{c:?}"))
     };
+    // The ball placed as the loops place it, pushed out of every face nearer than its radius
+    // (a facetted flank's neighbouring facets lean a few degrees off the root point's).
+    let place = |p: &crate::mesh::DrivePoint| path::place_ball(ctx.part.surface(), p, r);
     let plan = swarf_runs(
         ctx.part.surface(),
         &on_blade,
         &rising,
+        &place,
         &accept,
         &root,
         &SwarfOptions {

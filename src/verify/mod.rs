@@ -23,8 +23,6 @@ pub use posted::{
 pub use program::{MotionBlock, ProgramError, read_conversational, read_program};
 pub use scallop::{AreaSplit, ScallopOptions, ScallopReport, measure_scallop, ray_capsule_entry};
 pub use segment_distance::SegmentDistance;
-#[cfg(test)]
-pub(crate) use segment_distance::point_triangle_distance;
 
 use rayon::prelude::*;
 use serde::Serialize;
