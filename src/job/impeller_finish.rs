@@ -54,7 +54,7 @@ pub struct ImpellerFinishOptions {
     pub blade_axes: BladeAxes,
     /// How far the tool leans off a blade's surface, degrees.
     pub blade_lean_deg: f64,
-    /// Swarf a blade ruled within the tolerance (else the loops).
+    /// Swarf a blade where it is ruled within the tolerance (the loops for the rest).
     pub swarf: bool,
     /// The tool axis at which the machine's rotary axes are singular (part frame).
     pub pole: Vector3,
@@ -112,15 +112,15 @@ pub struct BladeSummary {
     pub height_mm: f64,
     pub axes: BladeAxes,
     pub lean_deg: f64,
-    /// The swarf pass that finishes the blade in place of the loops, when it is ruled.
+    /// The swarf runs that finish the blade's ruled stretches (the loops take the rest).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swarf: Option<SwarfSummary>,
-    /// Why the blade is finished by the loops rather than swarfed (swarf asked for).
+    /// Why no stretch of the blade is swarfed (swarf asked for): the loops finish it all.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_swarfed: Option<NotSwarf>,
 }
 
-/// The swarf pass round one blade.
+/// The swarf runs round one blade.
 #[derive(Clone, Debug, Serialize)]
 pub struct SwarfSummary {
     /// Stretches of the root swarfed, and the rulings the tool stands along in them.
