@@ -31,7 +31,9 @@ use crate::impeller::{
 };
 use crate::mesh::Mesh;
 use crate::orient::{away_from_pole, preferred_axis};
-use crate::path::{self, Finishing, FinishingContext, FinishingOptions, TurnedCopy};
+use crate::path::{
+    self, CutSegment, Finishing, FinishingContext, FinishingOptions, LinkOptions, TurnedCopy,
+};
 
 /// Distance between the stations along the hub's meridian, mm.
 const STATION_STEP: f64 = 0.25;
@@ -58,6 +60,9 @@ pub struct ImpellerFinishOptions {
     pub swarf: bool,
     /// The tool axis at which the machine's rotary axes are singular (part frame).
     pub pole: Vector3,
+    /// How the segments will be linked: a swarf run counts as cut only where the tool can
+    /// leave its ends to the safe plane.
+    pub link: LinkOptions,
 }
 
 /// What the hub finishing planned.
@@ -135,6 +140,9 @@ pub struct SwarfSummary {
     pub flank_length_mm: f64,
     /// Height of the root loop above the hub, mm.
     pub root_height_mm: f64,
+    /// Runs in the other passages (copied by the symmetry) with no clear way in or out: the
+    /// link trims them back to where the tool can leave.
+    pub copied_runs_without_leads: usize,
 }
 
 /// What the impeller finishing planned, by strategy.
@@ -346,20 +354,23 @@ pub fn finish_impeller(
                 tool: &swarf_tool,
                 ..blade_ctx
             };
+            // Into and out of a run off the flank, checked with the tool linking uses.
+            let leads = |segment: &CutSegment| {
+                swarf_leads(
+                    segment,
+                    &blade_ctx,
+                    options.tolerance,
+                    &impeller_options.link,
+                )
+            };
             let swarfed = if impeller_options.swarf {
                 Some(swarf_blade(
-                    part,
-                    impeller,
-                    &passage,
-                    passage.first_blade,
-                    &swarf_ctx,
-                    options,
-                    pole,
+                    part, impeller, &passage, &swarf_ctx, options, pole, &leads,
                 ))
             } else {
                 None
             };
-            let (swarf, blade, swarf_summary, not_swarfed) = match swarfed {
+            let (swarf, blade, mut swarf_summary, not_swarfed) = match swarfed {
                 Some(Ok((finishing, plan, summary))) => {
                     // Swept where the flutes pass within the scallop target of the flank.
                     let reach = radius + options.scallop_height;
@@ -412,9 +423,25 @@ pub fn finish_impeller(
                 copies.push(hub_copy);
                 copies.push(blade_copy);
                 if let Some(swarf) = &swarf {
-                    let (copy, stats) =
-                        path::turned_copy(swarf, &rotation, &centre, &swarf_ctx, options);
+                    // Copied without its leads (a copy brings a pose in the air down onto
+                    // the part), which the copy's runs get anew.
+                    let runs = Finishing {
+                        segments: swarf.segments.iter().map(without_leads).collect(),
+                        ..Finishing::default()
+                    };
+                    let (mut copy, stats) =
+                        path::turned_copy(&runs, &rotation, &centre, &swarf_ctx, options);
                     summary.copies.merge(&stats);
+                    for segment in &mut copy.segments {
+                        match leads(segment) {
+                            Some(led) => *segment = led,
+                            None => {
+                                if let Some(s) = swarf_summary.as_mut() {
+                                    s.copied_runs_without_leads += 1;
+                                }
+                            }
+                        }
+                    }
                     copies.push(copy);
                 }
                 for (splitter, piece_ctx) in &splitters {
@@ -570,19 +597,21 @@ fn round_ms(since: Instant) -> f64 {
     (since.elapsed().as_secs_f64() * 1e4).round() / 10.0
 }
 
-/// The swarf runs round blade `piece` (of the part as recognised), every pose checked
-/// exactly on the part: the ball and the flutes within the tolerance of it, shank, holder and
-/// table by `ctx`'s tool (whose flutes may dip the tolerance), the machine's limits.
+/// The swarf runs round the blade `passage` starts at (of the part as recognised), every pose
+/// checked exactly on the part: the ball and the flutes within the tolerance of it, shank,
+/// holder and table by `ctx`'s tool (whose flutes may dip the tolerance), the machine's
+/// limits; only runs `leads` finds a way into and out of.
 fn swarf_blade(
     part: &Mesh,
     impeller: &Impeller,
     passage: &HubPassage,
-    piece: usize,
     ctx: &FinishingContext,
     options: &FinishingOptions,
     pole: Vector3,
+    leads: &dyn Fn(&CutSegment) -> Option<CutSegment>,
 ) -> Result<(Finishing, SwarfPlan, SwarfSummary), NotSwarf> {
     let r = ctx.tool.ball_radius;
+    let piece = passage.first_blade;
     let Some((flutes_above_ball, _)) = ctx.tool.flutes_above_ball() else {
         return Err(NotSwarf::NoRoot);
     };
@@ -619,7 +648,7 @@ fn swarf_blade(
     // The ball placed as the loops place it, pushed out of every face nearer than its radius
     // (a facetted flank's neighbouring facets lean a few degrees off the root point's).
     let place = |p: &crate::mesh::DrivePoint| path::place_ball(ctx.part.surface(), p, r);
-    let plan = swarf_runs(
+    let mut plan = swarf_runs(
         ctx.part.surface(),
         &on_blade,
         &rising,
@@ -635,14 +664,12 @@ fn swarf_blade(
             snap_to: Some(pole),
         },
     )?;
-    if plan.runs.is_empty() {
-        return Err(plan.refused.first().cloned().unwrap_or(NotSwarf::NoRoot));
-    }
     let mut finishing = Finishing {
         drive_points: plan.root_points,
         ..Finishing::default()
     };
-    for run in &plan.runs {
+    let mut kept = Vec::new();
+    for run in std::mem::take(&mut plan.runs) {
         let n = run.rulings.len();
         let mut poses: Vec<ToolPose> = run.rulings.iter().map(|g| swarf_pose(g, r)).collect();
         let mut directions: Vec<Vector3> = (0..n)
@@ -664,10 +691,26 @@ fn swarf_blade(
             poses.push(poses[0]);
             directions.push(directions[0]);
         }
-        finishing.segments.push(path::CutSegment {
+        let segment = CutSegment {
             poses,
             pass_directions: directions,
-        });
+        };
+        // A run the tool cannot get into or out of would be trimmed away by the link, and
+        // the loops would have been dropped along it: refused here, the loops finish it.
+        match leads(&segment) {
+            Some(led) => {
+                finishing.segments.push(led);
+                kept.push(run);
+            }
+            None => plan.refused.push(NotSwarf::Refused {
+                at: run.rulings[0].contact.point.into(),
+                why: "no way in or out of the run clear to the safe plane".into(),
+            }),
+        }
+    }
+    plan.runs = kept;
+    if plan.runs.is_empty() {
+        return Err(plan.refused.first().cloned().unwrap_or(NotSwarf::NoRoot));
     }
     let mut by_reason = std::collections::BTreeMap::new();
     for why in &plan.refused {
@@ -685,8 +728,106 @@ fn swarf_blade(
         deviation_mm: plan.deviation(),
         flank_length_mm: plan.rulings().map(|g| g.flank_length).fold(0.0, f64::max),
         root_height_mm: root_height,
+        copied_runs_without_leads: 0,
     };
     Ok((finishing, plan, summary))
+}
+
+/// Ways into and out of a swarf run: directions off the run's end, by their angle up from
+/// square off the flank toward the tool axis and their angle back or on along the run,
+/// degrees, tried with the most room first; and how far the ball's centre goes, in radii.
+const SWARF_LEAD_UP_DEG: [f64; 4] = [0.0, 30.0, 60.0, 80.0];
+const SWARF_LEAD_ALONG_DEG: [f64; 3] = [-45.0, 0.0, 45.0];
+const SWARF_LEAD_LENGTHS: [f64; 3] = [0.5, 1.0, 2.0];
+
+/// `segment` (a swarf run) with a way in and out. Its tool stands along the flank, so
+/// straight up its axis the ball would slide along the flank within the tolerance: a touch to
+/// the check the link makes before leaving a segment, which trimmed the runs away pose by pose
+/// (on the blower 97 of 356 rulings). At each end the tool first moves off the flank to a pose
+/// `ctx`'s tool can leave to the safe plane (`link`'s check) with its ball and bodies clear:
+/// the directions off the flank (square, up the axis, back or on along the run) are tried in
+/// the order of the room the ball has half a radius along them (square off was not always
+/// best: a hub rising across the passage), each at growing distances. `None` where no such
+/// pose is found at one end.
+fn swarf_leads(
+    segment: &CutSegment,
+    ctx: &FinishingContext,
+    tolerance: f64,
+    link: &LinkOptions,
+) -> Option<CutSegment> {
+    let r = ctx.tool.ball_radius;
+    let n = segment.poses.len();
+    if n < 2 {
+        return None;
+    }
+    let surface = ctx.part.surface();
+    let centre = |pose: &ToolPose| pose.tip + pose.axis.into_inner() * r;
+    let room = |p: &Point3| {
+        surface
+            .signed_distance(p)
+            .map_or(f64::NEG_INFINITY, |(d, _)| d)
+    };
+    let lead = |pose: &ToolPose, along: Vector3| -> Option<ToolPose> {
+        let axis = pose.axis.into_inner();
+        let at = centre(pose);
+        let along = (along - axis * axis.dot(&along)).try_normalize(1e-9)?;
+        let across = axis.cross(&along);
+        // Off the flank: the side with more room.
+        let out = if room(&(at + across * r)) >= room(&(at - across * r)) {
+            across
+        } else {
+            -across
+        };
+        let mut directions: Vec<(f64, Vector3)> = Vec::new();
+        for up in SWARF_LEAD_UP_DEG {
+            for on in SWARF_LEAD_ALONG_DEG {
+                let (up_sin, up_cos) = up.to_radians().sin_cos();
+                let (on_sin, on_cos) = on.to_radians().sin_cos();
+                let d = (out * on_cos + along * on_sin) * up_cos + axis * up_sin;
+                directions.push((room(&(at + d * (0.5 * r))), d));
+            }
+        }
+        // Most room first; ties in the order listed.
+        directions.sort_by(|a, b| b.0.total_cmp(&a.0));
+        directions.iter().find_map(|(_, d)| {
+            SWARF_LEAD_LENGTHS.iter().find_map(|&length| {
+                let from = at + d * (length * r);
+                let led = ToolPose {
+                    tip: from - axis * r,
+                    axis: pose.axis,
+                };
+                let clear = ctx.part.check_ball(&from, r, tolerance).is_ok()
+                    && !surface.segment_within(&from, &at, r - tolerance)
+                    && ctx.part.check_bodies(ctx.tool, &led).is_ok()
+                    && path::can_leave(ctx.part, ctx.tool, &led, link);
+                clear.then_some(led)
+            })
+        })
+    };
+    let (first, last) = (&segment.poses[0], &segment.poses[n - 1]);
+    let entry = lead(first, centre(&segment.poses[1]) - centre(first))?;
+    let exit = lead(last, centre(last) - centre(&segment.poses[n - 2]))?;
+    let mut poses = Vec::with_capacity(n + 2);
+    let mut directions = Vec::with_capacity(n + 2);
+    poses.push(entry);
+    directions.push(segment.pass_directions[0]);
+    poses.extend_from_slice(&segment.poses);
+    directions.extend_from_slice(&segment.pass_directions);
+    poses.push(exit);
+    directions.push(segment.pass_directions[n - 1]);
+    Some(CutSegment {
+        poses,
+        pass_directions: directions,
+    })
+}
+
+/// A swarf run without the leads [`swarf_leads`] gave it.
+fn without_leads(segment: &CutSegment) -> CutSegment {
+    let n = segment.poses.len();
+    CutSegment {
+        poses: segment.poses[1..n - 1].to_vec(),
+        pass_directions: segment.pass_directions[1..n - 1].to_vec(),
+    }
 }
 
 /// The tool standing along `ruling`, ball of radius `r`.
@@ -694,5 +835,108 @@ fn swarf_pose(ruling: &Ruling, r: f64) -> ToolPose {
     ToolPose {
         tip: ruling.centre - ruling.axis * r,
         axis: Direction::new_normalize(ruling.axis),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collide::PartCollider;
+    use crate::mesh::fixtures::{box_between, joined};
+    use crate::orient::{AxisChooser, AxisOptions};
+
+    /// Distance from `p` to the box `[lo, hi]` (closed form, outside it).
+    fn box_distance(p: &Point3, lo: [f64; 3], hi: [f64; 3]) -> f64 {
+        let gap = |k: usize| (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0);
+        Vector3::new(gap(0), gap(1), gap(2)).norm()
+    }
+
+    /// A swarf run along a wall standing on a plate, the tool upright with its flutes half
+    /// the tolerance into the wall (as swarf allows) and its ball that far above the plate:
+    /// straight up from its ends the tool cannot leave, which had linking trim the run away.
+    /// Each end gets a lead off the wall from which it can, its ball clear of both boxes (in
+    /// closed form) and the run itself untouched between the leads.
+    #[test]
+    fn a_swarf_run_gets_a_way_in_and_out_off_the_flank() {
+        let (plate, wall) = (
+            ([-30.0, -30.0, -5.0], [30.0, 30.0, 0.0]),
+            ([-10.0, -1.0, 0.0], [10.0, 1.0, 8.0]),
+        );
+        let part = joined([plate, wall].map(|(lo, hi)| box_between(lo.into(), hi.into())));
+        let collider = PartCollider::new(&part).unwrap();
+        let rays = RayScene::new(&part);
+        let tool = crate::collide::tool_bodies::tests::prepared();
+        let chooser = AxisChooser::new(AxisOptions::default());
+        let anywhere = |_: &Vector3| true;
+        let ctx = FinishingContext {
+            part: &collider,
+            rays: &rays,
+            tool: &tool,
+            chooser: &chooser,
+            reachable: &anywhere,
+            allowance: 0.0,
+            lift: 0.0,
+            material_filter: None,
+            axis_field: None,
+            region: None,
+        };
+        let tolerance = 0.01;
+        let link = LinkOptions {
+            pivot: Point3::origin(),
+            safe_distance: 80.0,
+            clearance: 2.0,
+            cut_feed: 1000.0,
+            approach_feed: 500.0,
+            retract_feed: 2000.0,
+            rapid_feed: 10000.0,
+            rapid_margin: 0.5,
+            max_short_link: 20.0,
+            chord_tolerance: tolerance,
+        };
+        let r = tool.ball_radius;
+        let axis = Direction::new_normalize(Vector3::z());
+        let y = wall.1[1] + r - 0.5 * tolerance;
+        let poses: Vec<ToolPose> = (-8..=8)
+            .map(|x| ToolPose {
+                tip: Point3::new(x as f64, y, 0.5 * tolerance),
+                axis,
+            })
+            .collect();
+        let n = poses.len();
+        let run = CutSegment {
+            poses: poses.clone(),
+            pass_directions: vec![Vector3::x(); n],
+        };
+        assert!(!path::can_leave(&collider, &tool, &poses[0], &link));
+        assert!(!path::can_leave(&collider, &tool, &poses[n - 1], &link));
+
+        let led = swarf_leads(&run, &ctx, tolerance, &link).expect("a way in and out");
+        assert_eq!(led.poses.len(), n + 2);
+        assert_eq!(led.poses[1..=n], poses[..]);
+        assert_eq!(led.pass_directions.len(), n + 2);
+        for (lead, end) in [(led.poses[0], poses[0]), (led.poses[n + 1], poses[n - 1])] {
+            assert!(path::can_leave(&collider, &tool, &lead, &link), "{lead:?}");
+            let centre = lead.tip + lead.axis.into_inner() * r;
+            for (lo, hi) in [plate, wall] {
+                assert!(box_distance(&centre, lo, hi) >= r, "{centre:?}");
+            }
+            // Off the wall, not into it, and no farther than the longest lead.
+            let from = end.tip + end.axis.into_inner() * r;
+            assert!(centre.y > from.y, "{centre:?}");
+            assert!((centre - from).norm() <= 2.0 * r + 1e-9, "{centre:?}");
+        }
+
+        // Under a roof there is no way out: the run is not led (the job refuses it, and the
+        // loops finish there).
+        let roof = ([-30.0, -30.0, 20.0], [30.0, 30.0, 22.0]);
+        let roofed = joined([plate, wall, roof].map(|(lo, hi)| box_between(lo.into(), hi.into())));
+        let collider = PartCollider::new(&roofed).unwrap();
+        let rays = RayScene::new(&roofed);
+        let ctx = FinishingContext {
+            part: &collider,
+            rays: &rays,
+            ..ctx
+        };
+        assert_eq!(swarf_leads(&run, &ctx, tolerance, &link), None);
     }
 }

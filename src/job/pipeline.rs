@@ -344,6 +344,7 @@ pub fn plan_operation(
                             blade_lean_deg: setup.impeller.blade_lean_deg,
                             swarf: setup.impeller.swarf,
                             pole: setup.pole(),
+                            link: setup.link.clone(),
                         },
                         advance,
                     );

@@ -82,6 +82,24 @@ pub struct LinkReport {
     pub safe_plane_blocked: usize,
 }
 
+/// Whether `tool` can leave `pose` straight up its axis to the safe plane, every body of it
+/// clear of the part: what linking asks of a segment's end (the end poses that cannot are
+/// trimmed off, see [`LinkReport::trimmed_poses`]), for a strategy to ask before it counts on
+/// a segment being cut.
+pub fn can_leave(
+    part: &PartCollider,
+    tool: &PreparedTool,
+    pose: &ToolPose,
+    options: &LinkOptions,
+) -> bool {
+    SafePlane {
+        part,
+        tool,
+        options,
+    }
+    .can_leave(pose)
+}
+
 /// Links `segments` in order into one toolpath for `tool`.
 pub fn link(
     segments: &[CutSegment],

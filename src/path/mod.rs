@@ -19,7 +19,7 @@ mod link;
 
 pub use contact::{place_ball, place_ball_from};
 pub use curves::{TurnedCopy, curve_passes, nearest_order, turned_copy};
-pub use link::{LinkOptions, LinkReport, link, relink, safe_midpoint};
+pub use link::{LinkOptions, LinkReport, can_leave, link, relink, safe_midpoint};
 
 use rayon::prelude::*;
 
