@@ -2,14 +2,17 @@
 //! moves alone: nothing of how they were planned.
 //!
 //! The part's surface is sampled evenly (a barycentric grid on every triangle, a cell per
-//! half `spacing`² of area; small triangles pool their area). Each cut move sweeps its ball along the straight segment between two ball
-//! centres: a capsule. At a sample point p with outward normal n, the material left is the
-//! stretch of the ray p + t·n (t ≥ 0) below the first swept capsule it meets: the scallop
-//! height is the least entry t over all capsules (0 where p lies inside one, a touch or a cut
-//! within the tolerance). A point whose ray meets no capsule within `reach` is not reached:
-//! the strategy left it (unreachable, or a region no pass covers). The face the part stands
-//! on is left out of both (no tool gets there). Capsules are found through a uniform grid;
-//! entries are exact (the ray against the capsule's cylinder and its two end spheres).
+//! half `spacing`² of area; small triangles pool their area). Each cut move sweeps its ball
+//! along the straight segment between two ball centres: a capsule; where its flutes come
+//! within twice the target of the part (a flank cut with their side), they sweep too: the
+//! sheet their axis sweeps between the two poses, thickened by the radius (triangles of the
+//! sheet, each with a prism and three edge capsules). At a sample point p with outward normal
+//! n, the material left is the stretch of the ray p + t·n (t ≥ 0) below the first swept body
+//! it meets: the scallop height is the least entry t over all of them (0 where p lies inside
+//! one, a touch or a cut within the tolerance). A point whose ray meets nothing within
+//! `reach` is not reached: the strategy left it (unreachable, or a region no pass covers).
+//! The face the part stands on is left out of both (no tool gets there). The bodies are
+//! found through a uniform grid and a bounding sphere each; entries are exact.
 //!
 //! Where the part is concave more tightly than the ball (a blade's root without a fillet as
 //! large as the ball, a channel narrower than it), no placement of the ball touches the
@@ -22,7 +25,9 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::geom::{MoveKind, Point3, Toolpath, Vector3, closest_point_on_segment};
+use crate::geom::{
+    MoveKind, Point3, Toolpath, Vector3, closest_point_on_segment, closest_point_on_triangle,
+};
 use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
 
@@ -107,15 +112,12 @@ pub fn measure_scallop(
     } = *options;
     let distance = SurfaceDistance::new(part);
     // The flutes sweep too where they come within twice the target of the part (a flank cut
-    // with their side): as a stack of balls up the axis, close enough that the stack leaves
-    // at most a quarter of the target of the cylinder uncovered (s²/8r between two balls).
-    let flute_step = (2.0 * radius * target).sqrt().max(1e-3);
-    let flute_balls = if flutes_above_ball > 0.0 {
-        (flutes_above_ball / flute_step).ceil() as usize
-    } else {
-        0
-    };
-    let capsules: Vec<(Point3, Point3)> = toolpath
+    // with their side): the sheet their axis sweeps between the move's two poses, thickened
+    // by the radius. The sheet is a bilinear patch; it is split into strips up the axis, two
+    // triangles each, few enough that a triangle is within a quarter of the target of the
+    // patch (the twist of a strip h high is h·|Δaxis|/4 off its diagonal).
+    let flutes = flutes_above_ball > 0.0;
+    let swept: Vec<Swept> = toolpath
         .moves
         .windows(2)
         .filter(|w| w[1].kind == MoveKind::Cut)
@@ -125,11 +127,19 @@ pub fn measure_scallop(
             let along = |m: &crate::geom::Move, h: f64| {
                 m.pose.tip + m.pose.axis.into_inner() * (radius + h)
             };
-            // Whether they do is asked of their axis a quarter and half way up, at both ends
-            // and every half radius between (a measure, not a safety check: a flank cut runs
-            // over many moves, and flutes leaning off the part keep those points away).
+            // Whether they do is asked of their axis a step above the centre (the distance
+            // between two balls that leaves a quarter of the target) and a quarter and half
+            // way up, at both ends and every half radius between (a
+            // measure, not a safety check: a flank cut runs over many moves, and flutes
+            // leaning off the part keep those points away). The step: a flank the flutes cut
+            // starts at the ball's equator, and on a low stretch of blade ends a millimetre
+            // above it (asked only a quarter way up, the blower's short flanks read as uncut
+            // where the flutes had swept them); a ball on a floor has its axis rising off the
+            // floor at once. Three points, not the whole axis: a segment query that finds
+            // nothing cost the blower's verification twice its time.
+            let flute_step = (2.0 * radius * target).sqrt().max(1e-3);
             let between = ((w[1].pose.tip - w[0].pose.tip).norm() / (0.5 * radius)).ceil() as usize;
-            let flutes_cut = flute_balls > 0
+            let flutes_cut = flutes
                 && (0..=between.max(1)).any(|k| {
                     let t = k as f64 / between.max(1) as f64;
                     let tip = w[0].pose.tip + (w[1].pose.tip - w[0].pose.tip) * t;
@@ -137,19 +147,35 @@ pub fn measure_scallop(
                         + w[1].pose.axis.into_inner() * t)
                         .try_normalize(1e-12)
                         .unwrap_or_else(|| w[1].pose.axis.into_inner());
-                    [0.25, 0.5].iter().any(|f| {
-                        let q = tip + axis * (radius + f * flutes_above_ball);
+                    [
+                        flute_step,
+                        0.25 * flutes_above_ball,
+                        0.5 * flutes_above_ball,
+                    ]
+                    .iter()
+                    .any(|h| {
+                        let q = tip + axis * (radius + h);
                         distance.any_within(&q, radius + 2.0 * target)
                     })
                 });
-            let stack = if flutes_cut { flute_balls } else { 0 };
-            (0..=stack).map(move |j| {
-                let h = flutes_above_ball * j as f64 / stack.max(1) as f64;
-                (along(&w[0], h), along(&w[1], h))
-            })
+            let mut swept = vec![Swept::Capsule(along(&w[0], 0.0), along(&w[1], 0.0))];
+            if flutes_cut {
+                let twist = (w[1].pose.axis.into_inner() - w[0].pose.axis.into_inner()).norm();
+                let strips = ((flutes_above_ball * twist / target).ceil() as usize).clamp(1, 64);
+                for j in 0..strips {
+                    let h0 = flutes_above_ball * j as f64 / strips as f64;
+                    let h1 = flutes_above_ball * (j + 1) as f64 / strips as f64;
+                    let (p00, p10) = (along(&w[0], h0), along(&w[1], h0));
+                    let (p01, p11) = (along(&w[0], h1), along(&w[1], h1));
+                    swept.push(Swept::Sheet([p00, p10, p11]));
+                    swept.push(Swept::Sheet([p00, p11, p01]));
+                }
+            }
+            swept
         })
         .collect();
-    let grid = Grid::new(&capsules, radius, (2.0 * radius).max(reach));
+    let grid = Grid::new(&swept, radius, (2.0 * radius).max(reach));
+    let spheres: Vec<(Point3, f64)> = swept.iter().map(|s| s.bounding_sphere(radius)).collect();
 
     // Samples: on a triangle of more than `quantum` area, a barycentric grid of k² cells of
     // about that area each; smaller triangles (a finely tessellated STL has
@@ -201,8 +227,17 @@ pub fn measure_scallop(
             let end = p + n * reach;
             let mut best: Option<f64> = None;
             grid.for_each_near(p, &end, |i| {
-                let (a, b) = capsules[i];
-                if let Some(t) = ray_capsule_entry(p, n, &a, &b, radius)
+                // Most bodies a cell lists pass far from the ray: their bounding sphere
+                // says so for a few products.
+                let (centre, bound) = spheres[i];
+                let along = (centre - p).dot(n).clamp(0.0, reach);
+                let off = centre - (p + n * along);
+                if off.norm_squared() > bound * bound
+                    || best.is_some_and(|h| (centre - p).dot(n) - bound >= h)
+                {
+                    return;
+                }
+                if let Some(t) = swept[i].entry(p, n, radius)
                     && t <= reach
                     && best.is_none_or(|h| t < h)
                 {
@@ -336,7 +371,105 @@ pub fn ray_capsule_entry(p: &Point3, d: &Vector3, a: &Point3, b: &Point3, r: f64
     entry
 }
 
-/// A uniform grid of capsules by their bounding boxes.
+/// What a cut move sweeps, each thickened by the tool's radius: the ball's centre moves along
+/// a segment (a capsule), the flutes' axis over a sheet (triangles).
+#[derive(Clone, Copy, Debug)]
+enum Swept {
+    Capsule(Point3, Point3),
+    Sheet([Point3; 3]),
+}
+
+impl Swept {
+    /// The box of the segment or triangle, without the radius.
+    fn bounds(&self) -> (Point3, Point3) {
+        match self {
+            Swept::Capsule(a, b) => (a.inf(b), a.sup(b)),
+            Swept::Sheet([a, b, c]) => (a.inf(b).inf(c), a.sup(b).sup(c)),
+        }
+    }
+
+    /// A sphere holding the body of radius `r`: the corners' centroid, and the farthest corner
+    /// from it plus `r`.
+    fn bounding_sphere(&self, r: f64) -> (Point3, f64) {
+        let corners: &[Point3] = match self {
+            Swept::Capsule(a, b) => &[*a, *b],
+            Swept::Sheet(corners) => corners,
+        };
+        let centre =
+            Point3::from(corners.iter().map(|c| c.coords).sum::<Vector3>() / corners.len() as f64);
+        let far = corners
+            .iter()
+            .map(|c| (c - centre).norm())
+            .fold(0.0, f64::max);
+        (centre, far + r)
+    }
+
+    /// Where the ray `p + t·d` (unit `d`, t ≥ 0) enters the body: 0 inside.
+    fn entry(&self, p: &Point3, d: &Vector3, r: f64) -> Option<f64> {
+        match self {
+            Swept::Capsule(a, b) => ray_capsule_entry(p, d, a, b, r),
+            Swept::Sheet(corners) => ray_rounded_triangle_entry(p, d, corners, r),
+        }
+    }
+}
+
+/// Where the ray `p + t·d` (unit `d`, t ≥ 0) enters the points within `r` of triangle `abc`
+/// (the triangle's prism of half-thickness `r`, and a capsule round each edge): 0 when `p` is
+/// inside, `None` when it misses or the body lies behind.
+pub fn ray_rounded_triangle_entry(
+    p: &Point3,
+    d: &Vector3,
+    [a, b, c]: &[Point3; 3],
+    r: f64,
+) -> Option<f64> {
+    let (closest, _) = closest_point_on_triangle(p, a, b, c);
+    if (p - closest).norm() <= r {
+        return Some(0.0);
+    }
+    let mut entry: Option<f64> = None;
+    for (u, v) in [(a, b), (b, c), (c, a)] {
+        if let Some(t) = ray_capsule_entry(p, d, u, v, r)
+            && entry.is_none_or(|e| t < e)
+        {
+            entry = Some(t);
+        }
+    }
+    // The prism: the ray clipped by its two faces and its three sides.
+    let Some(normal) = (b - a).cross(&(c - a)).try_normalize(1e-300) else {
+        return entry;
+    };
+    let (mut enter, mut leave) = (0.0_f64, f64::INFINITY);
+    let mut clip = |inward: Vector3, offset: f64| {
+        // Inside where (x − origin)·inward ≥ offset, x = p + t·d.
+        let at = inward.dot(&p.coords) - offset;
+        let rate = inward.dot(d);
+        if rate.abs() < 1e-300 {
+            if at < 0.0 {
+                leave = f64::NEG_INFINITY;
+            }
+        } else if rate > 0.0 {
+            enter = enter.max(-at / rate);
+        } else {
+            leave = leave.min(-at / rate);
+        }
+    };
+    clip(normal, normal.dot(&a.coords) - r);
+    clip(-normal, -normal.dot(&a.coords) - r);
+    for (u, v, w) in [(a, b, c), (b, c, a), (c, a, b)] {
+        let edge = v - u;
+        let mut inward = normal.cross(&edge);
+        if inward.dot(&(w - u)) < 0.0 {
+            inward = -inward;
+        }
+        clip(inward, inward.dot(&u.coords));
+    }
+    if enter <= leave && entry.is_none_or(|e| enter < e) {
+        entry = Some(enter);
+    }
+    entry
+}
+
+/// A uniform grid of the swept bodies by their bounding boxes.
 struct Grid {
     cell: f64,
     origin: Point3,
@@ -346,16 +479,15 @@ struct Grid {
 }
 
 impl Grid {
-    fn new(capsules: &[(Point3, Point3)], radius: f64, cell: f64) -> Grid {
+    fn new(swept: &[Swept], radius: f64, cell: f64) -> Grid {
         let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
         let mut hi = Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for (a, b) in capsules {
-            for p in [a, b] {
-                lo = lo.inf(p);
-                hi = hi.sup(p);
-            }
+        for item in swept {
+            let (l, h) = item.bounds();
+            lo = lo.inf(&l);
+            hi = hi.sup(&h);
         }
-        if capsules.is_empty() {
+        if swept.is_empty() {
             lo = Point3::origin();
             hi = Point3::origin();
         }
@@ -366,11 +498,9 @@ impl Grid {
             (((p[k] - origin[k]) / cell).floor().max(0.0) as usize).min(dims[k] - 1)
         };
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
-        for (i, (a, b)) in capsules.iter().enumerate() {
-            let (l, h) = (
-                a.inf(b) - Vector3::repeat(radius),
-                a.sup(b) + Vector3::repeat(radius),
-            );
+        for (i, item) in swept.iter().enumerate() {
+            let (l, h) = item.bounds();
+            let (l, h) = (l - Vector3::repeat(radius), h + Vector3::repeat(radius));
             for x in cell_of(&l, 0)..=cell_of(&h, 0) {
                 for y in cell_of(&l, 1)..=cell_of(&h, 1) {
                     for z in cell_of(&l, 2)..=cell_of(&h, 2) {
@@ -460,6 +590,79 @@ mod tests {
             ray_capsule_entry(&Point3::new(5.0, 0.0, 6.0), &up, &a, &b, 2.0),
             None
         );
+    }
+
+    /// The entry into a rounded triangle agrees with marching along the ray and asking the
+    /// exact distance to the triangle, on rays from every side (faces, edges, corners, a
+    /// sliver triangle, a triangle the ray starts within the radius of).
+    #[test]
+    fn the_ray_enters_a_rounded_triangle_where_marching_finds_it() {
+        let triangles = [
+            [
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(4.0, 0.0, 0.0),
+                Point3::new(0.0, 3.0, 0.0),
+            ],
+            [
+                Point3::new(-1.0, 2.0, 1.0),
+                Point3::new(3.0, -1.0, 2.5),
+                Point3::new(1.0, 4.0, -2.0),
+            ],
+            // A sliver: nearly a segment.
+            [
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(5.0, 0.0, 0.0),
+                Point3::new(2.5, 1e-9, 0.0),
+            ],
+        ];
+        let r = 0.7;
+        let (step, length) = (1e-3, 12.0);
+        let mut hits = 0;
+        let mut state = 12345u64;
+        let mut unit = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for corners in &triangles {
+            let [a, b, c] = corners;
+            for _ in 0..300 {
+                let p = Point3::new(
+                    -3.0 + 10.0 * unit(),
+                    -3.0 + 10.0 * unit(),
+                    -4.0 + 8.0 * unit(),
+                );
+                // Aimed near the triangle (within ±2 of a point on it), or anywhere.
+                let (u, v) = (unit(), unit());
+                let on = a + (b - a) * (u * (1.0 - v)) + (c - a) * (v * (1.0 - u));
+                let aim = on + Vector3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5) * 4.0;
+                let d = if unit() < 0.8 {
+                    (aim - p).normalize()
+                } else {
+                    Vector3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize()
+                };
+                let distance = |t: f64| {
+                    let x = p + d * t;
+                    (x - closest_point_on_triangle(&x, a, b, c).0).norm()
+                };
+                let marched = (0..=(length / step) as usize)
+                    .map(|k| k as f64 * step)
+                    .find(|&t| distance(t) <= r);
+                let entry = ray_rounded_triangle_entry(&p, &d, corners, r);
+                match (marched, entry) {
+                    (Some(m), Some(e)) => {
+                        hits += 1;
+                        assert!(e <= m + 1e-9 && e > m - step - 1e-9, "{m} vs {e}");
+                    }
+                    (None, None) => {}
+                    // Beyond the march, or a graze it stepped over: on the body's boundary.
+                    (None, Some(e)) if e > length || (distance(e) - r).abs() < 1e-9 => {}
+                    (m, e) => panic!("{p:?} {d:?} marched {m:?}, entry {e:?}"),
+                }
+            }
+        }
+        assert!(hits > 300, "{hits}");
     }
 
     fn passes(ys: impl Iterator<Item = f64>) -> Toolpath {
@@ -637,14 +840,11 @@ mod tests {
         );
     }
 
-    /// An upright tool runs along a 10 mm wall with its ball's centre 2 mm up: the flutes
-    /// sweep the wall from there to its top within the target (their stack of balls leaves at
-    /// most a quarter of it), so only the strip under the ball's equator is over the target;
-    /// with the balls alone everything above the ball's reach is left.
-    #[test]
-    fn flutes_along_a_wall_sweep_it_from_the_ball_up() {
+    /// An upright tool runs along a wall `height` mm tall with its ball's centre 2 mm up:
+    /// the wall's area over the target and not reached with flutes `flutes_above_ball` long.
+    fn wall_left(height: f64, flutes_above_ball: f64) -> AreaSplit {
         let (r, target) = (2.0, 0.01);
-        let block = crate::mesh::fixtures::cuboid(20.0, 20.0, 10.0);
+        let block = crate::mesh::fixtures::cuboid(20.0, 20.0, height);
         // The face x = 20 is triangles 10 and 11.
         let labels: Vec<&str> = (0..12)
             .map(|t| if t >= 10 { "wall" } else { "rest" })
@@ -662,24 +862,30 @@ mod tests {
             })
             .collect();
         let path = Toolpath { tool_id: 1, moves };
-        let measure = |flutes_above_ball| {
-            measure_scallop(
-                &block,
-                &path,
-                &ScallopOptions {
-                    radius: r,
-                    target,
-                    spacing: 0.1,
-                    reach: r,
-                    table_z: 0.0,
-                    flutes_above_ball,
-                },
-                Some(&labels),
-            )
-            .by_region["wall"]
-                .clone()
-        };
-        let with_flutes = measure(10.0);
+        measure_scallop(
+            &block,
+            &path,
+            &ScallopOptions {
+                radius: r,
+                target,
+                spacing: 0.1,
+                reach: r,
+                table_z: 0.0,
+                flutes_above_ball,
+            },
+            Some(&labels),
+        )
+        .by_region["wall"]
+            .clone()
+    }
+
+    /// Along a 10 mm wall the flutes sweep it from the ball's centre to its top within the
+    /// target, so only the strip under the ball's equator is over the target; with the balls
+    /// alone everything above the ball's reach is left.
+    #[test]
+    fn flutes_along_a_wall_sweep_it_from_the_ball_up() {
+        let (r, target): (f64, f64) = (2.0, 0.01);
+        let with_flutes = wall_left(10.0, 10.0);
         assert!((with_flutes.area_mm2 - 200.0).abs() < 1e-6);
         assert!(with_flutes.unreached_mm2 < 1e-9, "{with_flutes:?}");
         // Over the target: the strip below the ball's centre where its side stands more than
@@ -689,11 +895,27 @@ mod tests {
             (with_flutes.over_target_mm2 - strip).abs() <= 2.0,
             "{with_flutes:?} against {strip}"
         );
-        let balls_alone = measure(0.0);
+        let balls_alone = wall_left(10.0, 0.0);
         // Above z = 4 nothing of the ball reaches the wall within a radius.
         assert!(
             balls_alone.unreached_mm2 >= 20.0 * 6.0 - 1.0,
             "{balls_alone:?}"
+        );
+    }
+
+    /// A wall ending a millimetre above the ball's centre (a blade's low stretch by the rim):
+    /// the flutes sweep that millimetre too, though their axis a quarter of the way up is
+    /// above the wall (which the measure once took for flutes off the part: 1 mm × 20 over the
+    /// target).
+    #[test]
+    fn a_low_wall_is_swept_by_the_flutes_just_above_the_ball() {
+        let (r, target): (f64, f64) = (2.0, 0.01);
+        let low = wall_left(3.0, 10.0);
+        assert!((low.area_mm2 - 60.0).abs() < 1e-6);
+        let strip = 20.0 * (r - (r * r - (r - target).powi(2)).sqrt());
+        assert!(
+            low.unreached_mm2 < 1e-9 && (low.over_target_mm2 - strip).abs() <= 2.0,
+            "{low:?} against {strip}"
         );
     }
 }
