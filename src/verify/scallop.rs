@@ -25,9 +25,7 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::geom::{
-    MoveKind, Point3, Toolpath, Vector3, closest_point_on_segment, closest_point_on_triangle,
-};
+use crate::geom::{MoveKind, Point3, Toolpath, Vector3, closest_point_on_segment};
 use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
 
@@ -159,9 +157,19 @@ pub fn measure_scallop(
                     })
                 });
             let mut swept = vec![Swept::Capsule(along(&w[0], 0.0), along(&w[1], 0.0))];
-            if flutes_cut {
-                let twist = (w[1].pose.axis.into_inner() - w[0].pose.axis.into_inner()).norm();
-                let strips = ((flutes_above_ball * twist / target).ceil() as usize).clamp(1, 64);
+            // Where the axis turns much along the move the sheet needs many strips; a stack
+            // of balls up the axis, `flute_step` apart (leaving a quarter of the target
+            // between two, s²/8r), is then the cheaper of the two, a rounded triangle costing
+            // about five capsules.
+            let twist = (w[1].pose.axis.into_inner() - w[0].pose.axis.into_inner()).norm();
+            let strips = ((flutes_above_ball * twist / target).ceil() as usize).max(1);
+            let balls = (flutes_above_ball / flute_step).ceil() as usize;
+            if flutes_cut && 10 * strips > balls {
+                for j in 1..=balls {
+                    let h = flutes_above_ball * j as f64 / balls as f64;
+                    swept.push(Swept::Capsule(along(&w[0], h), along(&w[1], h)));
+                }
+            } else if flutes_cut {
                 for j in 0..strips {
                     let h0 = flutes_above_ball * j as f64 / strips as f64;
                     let h1 = flutes_above_ball * (j + 1) as f64 / strips as f64;
@@ -422,10 +430,7 @@ pub fn ray_rounded_triangle_entry(
     [a, b, c]: &[Point3; 3],
     r: f64,
 ) -> Option<f64> {
-    let (closest, _) = closest_point_on_triangle(p, a, b, c);
-    if (p - closest).norm() <= r {
-        return Some(0.0);
-    }
+    // Inside the body is inside an edge capsule (entry 0) or the prism (entered at 0).
     let mut entry: Option<f64> = None;
     for (u, v) in [(a, b), (b, c), (c, a)] {
         if let Some(t) = ray_capsule_entry(p, d, u, v, r)
@@ -562,7 +567,7 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::{Direction, Move, ToolPose};
+    use crate::geom::{Direction, Move, ToolPose, closest_point_on_triangle};
 
     #[test]
     fn the_ray_enters_a_capsule_where_the_closed_form_says() {
