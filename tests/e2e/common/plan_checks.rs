@@ -149,11 +149,12 @@ pub fn rs274_motions(gcode: &str, tool_table: Option<&str>) -> Option<Vec<(bool,
         eprintln!("skipped: rs274 not found (apt-get install linuxcnc-uspace)");
         return None;
     };
-    let dir = std::env::temp_dir().join(format!(
-        "wavemill-rs274-{}-{:x}",
-        std::process::id(),
-        gcode.len()
-    ));
+    // A directory of its own per call: tests run side by side in one process, and two
+    // programs of one length once shared a directory, the first to finish removing the
+    // other's tool table under it ("Requested tool 1 not found in the tool table").
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("wavemill-rs274-{}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (program, canon, table) = (
         dir.join("job.nc"),
