@@ -115,6 +115,9 @@ pub fn measure_scallop(
     // triangles each, few enough that a triangle is within a quarter of the target of the
     // patch (the twist of a strip h high is h·|Δaxis|/4 off its diagonal).
     let flutes = flutes_above_ball > 0.0;
+    // Balls this far apart up the axis leave a quarter of the target between two (s²/8r).
+    let flute_step = (2.0 * radius * target).sqrt().max(1e-3);
+    let balls = (flutes_above_ball / flute_step).ceil() as usize;
     let swept: Vec<Swept> = toolpath
         .moves
         .windows(2)
@@ -135,7 +138,6 @@ pub fn measure_scallop(
             // where the flutes had swept them); a ball on a floor has its axis rising off the
             // floor at once. Three points, not the whole axis: a segment query that finds
             // nothing cost the blower's verification twice its time.
-            let flute_step = (2.0 * radius * target).sqrt().max(1e-3);
             let between = ((w[1].pose.tip - w[0].pose.tip).norm() / (0.5 * radius)).ceil() as usize;
             let flutes_cut = flutes
                 && (0..=between.max(1)).any(|k| {
@@ -163,7 +165,6 @@ pub fn measure_scallop(
             // about five capsules.
             let twist = (w[1].pose.axis.into_inner() - w[0].pose.axis.into_inner()).norm();
             let strips = ((flutes_above_ball * twist / target).ceil() as usize).max(1);
-            let balls = (flutes_above_ball / flute_step).ceil() as usize;
             if flutes_cut && 10 * strips > balls {
                 for j in 1..=balls {
                     let h = flutes_above_ball * j as f64 / balls as f64;
