@@ -1,5 +1,5 @@
-//! Exact f64 distance from a straight segment to a triangle mesh, written for the verifier
-//! alone.
+//! Exact f64 distance from a straight segment, or a triangle, to a triangle mesh, written for
+//! the verifier alone.
 //!
 //! The back-simulation of a posted program ([`super::posted`]) asks how close a ball centre
 //! comes to the part along a piece of its path. A piece is short and nearly straight, so the
@@ -12,8 +12,12 @@
 //! which at least one lies on the boundary of its set, so the distance is 0 when the segment
 //! pierces the triangle and otherwise the least of the segment's endpoints to the triangle and
 //! the segment to each of the three edges.
+//!
+//! The flutes sweep a sheet (their axis, from the ball centre up) that the back-simulation
+//! covers with small triangles; triangle–triangle distance is the least of each triangle's
+//! edges against the other ([`triangle_triangle_distance`]).
 
-use crate::geom::Point3;
+use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 
 /// Triangles per leaf of the tree.
@@ -34,6 +38,10 @@ struct BoxNode {
 #[derive(Clone, Debug)]
 pub struct SegmentDistance {
     corners: Vec<[Point3; 3]>,
+    /// Each triangle's unit normal (zero for a degenerate one) and its plane's offset along
+    /// it: a query held on one side of the plane is at least that far from the triangle, a
+    /// bound of a few dot products before the exact distance.
+    planes: Vec<(Vector3, f64)>,
     order: Vec<u32>,
     nodes: Vec<BoxNode>,
 }
@@ -43,8 +51,22 @@ impl SegmentDistance {
     pub fn new(mesh: &Mesh) -> Self {
         let corners: Vec<[Point3; 3]> =
             (0..mesh.triangles.len()).map(|t| mesh.corners(t)).collect();
+        let planes = corners
+            .iter()
+            .map(|[a, b, c]| {
+                let n = (b - a).cross(&(c - a));
+                let length = n.norm();
+                let unit = if length > 0.0 {
+                    n / length
+                } else {
+                    Vector3::zeros()
+                };
+                (unit, unit.dot(&a.coords))
+            })
+            .collect();
         let mut tree = SegmentDistance {
             order: (0..corners.len() as u32).collect(),
+            planes,
             corners,
             nodes: Vec::new(),
         };
@@ -113,17 +135,97 @@ impl SegmentDistance {
 
     /// The distance from segment `p q` to the mesh, or `limit` when nothing is closer.
     pub fn distance(&self, p: &Point3, q: &Point3, limit: f64) -> f64 {
+        self.nearest(&[*p, *q], limit, |t, _| {
+            let [a, b, c] = &self.corners[t];
+            segment_triangle_distance(p, q, a, b, c)
+        })
+    }
+
+    /// The distance from triangle `a b c` to the mesh, or `limit` when nothing is closer.
+    pub fn triangle_distance(&self, a: &Point3, b: &Point3, c: &Point3, limit: f64) -> f64 {
+        self.nearest(&[*a, *b, *c], limit, |t, _| {
+            let [u, v, w] = &self.corners[t];
+            triangle_triangle_distance(a, b, c, u, v, w)
+        })
+    }
+
+    /// The distance from the two triangles `p00 p10 p11` and `p00 p11 p01` (a quadrilateral
+    /// cut along its diagonal) to the mesh triangles `keep` keeps, or `limit` when nothing
+    /// is closer.
+    pub fn quad_distance(
+        &self,
+        corners: &[Point3; 4],
+        limit: f64,
+        keep: impl Fn(&[Point3; 3]) -> bool,
+    ) -> f64 {
+        let [p00, p10, p11, p01] = corners;
+        // Three directions to look for a gap along before measuring exactly: across the
+        // quadrilateral (its mean normal) and along its two sides. Any unit direction
+        // separating the projections bounds the distance from below.
+        let directions = [
+            (p11 - p00).cross(&(p01 - p10)),
+            p10 - p00 + (p11 - p01),
+            p01 - p00 + (p11 - p10),
+        ]
+        .map(|d| {
+            let length = d.norm();
+            if length > 0.0 { d / length } else { d }
+        });
+        let spans = directions.map(|d| {
+            corners
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    let x = d.dot(&p.coords);
+                    (lo.min(x), hi.max(x))
+                })
+        });
+        self.nearest(corners, limit, |t, best| {
+            let triangle = &self.corners[t];
+            let separated = directions.iter().zip(&spans).any(|(d, (lo, hi))| {
+                let (mut below, mut above) = (f64::INFINITY, f64::NEG_INFINITY);
+                for p in triangle {
+                    let x = d.dot(&p.coords);
+                    below = below.min(x);
+                    above = above.max(x);
+                }
+                let gap = (below - hi).max(lo - above);
+                gap > best + 1e-12 * (1.0 + best + hi.abs() + lo.abs())
+            });
+            if separated || !keep(triangle) {
+                return best;
+            }
+            let [u, v, w] = triangle;
+            let first = triangle_triangle_distance(p00, p10, p11, u, v, w);
+            if first == 0.0 {
+                return 0.0;
+            }
+            first.min(triangle_triangle_distance(p00, p11, p01, u, v, w))
+        })
+    }
+
+    /// The least of `measure` over the mesh's triangles, or `limit` when nothing is closer,
+    /// for a convex query set held by the box of `points` (which bounds the search).
+    /// `measure(t, best)` is triangle `t`'s distance, or anything not below `best` when it is
+    /// not nearer than that. A triangle whose plane has the whole query beyond `best` on one
+    /// side (the query is the hull of `points`) is not measured.
+    fn nearest(&self, points: &[Point3], limit: f64, measure: impl Fn(usize, f64) -> f64) -> f64 {
         if self.nodes.is_empty() {
             return limit;
         }
-        let seg_lo = [p.x.min(q.x), p.y.min(q.y), p.z.min(q.z)];
-        let seg_hi = [p.x.max(q.x), p.y.max(q.y), p.z.max(q.z)];
-        // A lower bound of the distance from the segment to anything in a node: the gap
-        // between the segment's box and the node's box.
+        let mut query_lo = [f64::INFINITY; 3];
+        let mut query_hi = [f64::NEG_INFINITY; 3];
+        for point in points {
+            for k in 0..3 {
+                query_lo[k] = query_lo[k].min(point[k]);
+                query_hi[k] = query_hi[k].max(point[k]);
+            }
+        }
+        // A lower bound of the distance from the query to anything in a node: the gap
+        // between the query's box and the node's box.
         let gap = |n: &BoxNode| -> f64 {
             let mut s = 0.0;
             for k in 0..3 {
-                let g = (n.lo[k] - seg_hi[k]).max(seg_lo[k] - n.hi[k]).max(0.0);
+                let g = (n.lo[k] - query_hi[k]).max(query_lo[k] - n.hi[k]).max(0.0);
                 s += g * g;
             }
             s.sqrt()
@@ -139,8 +241,20 @@ impl SegmentDistance {
             if node.count > 0 {
                 let start = node.first as usize;
                 for &t in &self.order[start..start + node.count as usize] {
-                    let [a, b, c] = &self.corners[t as usize];
-                    best = best.min(segment_triangle_distance(p, q, a, b, c));
+                    let (normal, offset) = &self.planes[t as usize];
+                    let (mut below, mut above) = (f64::INFINITY, f64::NEG_INFINITY);
+                    for point in points {
+                        let height = normal.dot(&point.coords) - offset;
+                        below = below.min(height);
+                        above = above.max(height);
+                    }
+                    // Beyond the best by more than the heights' rounding: a nearer triangle
+                    // is never skipped.
+                    let gap = below.max(-above);
+                    if gap > best + 1e-12 * (1.0 + best + offset.abs()) {
+                        continue;
+                    }
+                    best = best.min(measure(t as usize, best));
                 }
             } else {
                 let (l, r) = (node.first, node.first + 1);
@@ -248,10 +362,35 @@ pub fn segment_triangle_distance(
         .min(segment_segment_distance(p, q, c, a))
 }
 
+/// Distance between triangles `abc` and `uvw`: of two disjoint convex sets' closest pair one
+/// point can always be taken on the boundary of its set (two triangles' interiors can be
+/// closest only when parallel, and then an edge is as close), so it is the least of each
+/// triangle's three edges measured against the other; 0 when they meet, which an edge of one
+/// piercing the other (or two edges touching) shows.
+pub fn triangle_triangle_distance(
+    a: &Point3,
+    b: &Point3,
+    c: &Point3,
+    u: &Point3,
+    v: &Point3,
+    w: &Point3,
+) -> f64 {
+    let mut best = f64::INFINITY;
+    for (p, q) in [(a, b), (b, c), (c, a)] {
+        best = best.min(segment_triangle_distance(p, q, u, v, w));
+        if best == 0.0 {
+            return 0.0;
+        }
+    }
+    for (p, q) in [(u, v), (v, w), (w, u)] {
+        best = best.min(segment_triangle_distance(p, q, a, b, c));
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::Vector3;
     use crate::mesh::fixtures::uv_sphere;
     use proptest::prelude::*;
 
@@ -329,6 +468,72 @@ mod tests {
         assert!((beyond - expected).abs() < 1e-12, "{beyond}");
     }
 
+    /// Points over a triangle's area (a barycentric grid).
+    fn area_samples(a: &Point3, b: &Point3, c: &Point3, n: usize) -> Vec<Point3> {
+        let mut out = Vec::new();
+        for j in 0..=n {
+            for k in 0..=(n - j) {
+                let (u, v) = (j as f64 / n as f64, k as f64 / n as f64);
+                out.push(a + (b - a) * u + (c - a) * v);
+            }
+        }
+        out
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// Never more than the distance between the two sampled areas, and within their
+        /// sampling resolution of it; 0 exactly when the sampling finds them crossing.
+        #[test]
+        fn triangle_triangle_distance_agrees_with_dense_sampling(
+            a in point(), b in point(), c in point(), u in point(), v in point(), w in point()
+        ) {
+            let exact = triangle_triangle_distance(&a, &b, &c, &u, &v, &w);
+            prop_assert_eq!(exact, triangle_triangle_distance(&u, &v, &w, &a, &b, &c));
+            let n = 40;
+            let (first, second) = (area_samples(&a, &b, &c, n), area_samples(&u, &v, &w, n));
+            let dense = first
+                .iter()
+                .flat_map(|x| second.iter().map(move |y| (x - y).norm()))
+                .fold(f64::INFINITY, f64::min);
+            prop_assert!(exact <= dense + 1e-9, "{exact} > {dense}");
+            // A point of either triangle lies within half a grid cell's diagonal of a sample.
+            let cell = |p: &Point3, q: &Point3, r: &Point3| {
+                ((q - p).norm() + (r - p).norm()) / n as f64
+            };
+            prop_assert!(dense - exact <= cell(&a, &b, &c) + cell(&u, &v, &w), "{exact} vs {dense}");
+        }
+    }
+
+    #[test]
+    fn crossing_and_stacked_triangles_are_at_their_closed_form_distances() {
+        let (a, b, c) = (
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(4.0, 0.0, 0.0),
+            Point3::new(0.0, 4.0, 0.0),
+        );
+        // Standing through the first's interior: they meet, though no corner is near.
+        let crossing = triangle_triangle_distance(
+            &a,
+            &b,
+            &c,
+            &Point3::new(1.0, -3.0, -1.0),
+            &Point3::new(1.0, 5.0, -1.0),
+            &Point3::new(1.0, 1.0, 3.0),
+        );
+        assert_eq!(crossing, 0.0);
+        // A smaller copy 0.25 above, wholly over the first: only interiors face each other.
+        let stacked = triangle_triangle_distance(
+            &a,
+            &b,
+            &c,
+            &Point3::new(0.5, 0.5, 0.25),
+            &Point3::new(1.5, 0.5, 0.25),
+            &Point3::new(0.5, 1.5, 0.25),
+        );
+        assert!((stacked - 0.25).abs() < 1e-15, "{stacked}");
+    }
+
     /// The tree against every triangle, on chords around and through a sphere.
     #[test]
     fn tree_query_equals_brute_force_on_a_sphere() {
@@ -350,6 +555,41 @@ mod tests {
             assert_eq!(tree.distance(&p, &q, f64::INFINITY), exact);
             // A limit below the answer returns the limit.
             assert_eq!(tree.distance(&p, &q, exact * 0.5), exact * 0.5);
+        }
+    }
+
+    /// The tree's triangle and quadrilateral queries against every triangle, on slivers and
+    /// sheets around and through a sphere.
+    #[test]
+    fn tree_triangle_and_quad_queries_equal_brute_force_on_a_sphere() {
+        let sphere = uv_sphere(10.0, 16, 32);
+        let tree = SegmentDistance::new(&sphere);
+        for i in 0..200 {
+            let s = i as f64 * 0.41;
+            let a = Point3::new(13.0 * s.cos(), 13.0 * s.sin(), 11.0 * (0.6 * s).sin());
+            let b = a + Vector3::new((1.1 * s).sin(), (0.5 * s).cos(), -0.7) * (2.0 + s % 5.0);
+            let c = a + Vector3::new(0.2, (0.9 * s).sin(), (0.4 * s).cos()) * (1.0 + s % 3.0);
+            let exact = (0..sphere.triangles.len())
+                .map(|t| {
+                    let [u, v, w] = sphere.corners(t);
+                    triangle_triangle_distance(&a, &b, &c, &u, &v, &w)
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(tree.triangle_distance(&a, &b, &c, f64::INFINITY), exact);
+            assert_eq!(tree.triangle_distance(&a, &b, &c, exact * 0.5), exact * 0.5);
+            // A twisted quadrilateral on a, b, c: its two triangles, with the gap tests along
+            // its sides and across it in front of the exact ones.
+            let d = c + (b - a) * 0.8 + Vector3::new(0.3, -0.2, 0.5) * (s % 2.0);
+            let quad = [a, b, d, c];
+            let exact = (0..sphere.triangles.len())
+                .map(|t| {
+                    let [u, v, w] = sphere.corners(t);
+                    triangle_triangle_distance(&a, &b, &d, &u, &v, &w)
+                        .min(triangle_triangle_distance(&a, &d, &c, &u, &v, &w))
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(tree.quad_distance(&quad, f64::INFINITY, |_| true), exact);
+            assert_eq!(tree.quad_distance(&quad, 7.0, |_| false), 7.0);
         }
     }
 }
