@@ -117,6 +117,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             search_mm: setup.search,
             tool: None,
             rounding_mm: setup.budget.rounding_mm,
+            flutes_above_ball: setup
+                .prepared_tool
+                .flutes_above_ball()
+                .map_or(0.0, |(length, _)| length),
         },
     )?;
     println!(
@@ -125,6 +129,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         posted.min_feed_clearance_mm,
         posted.min_rapid_clearance_mm
     );
+    if let Some(flutes) = &posted.flutes {
+        println!(
+            "  ball and flutes together: {:+.5} mm along feed moves",
+            flutes.min_feed_clearance_mm
+        );
+    }
 
     // The same chain in one call.
     let whole = job::plan(&raw, &part_file, "mm", &job, &Quiet)?;

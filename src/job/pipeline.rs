@@ -909,6 +909,10 @@ pub fn plan_with_surfaces(
             search_mm: setup.search,
             tool: Some(setup.tool.id),
             rounding_mm: budget.rounding_mm,
+            flutes_above_ball: setup
+                .prepared_tool
+                .flutes_above_ball()
+                .map_or(0.0, |(length, _)| length),
         },
     );
     let roughing_failure = check_posted_roughing(
@@ -1279,9 +1283,17 @@ pub fn linearise_program(
     first_gauge_length: f64,
     unwind: &[bool],
 ) -> Result<LinearisedProgram> {
+    // The flutes' top too: they may touch the part (and dip the tolerance on a swarf run),
+    // and 0.1° of axis is 0.014 mm at the top of 8 mm of flutes.
     let linearise = LineariseOptions::default()
         .with_tolerance_mm(setup.budget.linearisation_mm)
-        .with_control_point_mm(setup.prepared_tool.ball_radius);
+        .with_control_point_mm(setup.prepared_tool.ball_radius)
+        .with_flutes_above_control_mm(
+            setup
+                .prepared_tool
+                .flutes_above_ball()
+                .map_or(0.0, |(length, _)| length),
+        );
     let tcp = setup.gcode_options.output == post::OutputMode::Tcp;
     let mut starts: Vec<usize> = std::iter::once(0)
         .chain(changes.iter().map(|c| c.at))
@@ -1505,6 +1517,22 @@ fn posted_failure(
             "a posted move cuts {:.6} mm into the part at line {} of job.nc (tolerance {})",
             -posted.min_feed_clearance_mm, posted.min_feed_line, budget.total_mm
         ));
+    }
+    if let Some(flutes) = &posted.flutes {
+        if flutes.min_feed_clearance_mm < -budget.total_mm {
+            problems.push(format!(
+                "a posted move's flutes cut {:.6} mm into the part at line {} of job.nc \
+                 (tolerance {})",
+                -flutes.min_feed_clearance_mm, flutes.min_feed_line, budget.total_mm
+            ));
+        }
+        if flutes.min_rapid_clearance_mm < rapid_margin {
+            problems.push(format!(
+                "a rapid's flutes pass {:.6} mm from the part at line {} of job.nc (they must \
+                 keep the shank margin {rapid_margin} mm)",
+                flutes.min_rapid_clearance_mm, flutes.min_rapid_line
+            ));
+        }
     }
     if posted.min_rapid_clearance_mm < rapid_margin {
         problems.push(format!(

@@ -30,6 +30,16 @@
 //! piece-by-piece measurement (a test compares the two); on the blower impeller's finishing
 //! program this measures a fraction of the pieces.
 //!
+//! # The flutes
+//! With [`PostedOptions::flutes_above_ball`] the cutting part of a ball-end mill is measured
+//! whole: the cylinder of the ball's radius round the axis from the ball's centre up that
+//! far. Its clearance is the distance from the part of the sheet `c(t) + s·k(t)` the axis
+//! segment sweeps, less the radius; the sheet is cut into pieces measured as triangles with
+//! an error bound of the same kind as the chords' ([`FluteSheets`]), so this minimum is a
+//! certified lower bound too. Where the flutes are nowhere near the part the pieces are few
+//! and far; the surface round the ball's contact lies below the ball's equator, where the
+//! axis is nearest the part at the ball's centre, and is left to the ball's measure.
+//!
 //! The path is one continuous curve from the program's first fully known position, which is
 //! checked to lie outside the part's bounding sphere about the pivot. A path that never comes
 //! within 0 of the surface therefore never enters the part, and the unsigned distance is the
@@ -394,6 +404,9 @@ pub struct PostedOptions {
     /// inverse-time block's distance is taken this much shorter at each end before it is
     /// timed by its F, so a short block's rounding does not read as speed.
     pub rounding_mm: f64,
+    /// How far the flutes reach up the axis above the ball's centre, mm: with more than 0 the
+    /// ball and its flutes are measured together too ([`FluteClearance`]).
+    pub flutes_above_ball: f64,
 }
 
 /// What the back-simulation found.
@@ -418,14 +431,38 @@ pub struct PostedClearance {
     /// along a G1 block (the straight distance it makes good, less the rounding at both ends,
     /// times the block's F), mm/min, and the line. `None` for feed per minute.
     pub fastest_part_feed: Option<(f64, usize)>,
+    /// The ball and its flutes together, where [`PostedOptions::flutes_above_ball`] asks.
+    pub flutes: Option<FluteClearance>,
     /// What is wrong with the program's structure (motion before tool length compensation, a
     /// start that cannot be shown to be outside the part).
     pub problems: Vec<String>,
 }
 
+/// The least clearance of the ball and its flutes together: of the cylinder of the ball's
+/// radius round the axis from the ball's centre to the flutes' top (capped by half a ball
+/// there), which holds the ball-end mill's cutting part. Measured as the distance from the
+/// part of the sheet the axis segment sweeps, less the radius, and never above the ball's
+/// own; certified like the ball's (module docs, "The flutes").
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FluteClearance {
+    pub flutes_above_ball_mm: f64,
+    /// Pieces of sheet measured.
+    pub cells: usize,
+    /// Least clearance along G1 blocks; negative = the tool cuts into the part by that much.
+    pub min_feed_clearance_mm: f64,
+    pub min_feed_line: usize,
+    /// The same along G0 blocks.
+    pub min_rapid_clearance_mm: f64,
+    pub min_rapid_line: usize,
+}
+
 /// Most pieces one block may be cut into; a block that needs more is measured with the error
 /// this leaves, which is reported.
 const MAX_PIECES: usize = 100_000;
+
+/// Most pieces of sheet one block's flutes are measured in; past it the pieces left are taken
+/// with the error they have (still a lower bound, a looser one).
+const MAX_SHEET_CELLS: usize = 20_000;
 
 /// Most moves a read-back program may expand to: bounds the memory a small file with huge
 /// rotary words could ask for.
@@ -490,7 +527,11 @@ fn check_posted_pruned(
     if let Some(i) = first {
         let j = joints(&blocks[i]).unwrap_or_default();
         let start = machine.ball_centre(&j, r, blocks[i].tool);
-        if (start - pivot).norm() <= reach + r {
+        let flutes_top =
+            start + machine.pose(&j, blocks[i].tool).axis.into_inner() * options.flutes_above_ball;
+        let flutes_in_reach = options.flutes_above_ball > 0.0
+            && point_segment_distance(&pivot, &start, &flutes_top) <= reach + r;
+        if (start - pivot).norm() <= reach + r || flutes_in_reach {
             problems.push(format!(
                 "line {}: the first position is within the part's reach from the pivot; it \
                  cannot be shown to be outside the part",
@@ -570,6 +611,16 @@ fn check_posted_pruned(
             m
         })
         .collect();
+    let flutes = (options.flutes_above_ball > 0.0).then(|| {
+        let sheets = FluteSheets {
+            machine,
+            tree: &tree,
+            r,
+            length: options.flutes_above_ball,
+            limit,
+        };
+        sheets.measure(&blocks, &pairs, options, prune)
+    });
     let mut total = Minima::new(options.search_mm);
     for m in per_chunk {
         total.pieces += m.pieces;
@@ -579,6 +630,16 @@ fn check_posted_pruned(
             total.note_feed(f, line);
         }
     }
+    // The sheets leave the surface below the ball's equator to the ball's measure.
+    let flutes = flutes.map(|mut f| {
+        if total.feed.0 < f.min_feed_clearance_mm {
+            (f.min_feed_clearance_mm, f.min_feed_line) = total.feed;
+        }
+        if total.rapid.0 < f.min_rapid_clearance_mm {
+            (f.min_rapid_clearance_mm, f.min_rapid_line) = total.rapid;
+        }
+        f
+    });
     Ok(PostedClearance {
         motion_blocks: blocks.len(),
         pieces: total.pieces,
@@ -590,6 +651,7 @@ fn check_posted_pruned(
         rapid_error_bound_mm: options.rapid_error_mm,
         search_distance_mm: options.search_mm,
         fastest_part_feed: total.fastest,
+        flutes,
         problems,
     })
 }
@@ -788,6 +850,221 @@ fn block_clearance(
     (below.then_some(clearance), measured, (end - start).norm())
 }
 
+/// Distance from `p` to the segment `a b`.
+fn point_segment_distance(p: &Point3, a: &Point3, b: &Point3) -> f64 {
+    let d = b - a;
+    let length2 = d.norm_squared();
+    let s = if length2 > 0.0 {
+        ((p - a).dot(&d) / length2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + d * s - p).norm()
+}
+
+/// The sheets the flutes' axis sweeps over the blocks, measured against the part.
+struct FluteSheets<'a> {
+    machine: &'a MachineModel,
+    tree: &'a SegmentDistance,
+    r: f64,
+    /// How far the flutes reach above the ball's centre.
+    length: f64,
+    limit: f64,
+}
+
+impl FluteSheets<'_> {
+    /// Every block's sheet, in the ball pass's fixed chunks, each pruned against the least
+    /// clearance its chunk has found (and, with `prune`, against the first pass's ceilings).
+    fn measure(
+        &self,
+        blocks: &[MotionBlock],
+        pairs: &[BlockJoints],
+        options: &PostedOptions,
+        prune: bool,
+    ) -> FluteClearance {
+        let floors = if prune {
+            let (feed, rapid) = self.ceilings(blocks, pairs);
+            let raise = |c: f64| (c + self.r + 1e-9 < self.limit).then_some(c + 1e-9);
+            (raise(feed), raise(rapid))
+        } else {
+            (None, None)
+        };
+        let per_chunk: Vec<Minima> = pairs
+            .par_chunks(256)
+            .map(|chunk| {
+                let mut m = Minima::new(options.search_mm);
+                let mut floors = floors;
+                for (i, j0, j1) in chunk {
+                    let block = &blocks[*i];
+                    let (floor, error) = if block.rapid {
+                        (&mut floors.1, options.rapid_error_mm)
+                    } else {
+                        (&mut floors.0, options.feed_error_mm)
+                    };
+                    let (clearance, cells) = self.block(j0, j1, error, *floor, block.tool);
+                    m.pieces += cells;
+                    if let Some(c) = clearance {
+                        m.note(block.rapid, c, block.line);
+                        if floor.is_some() {
+                            *floor = Some(m.least(block.rapid));
+                        }
+                    }
+                }
+                m
+            })
+            .collect();
+        let mut total = Minima::new(options.search_mm);
+        for m in per_chunk {
+            total.pieces += m.pieces;
+            total.note(false, m.feed.0, m.feed.1);
+            total.note(true, m.rapid.0, m.rapid.1);
+        }
+        FluteClearance {
+            flutes_above_ball_mm: self.length,
+            cells: total.pieces,
+            min_feed_clearance_mm: total.feed.0,
+            min_feed_line: total.feed.1,
+            min_rapid_clearance_mm: total.rapid.0,
+            min_rapid_line: total.rapid.1,
+        }
+    }
+
+    /// Upper bounds (feed, rapid) of the least clearance [`Self::block`] finds: a block's
+    /// sheet ends on the axis segment of its end point, which the last pieces' triangles hold,
+    /// so the block's clearance is at most that segment's distance less the radius.
+    fn ceilings(&self, blocks: &[MotionBlock], pairs: &[BlockJoints]) -> (f64, f64) {
+        let far = self.limit - self.r;
+        let per_chunk: Vec<(f64, f64)> = pairs
+            .par_chunks(256)
+            .map(|chunk| {
+                let mut ceilings = (far, far);
+                for (i, _, j1) in chunk {
+                    let block = &blocks[*i];
+                    let ceiling = if block.rapid {
+                        &mut ceilings.1
+                    } else {
+                        &mut ceilings.0
+                    };
+                    let (centre, axis) = self.axis_at(j1, block.tool);
+                    let reach = *ceiling + self.r;
+                    let d = self
+                        .tree
+                        .distance(&centre, &(centre + axis * self.length), reach);
+                    if d < reach {
+                        *ceiling = d - self.r;
+                    }
+                }
+                ceilings
+            })
+            .collect();
+        per_chunk
+            .iter()
+            .fold((far, far), |(f, q), c| (f.min(c.0), q.min(c.1)))
+    }
+
+    /// The ball's centre and the unit axis at `joints`.
+    fn axis_at(&self, joints: &[f64; 5], tool: Option<u32>) -> (Point3, Vector3) {
+        let pose = self.machine.pose(joints, tool);
+        let axis = pose.axis.into_inner();
+        (pose.tip + axis * self.r, axis)
+    }
+
+    /// The certified least clearance of the ball and flutes along the joint interpolation
+    /// `j0 → j1` (with a `floor`, only where below it), and how many pieces were measured.
+    ///
+    /// The sheet `p(t, s) = c(t) + s·k(t)` is cut into pieces `[ta, tb] × [sa, sb]`, each
+    /// measured as the two triangles of its corners. A piece's points lie within
+    /// `K·(tb − ta)²/8` of the bilinear patch through its corners (linear interpolation in
+    /// `t`; `K` bounds `|∂²p/∂t²|`, which is affine in `s` and so at most the larger of the
+    /// centre's and the top's curvature bounds), and the patch within `|D|/4` of the two
+    /// triangles, `D = (sb − sa)·(k(tb) − k(ta))` its twist. A piece whose triangles are far
+    /// enough is dropped; one whose error is above `error` is halved in `t` where its bend
+    /// dominates, in `s` where its twist does.
+    ///
+    /// Mesh triangles below the ball's equator at every pose of a piece are left out: for a
+    /// point `p` with `(p − c)·k ≤ 0` the nearest point of the axis segment is the centre, so
+    /// its distance to the sheet is its distance to the centre's path, which the ball's
+    /// measure bounds (the caller takes the least of both). Below for every `t` is shown with
+    /// the chords: `(p − c(t))·k(t)` is at most its larger value at the piece's ends against
+    /// the mean axis, plus the centre's bend `e` and `(|p − c| + e)` times how far the axis
+    /// strays from that mean (half the chord of its ends, plus `ω²h²/8`).
+    fn block(
+        &self,
+        j0: &[f64; 5],
+        j1: &[f64; 5],
+        error: f64,
+        floor: Option<f64>,
+        tool: Option<u32>,
+    ) -> (Option<f64>, usize) {
+        let curvature =
+            self.machine
+                .curvature_bound(j0, j1, self.r, tool)
+                .max(
+                    self.machine
+                        .curvature_bound(j0, j1, self.r + self.length, tool),
+                );
+        let at = |t: f64| {
+            let j: [f64; 5] = std::array::from_fn(|i| j0[i] + (j1[i] - j0[i]) * t);
+            self.axis_at(&j, tool)
+        };
+        // The axis turns at most this fast in the block parameter, so it leaves its chord
+        // between two parameters h apart by at most ω²h²/8.
+        let omega = (j1[3] - j0[3]).to_radians().abs() + (j1[4] - j0[4]).to_radians().abs();
+        let mut least = floor.map_or(self.limit, |f| f + self.r);
+        let mut lowered = false;
+        let mut measured = 0;
+        // Strips no taller than the radius to start: a tall tilted sheet's box holds much of
+        // the surface round the ball, and most strips are far from it.
+        let strips = (self.length / self.r).ceil().max(1.0) as usize;
+        let height = self.length / strips as f64;
+        let mut pieces: Vec<(f64, f64, f64, f64)> = (0..strips)
+            .rev()
+            .map(|k| (0.0, 1.0, k as f64 * height, (k + 1) as f64 * height))
+            .collect();
+        while let Some((ta, tb, sa, sb)) = pieces.pop() {
+            let ((ca, ka), (cb, kb)) = (at(ta), at(tb));
+            let bend = curvature * (tb - ta) * (tb - ta) / 8.0;
+            let twist = (sb - sa) * (kb - ka).norm() / 4.0;
+            let piece_error = bend + twist;
+            let corners = [ca + ka * sa, cb + kb * sa, cb + kb * sb, ca + ka * sb];
+            let reach = least + piece_error;
+            // A mesh triangle below the ball's equator at every pose of the piece is nearest
+            // the axis at the ball's centre: the ball's own measure has it.
+            let (bend_centre, mid) = (bend, 0.5 * (ka + kb));
+            let wobble = 0.5 * (kb - ka).norm() + omega * omega * (tb - ta) * (tb - ta) / 8.0;
+            let above = |triangle: &[Point3; 3]| {
+                triangle.iter().any(|v| {
+                    let height = (v - ca).dot(&mid).max((v - cb).dot(&mid));
+                    let reach = (v - ca).norm().max((v - cb).norm());
+                    height + bend_centre + (reach + bend_centre) * wobble >= 0.0
+                })
+            };
+            let d = self.tree.quad_distance(&corners, reach, above);
+            measured += 1;
+            if d >= reach {
+                continue;
+            }
+            if piece_error <= error || measured >= MAX_SHEET_CELLS {
+                if d - piece_error < least {
+                    least = d - piece_error;
+                    lowered = true;
+                }
+            } else if bend >= twist {
+                let tm = 0.5 * (ta + tb);
+                pieces.push((tm, tb, sa, sb));
+                pieces.push((ta, tm, sa, sb));
+            } else {
+                let sm = 0.5 * (sa + sb);
+                pieces.push((ta, tb, sm, sb));
+                pieces.push((ta, tb, sa, sm));
+            }
+        }
+        let clearance = (least - self.r).min(self.limit - self.r);
+        let below = floor.is_none() || (lowered && floor.is_some_and(|f| clearance < f));
+        (below.then_some(clearance), measured)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -807,6 +1084,7 @@ mod tests {
             search_mm: 5.0,
             rounding_mm: 0.0,
             tool: None,
+            flutes_above_ball: 0.0,
         }
     }
 
@@ -850,6 +1128,18 @@ mod tests {
             assert!(c.problems.is_empty(), "{:?}", c.problems);
             assert!((c.min_feed_clearance_mm - expected).abs() < 1e-9, "{c:?}");
             assert!(c.min_rapid_clearance_mm >= 5.0 - 1e-9);
+            // Flutes standing up from the ball, the face below it: the ball's contact is the
+            // least of both, the surface below the equator left to the ball's measure.
+            let with_flutes = PostedOptions {
+                flutes_above_ball: 8.0,
+                ..options()
+            };
+            let f = check_posted(&program, &machine(), &part, &with_flutes).unwrap();
+            let flutes = f.flutes.unwrap();
+            assert_eq!(
+                (flutes.min_feed_clearance_mm, flutes.min_feed_line),
+                (c.min_feed_clearance_mm, c.min_feed_line)
+            );
         }
     }
 
@@ -968,6 +1258,122 @@ mod tests {
             every
         );
         assert!(2 * pruned.pieces < every.pieces, "{pruned:?} {every:?}");
+    }
+
+    /// Flutes along the side of a block that floats 5 mm up (a cuboid from z = 5 to 15), the
+    /// ball's centre 2 mm below its bottom: the flutes' clearance is the axis's distance from
+    /// the face less the radius (and a 0.01 mm gouge when it is 1.99 mm), while the ball,
+    /// diagonally off the bottom edge, is 1.05 mm clear.
+    #[test]
+    fn flutes_beside_a_wall_are_measured_in_closed_form() {
+        let mut part = cuboid(30.0, 30.0, 10.0);
+        for p in &mut part.positions {
+            p.z += 5.0;
+        }
+        let options = PostedOptions {
+            flutes_above_ball: 8.0,
+            ..options()
+        };
+        for (gap, expected) in [(2.3, 0.3), (1.99, -0.01)] {
+            // Machine X = part x − 15 at A = C = 0; the tip 2 mm below the ball's centre.
+            let x = -gap - 15.0;
+            let program = format!(
+                "{START}G0 X{x} Y-20 Z{}
+G1 Z1 F100
+G1 Y0
+G1 X{}
+G0 Z100
+",
+                11.0,
+                x - 10.0
+            );
+            let c = check_posted(&program, &machine(), &part, &options).unwrap();
+            assert!(c.problems.is_empty(), "{:?}", c.problems);
+            let flutes = c.flutes.clone().unwrap();
+            assert!(
+                (flutes.min_feed_clearance_mm - expected).abs() < 1e-9,
+                "{flutes:?}"
+            );
+            assert_eq!(flutes.min_feed_line, 5, "{flutes:?}");
+            let ball = (gap * gap + 4.0f64).sqrt() - 2.0;
+            assert!((c.min_feed_clearance_mm - ball).abs() < 1e-9, "{c:?}");
+        }
+    }
+
+    /// The table turns the flutes about a ball centre held 2.5 mm off a block's side face,
+    /// toward the face and over its top edge: the certified flute clearance of every block is
+    /// never above the least clearance of 201 × 201 points of its sheet (it is a lower bound),
+    /// and within the sampling's resolution and twice the error bound of it. Measuring against
+    /// the first pass's ceilings finds the same minimum at the same line.
+    #[test]
+    fn the_flute_sheet_bound_holds_against_dense_sampling() {
+        use nalgebra::Rotation3;
+        let part = cuboid(30.0, 30.0, 10.0);
+        let tree = SegmentDistance::new(&part);
+        let o = Vector3::new(-15.0, -15.0, 0.0);
+        let (r, length) = (2.0, 8.0);
+        let centre = Point3::new(-2.5, 15.0, 4.0);
+        let mut program = String::from(START);
+        let mut joints = Vec::new();
+        for k in 0..=40 {
+            let t = k as f64 / 40.0;
+            let (a, c) = (35.0 * t, -25.0 + 50.0 * t + 8.0 * (9.0 * t).sin());
+            let m = Rotation3::from_axis_angle(&Vector3::x_axis(), a.to_radians())
+                * Rotation3::from_axis_angle(&Vector3::z_axis(), c.to_radians())
+                * (centre.coords + o);
+            let j = [m.x, m.y, m.z - r, a, c];
+            let word = if k == 0 { "G0" } else { "G1" };
+            program += &format!(
+                "{word} X{} Y{} Z{} A{} C{} F500\n",
+                j[0], j[1], j[2], j[3], j[4]
+            );
+            joints.push(j);
+        }
+        let options = PostedOptions {
+            flutes_above_ball: length,
+            ..options()
+        };
+        let pruned = check_posted_pruned(&program, &machine(), &part, &options, true).unwrap();
+        let every = check_posted_pruned(&program, &machine(), &part, &options, false).unwrap();
+        let (pruned, every) = (pruned.flutes.unwrap(), every.flutes.unwrap());
+        assert_eq!(
+            (pruned.min_feed_clearance_mm, pruned.min_feed_line),
+            (every.min_feed_clearance_mm, every.min_feed_line)
+        );
+        let m = machine();
+        let (samples_t, samples_s) = (200, 200);
+        let mut sampled = f64::INFINITY;
+        let mut resolution: f64 = 0.0;
+        for pair in joints.windows(2) {
+            let at = |t: f64, s: f64| {
+                let j: [f64; 5] =
+                    std::array::from_fn(|i| pair[0][i] + (pair[1][i] - pair[0][i]) * t);
+                let pose = m.pose(&j, None);
+                pose.tip + pose.axis.into_inner() * (r + s)
+            };
+            for i in 0..=samples_t {
+                let t = i as f64 / samples_t as f64;
+                let step_t = (at(t + 1.0 / samples_t as f64, length) - at(t, length)).norm();
+                resolution = resolution.max(step_t.hypot(length / samples_s as f64) / 2.0);
+                for k in 0..=samples_s {
+                    let p = at(t, length * k as f64 / samples_s as f64);
+                    sampled = sampled.min(tree.distance(&p, &p, f64::INFINITY) - r);
+                }
+            }
+        }
+        let certified = every.min_feed_clearance_mm;
+        assert!(
+            certified < 0.0,
+            "the flutes were to cut into the face: {certified}"
+        );
+        assert!(
+            certified <= sampled + 1e-12,
+            "{certified} above the sampled {sampled}"
+        );
+        assert!(
+            sampled - certified <= resolution + 2.0 * options.feed_error_mm,
+            "{certified} vs sampled {sampled} (resolution {resolution})"
+        );
     }
 
     /// The curvature bound of every chain kind holds against the second differences of the
