@@ -67,7 +67,7 @@ use serde::{Deserialize, Serialize};
 
 use super::kinematics::{
     Joints, KinematicsError, KinematicsKind, MachineKinematics, RotaryAxis, checked_axis,
-    turns_within, within_limits,
+    relaxed_free_angle, turns_within, within_limits,
 };
 use crate::geom::ToolPose;
 
@@ -556,11 +556,11 @@ impl MachineKinematics for RotaryChain {
 
     /// Near the free axis (angle `φ` between it and the tool axis below `2s`, `s` the smaller of
     /// the singular tolerance and `max_axis_error_deg`), the free angle may stay anywhere within
-    /// `δ = asin(sin e / sin φ)` of the exact one (`e = s` for `φ ≤ s`, `2s − φ` up to `2s`), the
-    /// point of that set nearest `preferred` being taken, and the other angle is the one that
-    /// brings the axis nearest the pose's. For perpendicular axes the error is exactly
-    /// `asin(sin φ · |sin Δ|) ≤ e`; it is measured, and the exact inverse taken when it is not
-    /// within `e` (axes at other angles) or the limits refuse.
+    /// [`relaxed_free_angle`]'s `δ(φ)` of the exact one, the point of that set nearest
+    /// `preferred` being taken, and the other angle is the one that brings the axis nearest the
+    /// pose's. For perpendicular axes the error is `asin(sin φ · |sin Δ|) ≤ s`; it is measured,
+    /// and the exact inverse taken when it is not within `s` (axes at other angles) or the
+    /// limits refuse.
     fn inverse_relaxed(
         &self,
         pose: &ToolPose,
@@ -578,21 +578,18 @@ impl MachineKinematics for RotaryChain {
         let (free_dir, along) = if free_second { (w2, p) } else { (w1, q) };
         let cos = along.dot(&free_dir).abs().min(1.0);
         let phi = cos.acos().to_degrees();
-        if s <= 0.0 || phi >= 2.0 * s {
+        let Some(delta) = relaxed_free_angle(phi, s) else {
             return self.inverse(pose, Some(preferred));
-        }
-        let e = if phi <= s { s } else { 2.0 * s - phi };
+        };
         let pref = self.angles_of(preferred.a, preferred.c);
         let pref_free = if free_second { pref.second } else { pref.first };
-        let ratio = e.to_radians().sin() / phi.to_radians().sin();
         let free = match self.orientations(&k, Some(pref_free)) {
-            Ok(branches) if ratio < 1.0 => {
+            Ok(branches) if delta < 90.0 => {
                 let exact = if free_second {
                     branches[0].second
                 } else {
                     branches[0].first
                 };
-                let delta = ratio.asin().to_degrees();
                 let d = pref_free - exact;
                 let n = (d / 180.0).round();
                 let r = d - 180.0 * n;
@@ -624,7 +621,7 @@ impl MachineKinematics for RotaryChain {
         ) else {
             return self.inverse(pose, Some(preferred));
         };
-        if error > e + 1e-9 {
+        if error > s + 1e-9 {
             return self.inverse(pose, Some(preferred));
         }
         Ok(self.joints_at(&pose.tip, j1, j2))

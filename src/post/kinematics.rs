@@ -288,6 +288,27 @@ pub trait MachineKinematics {
     fn work_offset(&self) -> &str;
 }
 
+/// How far (degrees) the free rotary angle may stray from its exact value, mod 180°, when the
+/// tool axis is `phi` degrees from the free axis and the axis may err by `s` degrees; `None`
+/// beyond `2s`, where the exact inverse is taken. Straying by `δ` tilts the axis by
+/// `asin(sin φ · |sin δ|)`.
+///
+/// Free (90°) up to `s/2`, then narrowing linearly to 0 at `2s`: `δ = 90°·(2s − φ)/(1.5 s)`.
+/// The error `φ·sin δ` is then at most 0.9 s (greatest near φ = 1.2 s), and the angle narrows
+/// at 60°/s per degree of `φ`, so a free angle held near the previous pose's value follows
+/// the exact one at a bounded rate. (Allowing the whole `s` from `φ = s`, `δ = asin(s/φ)`,
+/// narrows at an unbounded rate there: the free angle would have to swing through tens of
+/// degrees between two poses a hair apart, which no block short enough can follow.)
+pub(crate) fn relaxed_free_angle(phi: f64, s: f64) -> Option<f64> {
+    if s <= 0.0 || phi >= 2.0 * s {
+        None
+    } else if phi <= 0.5 * s {
+        Some(90.0)
+    } else {
+        Some(90.0 * (2.0 * s - phi) / (1.5 * s))
+    }
+}
+
 /// A 3-axis machine: the tool along machine +Z, machine X, Y, Z = the tool tip in the part
 /// frame (the work offset's origin at the part origin). Poses must have the axis +Z.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -656,15 +677,14 @@ impl MachineKinematics for TableTableAC {
     /// Relaxed inverse for the A/C table-table machine.
     ///
     /// Let `φ` be the angle between the tool axis and the C axis line (`min(tilt, 180° − tilt)`)
-    /// and `s = min(singular_tolerance_deg, max_axis_error_deg)`. The allowed axis error is
-    /// `e(φ) = s` for `φ ≤ s`, `2s − φ` for `s < φ < 2s` and 0 beyond (exact inverse). With C
-    /// fixed at some value, the best A is `a = atan2(k_x sin c + k_y cos c, k_z)` and the axis
-    /// error is `asin(sin φ · |sin(c − c_exact)|)`; so C may be anywhere in the set
-    /// `|sin(c − c_exact)| ≤ sin e / sin φ` (everything when `φ ≤ s`). The chosen C is the
-    /// point of that set nearest `preferred.c`. The set varies continuously with the pose, so
-    /// linearisation converges through and around the pole instead of chasing the exact C's
-    /// half-turn. The tip stays exact. Falls back to the exact inverse when the relaxed joints
-    /// would leave the limits.
+    /// and `s = min(singular_tolerance_deg, max_axis_error_deg)`. With C fixed at some value,
+    /// the best A is `a = atan2(k_x sin c + k_y cos c, k_z)` and the axis error is
+    /// `asin(sin φ · |sin(c − c_exact)|)`; C may be anywhere within [`relaxed_free_angle`]'s
+    /// `δ(φ)` of `c_exact` (mod 180°), which keeps that error within `s`, and the point of that
+    /// set nearest `preferred.c` is chosen. `δ` narrows at a bounded rate as the axis leaves
+    /// the pole, so C turns at a bounded rate too and linearisation converges through and
+    /// around the pole instead of chasing the exact C's half-turn. The tip stays exact. Falls
+    /// back to the exact inverse when the relaxed joints would leave the limits.
     fn inverse_relaxed(
         &self,
         pose: &ToolPose,
@@ -680,15 +700,12 @@ impl MachineKinematics for TableTableAC {
         let h = k.x.hypot(k.y);
         let tilt = h.atan2(k.z).to_degrees();
         let phi = tilt.min(180.0 - tilt);
-        if s <= 0.0 || phi >= 2.0 * s {
+        let Some(delta) = relaxed_free_angle(phi, s) else {
             return self.inverse(pose, Some(preferred));
-        }
-        let e = if phi <= s { s } else { 2.0 * s - phi };
-        let ratio = e.to_radians().sin() / phi.to_radians().sin();
-        let c = if h <= SINGULAR_AXIS_EPS || ratio >= 1.0 {
+        };
+        let c = if h <= SINGULAR_AXIS_EPS || delta >= 90.0 {
             preferred.c
         } else {
-            let delta = ratio.asin().to_degrees(); // in [0, 90)
             let c_exact = atan2_deg(k.x, k.y);
             let d = preferred.c - c_exact;
             let n = (d / 180.0).round();

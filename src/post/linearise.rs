@@ -11,7 +11,8 @@
 //! joints come from [`MachineKinematics::inverse_relaxed`] relative to the current joints, and
 //! the step is accepted when the forward kinematics of the joint-space interpolation, at the
 //! seven [`CHECK_PARAMETERS`] of the step, is within `tolerance_mm` of the planned control
-//! point and within `angle_tolerance_deg` of the planned axis; otherwise `dt` is halved (down
+//! point (and of the flutes' top, `flutes_above_control_mm` above it, where a tool cuts with
+//! its flutes) and within `angle_tolerance_deg` of the planned axis; otherwise `dt` is halved (down
 //! to `2^−max_depth`, error beyond), and after each accepted step doubled. Every accepted
 //! interior step end becomes an inserted block, lying exactly on the planned segment. The
 //! samples do not bound the deviation between them by themselves; the back-simulation of the
@@ -24,9 +25,10 @@
 //! branch looks like a 20° move); no midpoint subdivision converges then. Walking forward, the
 //! nearest branch of each short step is one whose joint motion verifiably follows the plan.
 //!
-//! Joints use half the angle tolerance as the relaxed inverse's axis-error budget: near the C
-//! singularity C stays calm (tip exact, axis within half the angle tolerance), leaving the
-//! other half for interpolation. Rapid moves are positioning moves above the safe height: on a
+//! Joints use half the angle tolerance as the relaxed inverse's axis-error budget (or half the
+//! axis error that moves the flutes' top by the tolerance, where that is less): near the C
+//! singularity C stays calm (tip exact, axis within the budget), leaving the other half for
+//! interpolation. Rapid moves are positioning moves above the safe height: on a
 //! machine that turns only the table they get the nearest joints (C continuity kept) and are
 //! not subdivided, the table turning under a tool that stays on its safe plane; on a machine
 //! with head axes, whose rapids swing the tool about the head's pivot, they follow their
@@ -71,6 +73,11 @@ pub struct LineariseOptions {
     pub control_point_mm: f64,
     /// Largest allowed tool-axis deviation (degrees). Default 0.1.
     pub angle_tolerance_deg: f64,
+    /// The flutes reach this far above the control point (mm); their top is held within
+    /// `tolerance_mm` too, and so is every point between (a point's deviation is affine in
+    /// its height). Default 0: the control point alone, with the angle tolerance.
+    #[serde(default)]
+    pub flutes_above_control_mm: f64,
     /// Largest subdivision depth per move (at most `2^max_depth` blocks per move). Default 16.
     pub max_depth: u32,
 }
@@ -81,6 +88,7 @@ impl Default for LineariseOptions {
             tolerance_mm: 0.01,
             control_point_mm: 0.0,
             angle_tolerance_deg: 0.1,
+            flutes_above_control_mm: 0.0,
             max_depth: 16,
         }
     }
@@ -100,6 +108,11 @@ impl LineariseOptions {
     /// Sets the axis tolerance (degrees).
     pub fn with_angle_tolerance_deg(mut self, v: f64) -> Self {
         self.angle_tolerance_deg = v;
+        self
+    }
+    /// Sets how far the flutes reach above the control point (mm).
+    pub fn with_flutes_above_control_mm(mut self, v: f64) -> Self {
+        self.flutes_above_control_mm = v;
         self
     }
     /// Sets the subdivision depth bound.
@@ -252,13 +265,32 @@ pub fn segment_deviation_about<K: MachineKinematics + ?Sized>(
     j1: &Joints,
     control: f64,
 ) -> Option<(f64, f64)> {
+    segment_deviation_over(kin, p0, j0, p1, j1, control, 0.0)
+}
+
+/// [`segment_deviation_about`] with the point deviation the larger of the control point's and
+/// that of the point `above` it up the axis (the flutes' top).
+fn segment_deviation_over<K: MachineKinematics + ?Sized>(
+    kin: &K,
+    p0: &ToolPose,
+    j0: &Joints,
+    p1: &ToolPose,
+    j1: &Joints,
+    control: f64,
+    above: f64,
+) -> Option<(f64, f64)> {
     let mut point_dev: f64 = 0.0;
     let mut ang_dev: f64 = 0.0;
     for &t in &CHECK_PARAMETERS {
         let planned = interpolate_pose_about(p0, p1, t, control)?;
         let actual = kin.forward(&j0.lerp(j1, t));
-        let point = |p: &ToolPose| p.tip + p.axis.into_inner() * control;
-        point_dev = point_dev.max((point(&actual) - point(&planned)).norm());
+        for height in [control, control + above] {
+            let point = |p: &ToolPose| p.tip + p.axis.into_inner() * height;
+            point_dev = point_dev.max((point(&actual) - point(&planned)).norm());
+            if above <= 0.0 {
+                break;
+            }
+        }
         ang_dev = ang_dev.max(angle_between(&actual.axis, &planned.axis).to_degrees());
     }
     Some((point_dev, ang_dev))
@@ -343,12 +375,24 @@ pub fn linearise_unwinding<K: MachineKinematics + ?Sized>(
             "control_point_mm must be finite and >= 0".into(),
         ));
     }
+    if !(opts.flutes_above_control_mm.is_finite() && opts.flutes_above_control_mm >= 0.0) {
+        return Err(LineariseError::InvalidOptions(
+            "flutes_above_control_mm must be finite and >= 0".into(),
+        ));
+    }
     if !(opts.angle_tolerance_deg.is_finite() && opts.angle_tolerance_deg > 0.0) {
         return Err(LineariseError::InvalidOptions(
             "angle_tolerance_deg must be finite and > 0".into(),
         ));
     }
-    let budget = 0.5 * opts.angle_tolerance_deg;
+    // The flutes' top swings by the axis error times their length: half the tolerance there
+    // is the axis's share too.
+    let flute_axis_deg = if opts.flutes_above_control_mm > 0.0 {
+        (opts.tolerance_mm / opts.flutes_above_control_mm).to_degrees()
+    } else {
+        f64::INFINITY
+    };
+    let budget = 0.5 * opts.angle_tolerance_deg.min(flute_axis_deg);
     for (i, mv) in toolpath.moves.iter().enumerate() {
         let finite = mv.feed.is_finite()
             && mv
@@ -665,9 +709,16 @@ fn march<K: MachineKinematics + ?Sized>(
         let j_next = kin
             .inverse_relaxed(&p_next, &cur_j, budget)
             .map_err(|source| LineariseError::Kinematics { move_index, source })?;
-        let (point_dev, ang_dev) =
-            segment_deviation_about(kin, &cur_p, &cur_j, &p_next, &j_next, opts.control_point_mm)
-                .ok_or(antipodal.clone())?;
+        let (point_dev, ang_dev) = segment_deviation_over(
+            kin,
+            &cur_p,
+            &cur_j,
+            &p_next,
+            &j_next,
+            opts.control_point_mm,
+            opts.flutes_above_control_mm,
+        )
+        .ok_or(antipodal.clone())?;
         if point_dev <= opts.tolerance_mm && ang_dev <= opts.angle_tolerance_deg {
             if t_next == 1.0 {
                 return Ok(j_next);
