@@ -694,6 +694,7 @@ fn swarf_blade(
         let segment = CutSegment {
             poses,
             pass_directions: directions,
+            leads: false,
         };
         // A run the tool cannot get into or out of would be trimmed away by the link, and
         // the loops would have been dropped along it: refused here, the loops finish it.
@@ -818,6 +819,7 @@ fn swarf_leads(
     Some(CutSegment {
         poses,
         pass_directions: directions,
+        leads: true,
     })
 }
 
@@ -827,6 +829,7 @@ fn without_leads(segment: &CutSegment) -> CutSegment {
     CutSegment {
         poses: segment.poses[1..n - 1].to_vec(),
         pass_directions: segment.pass_directions[1..n - 1].to_vec(),
+        leads: false,
     }
 }
 
@@ -906,6 +909,7 @@ mod tests {
         let run = CutSegment {
             poses: poses.clone(),
             pass_directions: vec![Vector3::x(); n],
+            leads: false,
         };
         assert!(!path::can_leave(&collider, &tool, &poses[0], &link));
         assert!(!path::can_leave(&collider, &tool, &poses[n - 1], &link));

@@ -98,6 +98,7 @@ pub fn turned_copy(
             let mut run = CutSegment {
                 poses: Vec::new(),
                 pass_directions: Vec::new(),
+                leads: false,
             };
             let flush = |run: &mut CutSegment, out: &mut Vec<CutSegment>| {
                 let taken = std::mem::replace(
@@ -105,6 +106,7 @@ pub fn turned_copy(
                     CutSegment {
                         poses: Vec::new(),
                         pass_directions: Vec::new(),
+                        leads: false,
                     },
                 );
                 if taken.poses.len() >= 2 {

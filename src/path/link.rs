@@ -159,6 +159,13 @@ pub fn link(
         report.segments += 1;
         let (entry, exit) = (poses[start], poses[end - 1]);
         let mv = |pose, kind, feed| Move { pose, kind, feed };
+        // A lead off the part kept whole: the arrival ends in the air (an air move at its
+        // feed), the move from it to the part is the approach, the last move the retract.
+        let (lead_in, lead_out) = (
+            segment.leads && start == 0,
+            segment.leads && end == poses.len(),
+        );
+        let arrived = path.moves.len();
         match arriving.take() {
             Some(Link::Across) => {
                 // Across at the cut feed, but an approach: the pass it enters starts here
@@ -192,8 +199,18 @@ pub fn link(
                 path.moves.extend(safe.entry(&entry));
             }
         }
-        for pose in &poses[start + 1..end] {
-            path.moves.push(mv(*pose, MoveKind::Cut, options.cut_feed));
+        if lead_in && let Some(last) = path.moves[arrived..].last_mut() {
+            last.kind = MoveKind::Retract;
+        }
+        for (i, pose) in poses[start + 1..end].iter().enumerate() {
+            let (kind, feed) = if lead_in && i == 0 {
+                (MoveKind::Approach, options.approach_feed)
+            } else if lead_out && start + 1 + i == end - 1 {
+                (MoveKind::Retract, options.cut_feed)
+            } else {
+                (MoveKind::Cut, options.cut_feed)
+            };
+            path.moves.push(mv(*pose, kind, feed));
         }
         match short[k] {
             Ok(Link::Across) => arriving = Some(Link::Across),
@@ -488,6 +505,69 @@ mod tests {
         }
     }
 
+    /// A run with leads: the tool comes down to the lead in the air (no approach there), feeds
+    /// in to the part as the approach, cuts, and feeds out to the other lead as the retract
+    /// at the cut feed; without leads the same poses are all cut.
+    #[test]
+    fn a_run_with_leads_approaches_from_one_and_retracts_to_the_other() {
+        let plate = crate::mesh::fixtures::cuboid(100.0, 100.0, 20.0);
+        let part = PartCollider::new(&plate).expect("plate");
+        let margins = Margins {
+            shank: 0.5,
+            holder: 2.0,
+        };
+        let tool = PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins);
+        let up = [0.0, 0.0, 1.0];
+        let poses = vec![
+            pose([28.0, 50.0, 22.0], up),
+            pose([30.0, 50.0, 20.0], up),
+            pose([40.0, 50.0, 20.0], up),
+            pose([50.0, 50.0, 20.0], up),
+            pose([52.0, 50.0, 22.0], up),
+        ];
+        let options = LinkOptions {
+            pivot: Point3::new(50.0, 50.0, 0.0),
+            safe_distance: 200.0,
+            clearance: 1.0,
+            cut_feed: 1000.0,
+            approach_feed: 300.0,
+            retract_feed: 2000.0,
+            rapid_feed: 10000.0,
+            rapid_margin: 0.5,
+            max_short_link: 20.0,
+            chord_tolerance: 0.01,
+        };
+        let kinds = |leads: bool| {
+            let segment = CutSegment {
+                pass_directions: vec![Vector3::x(); poses.len()],
+                poses: poses.clone(),
+                leads,
+            };
+            let (path, _) = link(&[segment], &part, &tool, 1, &options);
+            poses
+                .iter()
+                .map(|p| {
+                    let m = path
+                        .moves
+                        .iter()
+                        .find(|m| m.pose == *p)
+                        .expect("every pose");
+                    (m.kind, m.feed)
+                })
+                .collect::<Vec<_>>()
+        };
+        let (cut, approach, retract) = (
+            (MoveKind::Cut, 1000.0),
+            (MoveKind::Approach, 300.0),
+            (MoveKind::Retract, 1000.0),
+        );
+        assert_eq!(
+            kinds(true),
+            vec![(MoveKind::Retract, 300.0), approach, cut, cut, retract]
+        );
+        assert_eq!(kinds(false)[1..], [cut, cut, cut, cut]);
+    }
+
     /// Two passes on a plate's top, 4 mm apart, the second with its axis turned 45°: linked by
     /// a short lift (not the safe plane), every move of the link keeps the ball the rapid
     /// margin off the plate except the approach's last clearance, and a lift above the
@@ -505,6 +585,7 @@ mod tests {
         let segment = |poses: Vec<ToolPose>| CutSegment {
             pass_directions: vec![Vector3::x(); poses.len()],
             poses,
+            leads: false,
         };
         let first = segment(vec![
             pose([30.0, 50.0, 20.0], [0.0, 0.0, 1.0]),

@@ -78,6 +78,10 @@ pub struct CutSegment {
     /// At each pose, the unit direction the pass runs in there (the drive curve's tangent):
     /// every step of the ball centre has a positive component along the direction at its end.
     pub pass_directions: Vec<Vector3>,
+    /// The first and last poses are leads off the part (a swarf run's ways in and out): the
+    /// tool arrives at the first in the air, feeds in to the second (an approach) and out
+    /// from the last but one to the last (a retract at the cut feed).
+    pub leads: bool,
 }
 
 /// Why a drive point could not be machined.
@@ -495,6 +499,7 @@ fn push_forward_runs(
     let empty = || CutSegment {
         poses: Vec::new(),
         pass_directions: Vec::new(),
+        leads: false,
     };
     let emit = |run: CutSegment, out: &mut Finishing| {
         if run.poses.len() >= 2 {
