@@ -505,6 +505,22 @@ mod tests {
         }
     }
 
+    /// Linking over the plate of these tests (100 × 100 × 20 mm from the origin).
+    fn plate_options() -> LinkOptions {
+        LinkOptions {
+            pivot: Point3::new(50.0, 50.0, 0.0),
+            safe_distance: 200.0,
+            clearance: 1.0,
+            cut_feed: 1000.0,
+            approach_feed: 300.0,
+            retract_feed: 2000.0,
+            rapid_feed: 10000.0,
+            rapid_margin: 0.5,
+            max_short_link: 20.0,
+            chord_tolerance: 0.01,
+        }
+    }
+
     /// A run with leads: the tool comes down to the lead in the air (no approach there), feeds
     /// in to the part as the approach, cuts, and feeds out to the other lead as the retract
     /// at the cut feed; without leads the same poses are all cut.
@@ -525,18 +541,7 @@ mod tests {
             pose([50.0, 50.0, 20.0], up),
             pose([52.0, 50.0, 22.0], up),
         ];
-        let options = LinkOptions {
-            pivot: Point3::new(50.0, 50.0, 0.0),
-            safe_distance: 200.0,
-            clearance: 1.0,
-            cut_feed: 1000.0,
-            approach_feed: 300.0,
-            retract_feed: 2000.0,
-            rapid_feed: 10000.0,
-            rapid_margin: 0.5,
-            max_short_link: 20.0,
-            chord_tolerance: 0.01,
-        };
+        let options = plate_options();
         let kinds = |leads: bool| {
             let segment = CutSegment {
                 pass_directions: vec![Vector3::x(); poses.len()],
@@ -594,18 +599,7 @@ mod tests {
         // The ball (centre 3 above the top) touching the plate under a tilted axis.
         let tilted = |x: f64| pose([x - r * tilt, 50.0, 23.0 - r * tilt], [tilt, 0.0, tilt]);
         let second = segment(vec![tilted(44.0), tilted(54.0)]);
-        let options = LinkOptions {
-            pivot: Point3::new(50.0, 50.0, 0.0),
-            safe_distance: 200.0,
-            clearance: 1.0,
-            cut_feed: 1000.0,
-            approach_feed: 300.0,
-            retract_feed: 2000.0,
-            rapid_feed: 10000.0,
-            rapid_margin: 0.5,
-            max_short_link: 20.0,
-            chord_tolerance: 0.01,
-        };
+        let options = plate_options();
         let (path, report) = link(&[first, second], &part, &tool, 1, &options);
         assert_eq!(
             (

@@ -556,7 +556,8 @@ impl MachineKinematics for RotaryChain {
 
     /// Near the free axis (angle `φ` between it and the tool axis below `2s`, `s` the smaller of
     /// the singular tolerance and `max_axis_error_deg`), the free angle may stay anywhere within
-    /// [`relaxed_free_angle`]'s `δ(φ)` of the exact one, the point of that set nearest
+    /// `δ(φ)` of the exact one (free up to `s/2`, then narrowing linearly to 0 at `2s`, as on
+    /// the A/C table-table machine), the point of that set nearest
     /// `preferred` being taken, and the other angle is the one that brings the axis nearest the
     /// pose's. For perpendicular axes the error is `asin(sin φ · |sin Δ|) ≤ s`; it is measured,
     /// and the exact inverse taken when it is not within `s` (axes at other angles) or the

@@ -679,9 +679,9 @@ impl MachineKinematics for TableTableAC {
     /// Let `φ` be the angle between the tool axis and the C axis line (`min(tilt, 180° − tilt)`)
     /// and `s = min(singular_tolerance_deg, max_axis_error_deg)`. With C fixed at some value,
     /// the best A is `a = atan2(k_x sin c + k_y cos c, k_z)` and the axis error is
-    /// `asin(sin φ · |sin(c − c_exact)|)`; C may be anywhere within [`relaxed_free_angle`]'s
-    /// `δ(φ)` of `c_exact` (mod 180°), which keeps that error within `s`, and the point of that
-    /// set nearest `preferred.c` is chosen. `δ` narrows at a bounded rate as the axis leaves
+    /// `asin(sin φ · |sin(c − c_exact)|)`; C may be anywhere within `δ(φ)` of `c_exact`
+    /// (mod 180°: free up to `s/2`, then narrowing linearly to 0 at `2s`), which keeps that
+    /// error within `0.9 s`, and the point of that set nearest `preferred.c` is chosen. `δ` narrows at a bounded rate as the axis leaves
     /// the pole, so C turns at a bounded rate too and linearisation converges through and
     /// around the pole instead of chasing the exact C's half-turn. The tip stays exact. Falls
     /// back to the exact inverse when the relaxed joints would leave the limits.

@@ -17,8 +17,8 @@ mod scallop;
 mod segment_distance;
 
 pub use posted::{
-    ChainModel, MachineModel, ModelAxis, PostedClearance, PostedOptions, check_posted,
-    program_toolpath,
+    ChainModel, FluteClearance, MachineModel, ModelAxis, PostedClearance, PostedOptions,
+    check_posted, program_toolpath,
 };
 pub use program::{MotionBlock, ProgramError, read_conversational, read_program};
 pub use scallop::{AreaSplit, ScallopOptions, ScallopReport, measure_scallop, ray_capsule_entry};

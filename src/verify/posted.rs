@@ -49,7 +49,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::program::{MotionBlock, ProgramError, read_conversational, read_program};
-use super::segment_distance::SegmentDistance;
+use super::segment_distance::{SegmentDistance, point_segment_distance};
 use crate::geom::{Point3, Vector3};
 use crate::mesh::Mesh;
 
@@ -848,18 +848,6 @@ fn block_clearance(
     let clearance = (least - r).min(limit - r);
     let below = floor.is_none() || (lowered && floor.is_some_and(|f| clearance < f));
     (below.then_some(clearance), measured, (end - start).norm())
-}
-
-/// Distance from `p` to the segment `a b`.
-fn point_segment_distance(p: &Point3, a: &Point3, b: &Point3) -> f64 {
-    let d = b - a;
-    let length2 = d.norm_squared();
-    let s = if length2 > 0.0 {
-        ((p - a).dot(&d) / length2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a + d * s - p).norm()
 }
 
 /// The sheets the flutes' axis sweeps over the blocks, measured against the part.

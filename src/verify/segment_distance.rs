@@ -294,7 +294,8 @@ pub fn point_triangle_distance(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -
         .min(point_segment_distance(p, c, a))
 }
 
-fn point_segment_distance(p: &Point3, a: &Point3, b: &Point3) -> f64 {
+/// Distance from point `p` to segment `a b`.
+pub(super) fn point_segment_distance(p: &Point3, a: &Point3, b: &Point3) -> f64 {
     let d = b - a;
     let len2 = d.norm_squared();
     let s = if len2 > 0.0 {
