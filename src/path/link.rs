@@ -505,7 +505,19 @@ mod tests {
         }
     }
 
-    /// Linking over the plate of these tests (100 × 100 × 20 mm from the origin).
+    /// The plate of these tests (100 × 100 × 20 mm from the origin) and the test tool.
+    fn plate_and_tool() -> (PartCollider, PreparedTool) {
+        let plate = crate::mesh::fixtures::cuboid(100.0, 100.0, 20.0);
+        let part = PartCollider::new(&plate).expect("plate");
+        let margins = Margins {
+            shank: 0.5,
+            holder: 2.0,
+        };
+        let tool = PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins);
+        (part, tool)
+    }
+
+    /// Linking over the plate of these tests.
     fn plate_options() -> LinkOptions {
         LinkOptions {
             pivot: Point3::new(50.0, 50.0, 0.0),
@@ -526,13 +538,7 @@ mod tests {
     /// at the cut feed; without leads the same poses are all cut.
     #[test]
     fn a_run_with_leads_approaches_from_one_and_retracts_to_the_other() {
-        let plate = crate::mesh::fixtures::cuboid(100.0, 100.0, 20.0);
-        let part = PartCollider::new(&plate).expect("plate");
-        let margins = Margins {
-            shank: 0.5,
-            holder: 2.0,
-        };
-        let tool = PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins);
+        let (part, tool) = plate_and_tool();
         let up = [0.0, 0.0, 1.0];
         let poses = vec![
             pose([28.0, 50.0, 22.0], up),
@@ -579,13 +585,7 @@ mod tests {
     /// clearance comes down at the retract feed before the approach feed takes over.
     #[test]
     fn a_turned_axis_a_few_millimetres_on_is_reached_by_a_short_link() {
-        let plate = crate::mesh::fixtures::cuboid(100.0, 100.0, 20.0);
-        let part = PartCollider::new(&plate).expect("plate");
-        let margins = Margins {
-            shank: 0.5,
-            holder: 2.0,
-        };
-        let tool = PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins);
+        let (part, tool) = plate_and_tool();
         let (r, tilt) = (3.0, std::f64::consts::FRAC_1_SQRT_2);
         let segment = |poses: Vec<ToolPose>| CutSegment {
             pass_directions: vec![Vector3::x(); poses.len()],
