@@ -56,6 +56,13 @@ const MIN_RUN_RULINGS: usize = 3;
 /// Shortest flank above the ball's centre worth a swarf pass, mm.
 const MIN_FLANK: f64 = 1.0;
 
+/// Shortest step between the ball centres of two rulings kept in a run, mm.
+const MIN_STEP: f64 = 1e-4;
+
+/// Rulings in a row whose centres turn the travel back, after which the run is split rather
+/// than the rulings dropped (the centres' path turns round, as in an acute concave corner).
+const TURN_STREAK: usize = 8;
+
 /// How the swarf pass is asked to run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SwarfOptions {
@@ -104,6 +111,8 @@ pub struct SwarfPlan {
     /// Root points tried, and the ones refused with the reason.
     pub root_points: usize,
     pub refused: Vec<NotSwarf>,
+    /// Rulings dropped from runs because their ball centre stepped back along the run.
+    pub stepping_back: usize,
 }
 
 impl SwarfPlan {
@@ -253,10 +262,18 @@ pub fn swarf_runs(
         }
     }
     close(&mut current, &mut runs);
+    let mut forward = Vec::with_capacity(runs.len());
+    let mut stepping_back = 0;
+    for run in runs {
+        let (kept, dropped) = forward_runs(surface, run, options);
+        forward.extend(kept);
+        stepping_back += dropped;
+    }
     Ok(SwarfPlan {
-        runs,
+        runs: forward,
         root_points: n,
         refused,
+        stepping_back,
     })
 }
 
@@ -270,15 +287,11 @@ fn between(
     options: &SwarfOptions,
     depth: u32,
 ) -> Result<Vec<Ruling>, NotSwarf> {
-    let held = options.ball_radius - options.tolerance;
-    let turn = angle_between(&a.axis, &b.axis).to_degrees();
-    let centre = nalgebra::center(&a.centre, &b.centre);
-    let axis = (a.axis + b.axis).try_normalize(1e-12).unwrap_or(a.axis);
-    let clear = !surface.segment_within(&a.centre, &b.centre, held)
-        && !surface.segment_within(&centre, &(centre + axis * options.flutes_above_ball), held);
-    if turn <= options.max_axis_turn_deg && clear {
+    if move_holds(surface, a, b, options) {
         return Ok(Vec::new());
     }
+    let turn = angle_between(&a.axis, &b.axis).to_degrees();
+    let centre = nalgebra::center(&a.centre, &b.centre);
     let at = [centre.x, centre.y, centre.z];
     let Some(normal) = (a.contact.normal + b.contact.normal).try_normalize(1e-9) else {
         return Err(NotSwarf::Refused {
@@ -300,6 +313,110 @@ fn between(
     out.push(mid);
     out.extend(between(find, surface, &mid, b, options, depth + 1)?);
     Ok(out)
+}
+
+/// Whether the tool may move straight from ruling `a` to ruling `b`: the axis turns no more
+/// than allowed, and neither the ball's chord nor the flutes half-way come nearer the part
+/// than the tolerance allows.
+fn move_holds(surface: &SurfaceDistance, a: &Ruling, b: &Ruling, options: &SwarfOptions) -> bool {
+    let held = options.ball_radius - options.tolerance;
+    let centre = nalgebra::center(&a.centre, &b.centre);
+    let axis = (a.axis + b.axis).try_normalize(1e-12).unwrap_or(a.axis);
+    angle_between(&a.axis, &b.axis).to_degrees() <= options.max_axis_turn_deg
+        && !surface.segment_within(&a.centre, &b.centre, held)
+        && !surface.segment_within(&centre, &(centre + axis * options.flutes_above_ball), held)
+}
+
+/// `run` (rulings in order round the root) as runs whose ball centre never steps back.
+///
+/// Each root point's ball is pushed out of the faces near it, and a midpoint inserted between
+/// two rulings is placed the same way: on a facetted flank, or where the root bends concave,
+/// a ball centre can land behind the one before it, and the tool would zig back along the
+/// flank. As the loops do (`path::push_forward_runs`), a ruling is dropped when its centre's
+/// step from the last one kept is shorter than [`MIN_STEP`], goes against the root's
+/// direction, or turns the travel back; the move that then spans the gap is checked as every
+/// other ([`move_holds`]), and the run is split where it fails, or where [`TURN_STREAK`]
+/// rulings in a row turn back (the centres' path itself turns round). A closed run whose last
+/// move back to its start fails the same tests is left open. Runs shorter than
+/// [`MIN_RUN_RULINGS`] are left to the loops; returns the runs and how many rulings were
+/// dropped.
+fn forward_runs(
+    surface: &SurfaceDistance,
+    run: SwarfRun,
+    options: &SwarfOptions,
+) -> (Vec<SwarfRun>, usize) {
+    let steps_back = |kept: &[Ruling], next: &Ruling| {
+        let last = &kept[kept.len() - 1];
+        let step = next.centre - last.centre;
+        let turns_back =
+            kept.len() >= 2 && step.dot(&(last.centre - kept[kept.len() - 2].centre)) < 0.0;
+        step.norm() < MIN_STEP
+            || step.dot(&(next.contact.point - last.contact.point)) < 0.0
+            || turns_back
+    };
+    let rulings = run.rulings;
+    let mut runs = Vec::new();
+    let mut dropped = 0;
+    let emit = |kept: Vec<Ruling>, runs: &mut Vec<SwarfRun>| {
+        if kept.len() >= MIN_RUN_RULINGS {
+            runs.push(SwarfRun {
+                rulings: kept,
+                closed: false,
+            });
+        }
+    };
+    let mut kept: Vec<Ruling> = Vec::with_capacity(rulings.len());
+    let mut split = false;
+    // Whether rulings were dropped since the last one kept, and where the streak began.
+    let mut streak: Option<(usize, usize)> = None;
+    let mut i = 0;
+    while i < rulings.len() {
+        let next = rulings[i];
+        i += 1;
+        if kept.is_empty() {
+            kept.push(next);
+            continue;
+        }
+        if steps_back(&kept, &next) {
+            dropped += 1;
+            let (first, count) = streak.unwrap_or((i - 1, 0));
+            streak = Some((first, count + 1));
+            if count + 1 == TURN_STREAK {
+                // The path turns round here: end the run, start the next at the turn.
+                dropped -= TURN_STREAK;
+                split = true;
+                emit(std::mem::take(&mut kept), &mut runs);
+                (i, streak) = (first, None);
+            }
+            continue;
+        }
+        if streak.take().is_some() && !move_holds(surface, &kept[kept.len() - 1], &next, options) {
+            split = true;
+            emit(std::mem::take(&mut kept), &mut runs);
+        }
+        kept.push(next);
+    }
+    // A closed run's last ruling may be its first again (the loop's end point): not a step.
+    if run.closed && !split {
+        while kept.len() > 1 && (kept[0].centre - kept[kept.len() - 1].centre).norm() < MIN_STEP {
+            kept.pop();
+        }
+    }
+    // Round the loop only when nothing was split off and the move back to the start holds.
+    let closes = run.closed
+        && !split
+        && kept.len() >= MIN_RUN_RULINGS
+        && !steps_back(&kept, &kept[0])
+        && (streak.is_none() || move_holds(surface, &kept[kept.len() - 1], &kept[0], options));
+    if closes {
+        runs.push(SwarfRun {
+            rulings: kept,
+            closed: true,
+        });
+    } else {
+        emit(kept, &mut runs);
+    }
+    (runs, dropped)
 }
 
 /// The flutes' distance to the part off the ball's radius at the samples up the axis from
@@ -611,10 +728,96 @@ mod tests {
         .expect("a root loop")
     }
 
+    /// Every run's ball centres step on along the root and never turn the travel back.
+    fn assert_forward(plan: &SwarfPlan) {
+        for run in &plan.runs {
+            let mut centres: Vec<Point3> = run.rulings.iter().map(|g| g.centre).collect();
+            if run.closed {
+                centres.push(centres[0]);
+            }
+            for w in centres.windows(3) {
+                let (before, step) = (w[1] - w[0], w[2] - w[1]);
+                assert!(before.norm() >= MIN_STEP && step.norm() >= MIN_STEP);
+                assert!(
+                    step.dot(&before) >= 0.0,
+                    "{step:?} turns back after {before:?}"
+                );
+            }
+        }
+    }
+
+    /// A ruling standing on the −y flank of `plate_and_blade(0.0)`, the ball's centre at `x`
+    /// along it, the root point at `root_x`.
+    fn flank_ruling(x: f64, root_x: f64, axis: Vector3) -> Ruling {
+        let z = R + 0.5 * TOLERANCE;
+        Ruling {
+            contact: DrivePoint {
+                point: Point3::new(root_x, -1.0, z),
+                normal: -Vector3::y(),
+            },
+            centre: Point3::new(x, -1.0 - R, z),
+            axis,
+            deviation: 0.0,
+            flank_length: 6.0,
+        }
+    }
+
+    #[test]
+    fn a_ruling_whose_centre_steps_back_is_dropped_and_the_move_over_it_checked() {
+        let mesh = plate_and_blade(0.0);
+        let surface = SurfaceDistance::new(&mesh);
+        let up = Vector3::z();
+        // The fourth ball sits 0.05 mm behind the third although its root point is ahead.
+        let at = [
+            (0.0, 0.0),
+            (0.5, 0.5),
+            (1.0, 1.0),
+            (0.95, 1.25),
+            (1.5, 1.5),
+            (2.0, 2.0),
+        ];
+        let rulings: Vec<Ruling> = at
+            .iter()
+            .map(|&(x, root)| flank_ruling(x, root, up))
+            .collect();
+        let run = SwarfRun {
+            rulings: rulings.clone(),
+            closed: false,
+        };
+        let (runs, dropped) = forward_runs(&surface, run, &options());
+        assert_eq!(dropped, 1);
+        assert_eq!(runs.len(), 1);
+        let xs: Vec<f64> = runs[0].rulings.iter().map(|g| g.centre.x).collect();
+        assert_eq!(xs, [0.0, 0.5, 1.0, 1.5, 2.0]);
+
+        // Where the axis turns more than allowed across the gap, the run is split there.
+        let tilted = Vector3::new(0.0, -(10f64.to_radians().sin()), 10f64.to_radians().cos());
+        let mut turning = rulings;
+        turning.push(flank_ruling(2.5, 2.5, up));
+        for g in &mut turning[4..] {
+            g.axis = tilted;
+        }
+        let (runs, dropped) = forward_runs(
+            &surface,
+            SwarfRun {
+                rulings: turning,
+                closed: false,
+            },
+            &options(),
+        );
+        assert_eq!(dropped, 1);
+        let xs: Vec<Vec<f64>> = runs
+            .iter()
+            .map(|run| run.rulings.iter().map(|g| g.centre.x).collect())
+            .collect();
+        assert_eq!(xs, [vec![0.0, 0.5, 1.0], vec![1.5, 2.0, 2.5]]);
+    }
+
     #[test]
     fn an_upright_blade_is_swarfed_in_one_closed_run_along_its_height() {
         let mesh = plate_and_blade(0.0);
         let plan = run(&mesh, &options());
+        assert_forward(&plan);
         assert_eq!(plan.runs.len(), 1, "refused: {:?}", plan.refused);
         assert!(plan.runs[0].closed);
         assert!(plan.refused.is_empty(), "{:?}", plan.refused);
@@ -646,6 +849,7 @@ mod tests {
         let mesh = plate_and_blade(lean);
         let plan = run(&mesh, &options());
         assert!(!plan.runs.is_empty(), "refused: {:?}", plan.refused);
+        assert_forward(&plan);
         let leaning = Vector3::new(lean.sin(), 0.0, lean.cos());
         let mut on_ends = 0;
         for ruling in plan.rulings() {

@@ -73,10 +73,8 @@ pub struct ImpellerSection {
     pub blade_lean_deg: f64,
     /// Swarf a blade where its flanks are ruled within the strategy's tolerance and no taller
     /// than the flutes: passes round its root with the tool along the rulings, the flutes
-    /// cutting the flank; the loops finish the rest (`report.json` says where and why). Off
-    /// by default until a run's ball centre is kept from stepping back along itself (on the
-    /// sample's end-to-end job a run steps back 0.015 mm, which the planes and loops never
-    /// do); the posted program is checked along the flutes as along the ball.
+    /// cutting the flank; the loops finish the rest (`report.json` says where and why). On by
+    /// default; the posted program is checked along the flutes as along the ball.
     pub swarf: bool,
 }
 
@@ -107,7 +105,7 @@ impl Default for ImpellerSection {
             hub_axes: HubAxes::Passage,
             blade_axes: BladeAxes::Blade,
             blade_lean_deg: 20.0,
-            swarf: false,
+            swarf: true,
         }
     }
 }

@@ -131,6 +131,8 @@ pub struct SwarfSummary {
     /// Stretches of the root swarfed, and the rulings the tool stands along in them.
     pub runs: usize,
     pub rulings: usize,
+    /// Rulings dropped because their ball centre stepped back along the run.
+    pub rulings_stepping_back: usize,
     /// Points of the root tried, and the ones refused by reason (the loops finish there).
     pub root_points: usize,
     pub refused: std::collections::BTreeMap<String, usize>,
@@ -724,6 +726,7 @@ fn swarf_blade(
     let summary = SwarfSummary {
         runs: plan.runs.len(),
         rulings: plan.rulings().count(),
+        rulings_stepping_back: plan.stepping_back,
         root_points: plan.root_points,
         refused: by_reason,
         deviation_mm: plan.deviation(),
