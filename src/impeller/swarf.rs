@@ -345,16 +345,39 @@ fn forward_runs(
     run: SwarfRun,
     options: &SwarfOptions,
 ) -> (Vec<SwarfRun>, usize) {
-    let steps_back = |kept: &[Ruling], next: &Ruling| {
+    let rulings = run.rulings;
+    let n = rulings.len();
+    // The root's direction at each ruling: from the nearest root point behind it to the
+    // nearest ahead that are elsewhere (neighbouring rulings can share a root point: a crease
+    // of the facets is kept with each face's normal, and each gives its own ball).
+    let elsewhere = |i: usize, ahead: bool| {
+        let at = rulings[i].contact.point;
+        let mut j = i;
+        for _ in 1..n {
+            j = match (ahead, run.closed) {
+                (true, _) if j + 1 < n => j + 1,
+                (true, true) => 0,
+                (false, _) if j > 0 => j - 1,
+                (false, true) => n - 1,
+                _ => break,
+            };
+            let p = rulings[j].contact.point;
+            if (p - at).norm() > MIN_STEP {
+                return p;
+            }
+        }
+        at
+    };
+    let tangents: Vec<Vector3> = (0..n)
+        .map(|i| elsewhere(i, true) - elsewhere(i, false))
+        .collect();
+    let steps_back = |kept: &[Ruling], next: usize| {
         let last = &kept[kept.len() - 1];
-        let step = next.centre - last.centre;
+        let step = rulings[next].centre - last.centre;
         let turns_back =
             kept.len() >= 2 && step.dot(&(last.centre - kept[kept.len() - 2].centre)) < 0.0;
-        step.norm() < MIN_STEP
-            || step.dot(&(next.contact.point - last.contact.point)) < 0.0
-            || turns_back
+        step.norm() < MIN_STEP || step.dot(&tangents[next]) < 0.0 || turns_back
     };
-    let rulings = run.rulings;
     let mut runs = Vec::new();
     let mut dropped = 0;
     let emit = |kept: Vec<Ruling>, runs: &mut Vec<SwarfRun>| {
@@ -377,7 +400,7 @@ fn forward_runs(
             kept.push(next);
             continue;
         }
-        if steps_back(&kept, &next) {
+        if steps_back(&kept, i - 1) {
             dropped += 1;
             let (first, count) = streak.unwrap_or((i - 1, 0));
             streak = Some((first, count + 1));
@@ -406,7 +429,7 @@ fn forward_runs(
     let closes = run.closed
         && !split
         && kept.len() >= MIN_RUN_RULINGS
-        && !steps_back(&kept, &kept[0])
+        && !steps_back(&kept, 0)
         && (streak.is_none() || move_holds(surface, &kept[kept.len() - 1], &kept[0], options));
     if closes {
         runs.push(SwarfRun {
@@ -767,11 +790,14 @@ mod tests {
         let mesh = plate_and_blade(0.0);
         let surface = SurfaceDistance::new(&mesh);
         let up = Vector3::z();
-        // The fourth ball sits 0.05 mm behind the third although its root point is ahead.
+        // The fourth ball sits 0.03 mm behind the third on the same root point (a facets'
+        // crease, each face's normal giving its own ball), the fifth 0.05 mm behind although
+        // its root point is ahead.
         let at = [
             (0.0, 0.0),
             (0.5, 0.5),
             (1.0, 1.0),
+            (0.97, 1.0),
             (0.95, 1.25),
             (1.5, 1.5),
             (2.0, 2.0),
@@ -785,16 +811,34 @@ mod tests {
             closed: false,
         };
         let (runs, dropped) = forward_runs(&surface, run, &options());
-        assert_eq!(dropped, 1);
+        assert_eq!(dropped, 2);
         assert_eq!(runs.len(), 1);
         let xs: Vec<f64> = runs[0].rulings.iter().map(|g| g.centre.x).collect();
         assert_eq!(xs, [0.0, 0.5, 1.0, 1.5, 2.0]);
+
+        // At a run's start, where there is no step before to judge by, the root's direction
+        // (its points ahead and behind, not the shared one) says the second ball is behind.
+        let starting: Vec<Ruling> = [(0.0, 0.0), (-0.02, 0.0), (0.5, 0.5), (1.0, 1.0)]
+            .iter()
+            .map(|&(x, root)| flank_ruling(x, root, up))
+            .collect();
+        let (runs, dropped) = forward_runs(
+            &surface,
+            SwarfRun {
+                rulings: starting,
+                closed: false,
+            },
+            &options(),
+        );
+        assert_eq!(dropped, 1);
+        let xs: Vec<f64> = runs[0].rulings.iter().map(|g| g.centre.x).collect();
+        assert_eq!(xs, [0.0, 0.5, 1.0]);
 
         // Where the axis turns more than allowed across the gap, the run is split there.
         let tilted = Vector3::new(0.0, -(10f64.to_radians().sin()), 10f64.to_radians().cos());
         let mut turning = rulings;
         turning.push(flank_ruling(2.5, 2.5, up));
-        for g in &mut turning[4..] {
+        for g in &mut turning[5..] {
             g.axis = tilted;
         }
         let (runs, dropped) = forward_runs(
@@ -805,7 +849,7 @@ mod tests {
             },
             &options(),
         );
-        assert_eq!(dropped, 1);
+        assert_eq!(dropped, 2);
         let xs: Vec<Vec<f64>> = runs
             .iter()
             .map(|run| run.rulings.iter().map(|g| g.centre.x).collect())
