@@ -113,6 +113,8 @@ pub fn turned_copy(
                     out.push(taken);
                 }
             };
+            // The turned centre of the source pose the run's last pose was copied from.
+            let mut last_source: Option<Point3> = None;
             for (pose, direction) in segment.poses.iter().zip(&segment.pass_directions) {
                 stats.poses += 1;
                 let axis = rotation * pose.axis.into_inner();
@@ -183,8 +185,9 @@ pub fn turned_copy(
                     tip: ball - axis.into_inner() * r,
                     axis,
                 };
-                if let Some(last) = run.poses.last() {
-                    let last_centre = last.tip + last.axis.into_inner() * r;
+                if let (Some(last), Some(source)) = (run.poses.last(), last_source) {
+                    let centre_of = |p: &ToolPose| p.tip + p.axis.into_inner() * r;
+                    let last_centre = centre_of(last);
                     let chord_ok = !ctx.part.surface().segment_within(
                         &last_centre,
                         &ball,
@@ -192,13 +195,21 @@ pub fn turned_copy(
                     );
                     let turn_ok =
                         angle_between(&last.axis, &axis).to_degrees() <= options.max_axis_turn_deg;
-                    let forward = (ball - last_centre).dot(&feed) > 0.0;
+                    // The copy steps the way its source stepped (not by the pass direction,
+                    // which is zero where a pass rolls the ball round an edge), and never
+                    // turns its travel back.
+                    let step = ball - last_centre;
+                    let forward = step.dot(&(turned_centre - source)) > 0.0
+                        && run.poses.len().checked_sub(2).is_none_or(|before| {
+                            step.dot(&(last_centre - centre_of(&run.poses[before]))) >= 0.0
+                        });
                     if !(chord_ok && turn_ok && forward) {
                         stats.splits += 1;
                         flush(&mut run, &mut out);
                     }
                 }
                 run.poses.push(copied);
+                last_source = Some(turned_centre);
                 run.pass_directions.push(feed);
             }
             flush(&mut run, &mut out);

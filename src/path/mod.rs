@@ -299,15 +299,25 @@ struct Placed {
     axis: Direction,
 }
 
+/// The drive curve's direction at point `i`: from the nearest point behind it to the nearest
+/// ahead that are elsewhere. A section keeps a crease of the facets as two points in one place
+/// (each face's normal), and a short curve clipped round a sharp edge can have all its points
+/// in one place: zero only then (the ball rolls round the edge with the drive point still).
 fn feed_direction(points: &[DrivePoint], i: usize) -> Vector3 {
-    let prev = points[i.saturating_sub(1)].point;
-    let next = points[(i + 1).min(points.len() - 1)].point;
-    let d = next - prev;
-    if d.norm() > 1e-12 {
-        d.normalize()
-    } else {
-        Vector3::zeros()
-    }
+    let at = points[i].point;
+    let elsewhere = |p: &&DrivePoint| (p.point - at).norm() > 1e-9;
+    let prev = points[..i]
+        .iter()
+        .rev()
+        .find(elsewhere)
+        .map_or(at, |p| p.point);
+    let next = points[i + 1..]
+        .iter()
+        .find(elsewhere)
+        .map_or(at, |p| p.point);
+    (next - prev)
+        .try_normalize(1e-12)
+        .unwrap_or_else(Vector3::zeros)
 }
 
 fn drive_curve(
@@ -673,6 +683,27 @@ pub fn unreachable_by_reason(
 mod tests {
     use super::*;
 
+    /// A crease kept as two points in one place (each face's normal) still has the curve's
+    /// direction; only a curve all in one place (a ball rolled round an edge) has none.
+    #[test]
+    fn a_drive_curve_has_a_direction_through_a_crease() {
+        let point = |x: f64, nx: f64| DrivePoint {
+            point: Point3::new(x, 0.0, 0.0),
+            normal: Vector3::new(nx, 0.0, 1.0).normalize(),
+        };
+        let creased = [
+            point(0.0, 0.0),
+            point(1.0, -0.3),
+            point(1.0, 0.3),
+            point(2.0, 0.0),
+        ];
+        for i in 0..creased.len() {
+            assert_eq!(feed_direction(&creased, i), Vector3::x(), "at {i}");
+        }
+        let still = [point(1.0, -0.3), point(1.0, 0.0), point(1.0, 0.3)];
+        assert_eq!(feed_direction(&still, 1), Vector3::zeros());
+    }
+
     #[test]
     fn stepover_matches_the_flat_surface_formula() {
         // r = 3, h = 0.01: 2·√(0.01·5.99) = 0.48949...
@@ -701,6 +732,48 @@ mod tests {
             chooser: AxisChooser::new(crate::orient::AxisOptions::default()),
             part,
         }
+    }
+
+    /// A copy steps the way its source stepped: a pass with no pass direction (a ball rolled
+    /// round an edge, its drive point still) is copied whole, where the copy once split it at
+    /// every pose and kept none.
+    #[test]
+    fn a_copy_without_pass_directions_keeps_its_passes_whole() {
+        let Block {
+            part,
+            collider,
+            rays,
+            tool,
+            chooser,
+        } = block();
+        let anywhere = |_: &Vector3| true;
+        let ctx = FinishingContext {
+            part: &collider,
+            rays: &rays,
+            tool: &tool,
+            chooser: &chooser,
+            reachable: &anywhere,
+            allowance: 0.0,
+            lift: 0.0,
+            material_filter: None,
+            axis_field: None,
+            region: None,
+        };
+        let options = FinishingOptions {
+            scallop_height: 0.5,
+            tolerance: 0.02,
+            drive_normal: Vector3::y(),
+            ..FinishingOptions::default()
+        };
+        let mut source = finishing_passes(&part, &ctx, &options, &|| {});
+        for segment in &mut source.segments {
+            segment.pass_directions.fill(Vector3::zeros());
+        }
+        let rotation = nalgebra::Rotation3::identity();
+        let (copy, stats) = turned_copy(&source, &rotation, &Point3::origin(), &ctx, &options);
+        assert_eq!(stats.splits, 0, "{stats:?}");
+        let lengths = |f: &Finishing| f.segments.iter().map(|s| s.poses.len()).collect::<Vec<_>>();
+        assert_eq!(lengths(&copy), lengths(&source));
     }
 
     /// Distance from `p` to the box [0,40]×[0,30]×[0,10] (closed form, outside it).
