@@ -886,7 +886,12 @@ pub fn plan_with_surfaces(
         })
         .collect();
     let cl_apt = post::write_apt(&prepared.name, &apt_rows);
-    let time = post::estimate_time(&program, job.machine.max_rotary_speed);
+    let time = post::estimate_time_posted(
+        &program,
+        setup.gcode_options.feed,
+        setup.gcode_options.control_point_mm,
+        setup.gcode_options.max_rotary_speed,
+    );
     timings.post += ms(t);
 
     let t = Instant::now();

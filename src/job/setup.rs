@@ -329,8 +329,9 @@ pub fn part_origin_in_table(job: &Job, part: &Mesh) -> Vector3 {
         .map(positive_zero)
 }
 
-/// The program's dialect, output and feed modes: the machine definition's, else LinuxCNC
-/// joint output with feed per minute.
+/// The program's dialect, output and feed modes: the machine definition's, else the built-in
+/// machine's LinuxCNC with `[machine] output` and `feed` (joint output, feed per minute when
+/// left out) and its rotary speed.
 pub fn gcode_options(job: &Job) -> Result<GcodeOptions> {
     Ok(match job.machine_definition()? {
         Some(d) => GcodeOptions {
@@ -340,7 +341,15 @@ pub fn gcode_options(job: &Job) -> Result<GcodeOptions> {
             max_rotary_speed: d.max_rotary_speed,
             ..GcodeOptions::default()
         },
-        None => GcodeOptions::default(),
+        None => {
+            let default = GcodeOptions::default();
+            GcodeOptions {
+                output: job.machine.output.unwrap_or(default.output),
+                feed: job.machine.feed.unwrap_or(default.feed),
+                max_rotary_speed: job.machine.max_rotary_speed,
+                ..default
+            }
+        }
     })
 }
 
@@ -431,4 +440,30 @@ pub fn machine(job: &Job, part_origin_in_table: Vector3, gauge_mm: f64) -> Resul
     };
     kin.validate()?;
     Ok(kin)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::post::{FeedMode, OutputMode};
+
+    /// Without a machine definition the built-in machine's program takes `[machine] feed`
+    /// and `output` (`--feed`, `--output`): they were once read and silently not used.
+    #[test]
+    fn the_built_in_machine_takes_the_jobs_feed_and_output_modes() {
+        let mut job = Job::default();
+        let plain = gcode_options(&job).expect("options");
+        assert_eq!(
+            (plain.feed, plain.output),
+            (FeedMode::PerMinute, OutputMode::Joint)
+        );
+        job.machine.feed = Some(FeedMode::InverseTime);
+        job.machine.output = Some(OutputMode::Tcp);
+        job.machine.max_rotary_speed = 5400.0;
+        let set = gcode_options(&job).expect("options");
+        assert_eq!(
+            (set.feed, set.output, set.max_rotary_speed),
+            (FeedMode::InverseTime, OutputMode::Tcp, 5400.0)
+        );
+    }
 }

@@ -14,8 +14,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::ArcXY;
+use super::dialect::FeedMode;
 use super::kinematics::Joints;
-use crate::geom::{Move, MoveKind};
+use crate::geom::{Move, MoveKind, ToolPose};
 
 /// Seconds per move kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -134,8 +135,9 @@ pub fn estimate_blocks<'a>(
     est
 }
 
-/// Estimates the machining time of a linearised program (no dwell).
-/// `max_rotary_deg_per_min` must be positive; a non-positive value ignores rotary limits.
+/// Estimates the machining time of a linearised program posted with feed per minute (no
+/// dwell). `max_rotary_deg_per_min` must be positive; a non-positive value ignores rotary
+/// limits.
 pub fn estimate_time(program: &[(Move, Joints)], max_rotary_deg_per_min: f64) -> TimeEstimate {
     estimate_blocks(
         program.iter().map(|(m, j)| (m, j, None)),
@@ -144,4 +146,62 @@ pub fn estimate_time(program: &[(Move, Joints)], max_rotary_deg_per_min: f64) ->
             dwell_per_block_s: 0.0,
         },
     )
+}
+
+/// Minutes an inverse-time (`G93`) feed block from `from` (pose and joints) to `m` (at
+/// joints `to`) lasts, as the post prints it (`F` = 1 / these minutes) and the control runs
+/// it: the longer of the part-frame motion of the tip and of the control point
+/// `control_point_mm` up the axis at the block's feed, and the largest rotary move at
+/// `max_rotary_deg_per_min`. Not the machine's linear travel: on a table-table machine a
+/// block that turns the table moves X, Y, Z far more than the tool moves over the part.
+pub fn inverse_time_minutes(
+    from: (&ToolPose, &Joints),
+    m: &Move,
+    to: &Joints,
+    control_point_mm: f64,
+    max_rotary_deg_per_min: f64,
+) -> f64 {
+    let (pose, joints) = from;
+    let centre = |p: &ToolPose| p.tip + p.axis.into_inner() * control_point_mm;
+    let distance = (m.pose.tip - pose.tip)
+        .norm()
+        .max((centre(&m.pose) - centre(pose)).norm());
+    let turn = (to.a - joints.a).abs().max((to.c - joints.c).abs());
+    (distance / m.feed.max(1e-9)).max(turn / max_rotary_deg_per_min)
+}
+
+/// Estimates the machining time of a linearised program as posted in `feed` mode (no dwell):
+/// per minute as [`estimate_time`]; in inverse time every feed block lasts what its `F`
+/// says ([`inverse_time_minutes`]) and rapids as per minute. `max_rotary_deg_per_min` must be
+/// positive.
+pub fn estimate_time_posted(
+    program: &[(Move, Joints)],
+    feed: FeedMode,
+    control_point_mm: f64,
+    max_rotary_deg_per_min: f64,
+) -> TimeEstimate {
+    if feed == FeedMode::PerMinute {
+        return estimate_time(program, max_rotary_deg_per_min);
+    }
+    let mut est = TimeEstimate::default();
+    for pair in program.windows(2) {
+        let ((from, from_joints), (m, to)) = (&pair[0], &pair[1]);
+        if !(m.feed.is_finite() && m.feed > 0.0) {
+            est.invalid_feed_blocks += 1;
+            continue;
+        }
+        let seconds = if m.kind == MoveKind::Rapid {
+            block_seconds(from_joints, m, to, None, max_rotary_deg_per_min).unwrap_or(0.0)
+        } else {
+            60.0 * inverse_time_minutes(
+                (&from.pose, from_joints),
+                m,
+                to,
+                control_point_mm,
+                max_rotary_deg_per_min,
+            )
+        };
+        est.add(m.kind, seconds);
+    }
+    est
 }

@@ -227,18 +227,16 @@ impl GcodeWriter {
 
     /// Inverse-time F of a block ending at `m` from the previous pose, 1/min.
     fn inverse_time(&self, m: &Move, j: &Joints) -> f64 {
-        let r = self.opts.control_point_mm;
-        let (distance, turn) = match (self.last_pose, self.last_joints) {
-            (Some(p), Some(q)) => {
-                let centre = |pose: &crate::geom::ToolPose| pose.tip + pose.axis.into_inner() * r;
-                let d = (m.pose.tip - p.tip)
-                    .norm()
-                    .max((centre(&m.pose) - centre(&p)).norm());
-                (d, (j.a - q.a).abs().max((j.c - q.c).abs()))
-            }
-            _ => (0.0, 0.0),
+        let minutes = match (&self.last_pose, &self.last_joints) {
+            (Some(p), Some(q)) => super::estimate::inverse_time_minutes(
+                (p, q),
+                m,
+                j,
+                self.opts.control_point_mm,
+                self.opts.max_rotary_speed,
+            ),
+            _ => 0.0,
         };
-        let minutes = (distance / m.feed.max(1e-9)).max(turn / self.opts.max_rotary_speed);
         // A block too short to time at the printed resolution is given the fastest F printable
         // rather than an infinite one.
         (1.0 / minutes.max(1e-9)).min(1e6)

@@ -47,7 +47,10 @@ pub use chain::{AxisSide, RotaryChain, RotaryJoint};
 pub use cl::{CL_CSV_HEADER, ClError, read_cl_csv, write_cl_csv};
 pub use contour::{BlockRole, ContourPostError, ContourProgram, PlanarParams, ProgramStats};
 pub use dialect::{Dialect, FeedMode, OutputMode};
-pub use estimate::{TimeEstimate, TimeModel, estimate_blocks, estimate_time};
+pub use estimate::{
+    TimeEstimate, TimeModel, estimate_blocks, estimate_time, estimate_time_posted,
+    inverse_time_minutes,
+};
 pub use gcode::{GcodeOptions, GcodeWriter};
 pub use heidenhain::HeidenhainWriter;
 pub use kinematics::{

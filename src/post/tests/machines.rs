@@ -9,7 +9,7 @@ use crate::post::machine_file::{MachineDefinition, SHIPPED};
 use crate::post::{
     Dialect, FeedMode, GcodeOptions, GcodeWriter, HeidenhainWriter, LineariseError,
     LineariseOptions, Machine, MachineKinematics, OutputMode, ProgramHeader, ProgramSink,
-    ToolCentrePoint, linearise_opt,
+    ToolCentrePoint, estimate_time_posted, linearise_opt,
 };
 use crate::verify::{read_conversational, read_program};
 
@@ -276,6 +276,47 @@ fn inverse_time_feeds_give_the_planned_feed_at_the_part() {
         }
         assert_eq!(checked, feeds.len(), "{name}: every G1 has its F");
     }
+}
+
+/// The time estimate of an inverse-time program is what its printed `F` words say: the sum of
+/// 1/F over the feed blocks (the rapids timed as per minute), read back from the text. On a
+/// table-table machine whose table turns under the pass it is shorter than the per-minute
+/// estimate of the same blocks, where F drives the machine's X, Y, Z.
+#[test]
+fn the_inverse_time_estimate_is_what_the_printed_feeds_say() {
+    let (text, blocks) = post("trunnion-ac", OutputMode::Joint, FeedMode::InverseTime);
+    let (d, _) = machine("trunnion-ac");
+    let read = read_program(&text, ['X', 'Y', 'Z', 'A', 'C']).unwrap();
+    let printed_minutes: f64 = read
+        .iter()
+        .filter(|b| !b.rapid)
+        .map(|b| 1.0 / b.feed.unwrap())
+        .sum();
+    let rapids: Vec<_> = blocks
+        .iter()
+        .map(|(m, j)| {
+            let mut m = *m;
+            if m.kind != MoveKind::Rapid {
+                m.feed = f64::INFINITY; // only the rapids counted
+            }
+            (m, *j)
+        })
+        .collect();
+    let rapid_s = crate::post::estimate_time(&rapids, d.max_rotary_speed).rapid_s;
+    let posted = estimate_time_posted(&blocks, FeedMode::InverseTime, 3.0, d.max_rotary_speed);
+    let feed_s = posted.approach_s + posted.cut_s + posted.retract_s;
+    // F is printed to 4 decimals; the first G1 has no block before it in either.
+    assert!(
+        (feed_s - 60.0 * printed_minutes).abs() <= 1e-3 * feed_s,
+        "{feed_s} s estimated, {} s printed",
+        60.0 * printed_minutes
+    );
+    assert!((posted.rapid_s - rapid_s).abs() < 1e-9);
+    let per_minute = crate::post::estimate_time(&blocks, d.max_rotary_speed);
+    assert!(
+        posted.total_s() < per_minute.total_s(),
+        "{posted:?} vs {per_minute:?}"
+    );
 }
 
 /// Two rapids down, then a pass whose axis, tilted 30°, turns its azimuth by 300°.
