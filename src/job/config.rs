@@ -924,6 +924,15 @@ impl Job {
                     ),
                 ));
             }
+            // The back-simulation reads tool-centre-point programs through a definition's
+            // chain; the built-in machine's programs are in joints.
+            None if self.machine.output == Some(crate::post::OutputMode::Tcp) => {
+                return Err(invalid(
+                    "machine.output",
+                    "= \"tcp\" needs a machine definition (machine.definition, e.g.                      \"trunnion-ac\" for this table-table A/C machine); the built-in machine                      posts joint output"
+                        .into(),
+                ));
+            }
             _ => {}
         }
         let [lo, hi] = self.machine.a_limits;
@@ -1541,6 +1550,13 @@ mod tests {
             .to_string();
         assert!(
             e.contains("five-axis") && e.contains("table-table-ac") && e.contains("head-head"),
+            "{e}"
+        );
+        let e = Job::from_toml("[machine]\noutput = \"tcp\"\n", "j.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("machine.output") && e.contains("definition"),
             "{e}"
         );
         let e = Job::from_toml("[machine]\nkinematics = \"head-head\"\n", "j.toml")

@@ -330,8 +330,8 @@ pub fn part_origin_in_table(job: &Job, part: &Mesh) -> Vector3 {
 }
 
 /// The program's dialect, output and feed modes: the machine definition's, else the built-in
-/// machine's LinuxCNC with `[machine] output` and `feed` (joint output, feed per minute when
-/// left out) and its rotary speed.
+/// machine's LinuxCNC with `[machine] feed` (per minute when left out), joint output (the
+/// validation refuses TCP output without a definition) and its rotary speed.
 pub fn gcode_options(job: &Job) -> Result<GcodeOptions> {
     Ok(match job.machine_definition()? {
         Some(d) => GcodeOptions {
@@ -448,7 +448,8 @@ mod tests {
     use crate::post::{FeedMode, OutputMode};
 
     /// Without a machine definition the built-in machine's program takes `[machine] feed`
-    /// and `output` (`--feed`, `--output`): they were once read and silently not used.
+    /// (`--feed`): it was once read and silently not used. (`output = "tcp"` needs a
+    /// definition: the job file's validation refuses it.)
     #[test]
     fn the_built_in_machine_takes_the_jobs_feed_and_output_modes() {
         let mut job = Job::default();
@@ -458,12 +459,11 @@ mod tests {
             (FeedMode::PerMinute, OutputMode::Joint)
         );
         job.machine.feed = Some(FeedMode::InverseTime);
-        job.machine.output = Some(OutputMode::Tcp);
         job.machine.max_rotary_speed = 5400.0;
         let set = gcode_options(&job).expect("options");
         assert_eq!(
             (set.feed, set.output, set.max_rotary_speed),
-            (FeedMode::InverseTime, OutputMode::Tcp, 5400.0)
+            (FeedMode::InverseTime, OutputMode::Joint, 5400.0)
         );
     }
 }
