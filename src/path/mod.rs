@@ -557,7 +557,13 @@ fn push_forward_runs(
             );
             let turn_ok =
                 angle_between(&last.axis, &pose.axis).to_degrees() <= options.max_axis_turn_deg;
-            if !(chord_ok && turn_ok) {
+            let flutes_ok = flutes_clear_along(
+                ctx,
+                options,
+                (&centre(last), &last.axis),
+                (&centre(&pose), &pose.axis),
+            );
+            if !(chord_ok && turn_ok && flutes_ok) {
                 out.splits_at_refinement += 1;
                 emit(std::mem::replace(&mut run, empty()), out);
             }
@@ -632,7 +638,10 @@ fn refine(
             .surface()
             .segment_within(&a.centre, &b.centre, held - options.tolerance);
     let turn_ok = angle_between(&a.axis, &b.axis).to_degrees() <= options.max_axis_turn_deg;
-    if chord_ok && turn_ok {
+    if chord_ok
+        && turn_ok
+        && flutes_clear_along(ctx, options, (&a.centre, &a.axis), (&b.centre, &b.axis))
+    {
         return Some(Vec::new());
     }
     if depth >= 8
@@ -659,6 +668,38 @@ fn refine(
     left.push(m);
     left.extend(right);
     Some(left)
+}
+
+/// Longest stretch of a move between two places its flutes are checked, mm.
+const FLUTE_CHECK_STEP: f64 = 0.5;
+
+/// Whether the flutes stay clear of the part along the move from `a` to `b` (ball centre and
+/// axis at each end; both ends are checked with the tool's bodies): where the axis turns, or
+/// the move climbs a wall, the flutes between the two poses can come nearer the part than at
+/// either. Each flute's axis, from the ball's centre up its length, must keep the ball's radius
+/// less the tolerance at the move's inner points no more than [`FLUTE_CHECK_STEP`] apart
+/// along the centres' chord (and at least half-way). On the blower's planes a 3.4 mm move up a
+/// blade wall, spanning dropped poses, had its flutes 0.014 mm into the part 3.4 mm above the
+/// ball's centre, both ends clear: the back-simulation refused the program.
+fn flutes_clear_along(
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    a: (&Point3, &Direction),
+    b: (&Point3, &Direction),
+) -> bool {
+    let Some((length, _)) = ctx.tool.flutes_above_ball() else {
+        return true;
+    };
+    let held = ctx.tool.ball_radius + ctx.allowance - options.tolerance;
+    let pieces = ((b.0 - a.0).norm() / FLUTE_CHECK_STEP).ceil().max(2.0) as usize;
+    (1..pieces).all(|k| {
+        let t = k as f64 / pieces as f64;
+        let centre = a.0 + (b.0 - a.0) * t;
+        let axis = slerp(&a.1.into_inner(), &b.1.into_inner(), t);
+        !ctx.part
+            .surface()
+            .segment_within(&centre, &(centre + axis * length), held)
+    })
 }
 
 /// Unreachable drive points counted by reason (the reasons' JSON names).
@@ -723,6 +764,30 @@ mod tests {
         chooser: AxisChooser,
     }
 
+    /// Reaches every axis.
+    fn anywhere(_: &Vector3) -> bool {
+        true
+    }
+
+    impl Block {
+        /// The block's finishing context, the ball held `allowance` off the part (and lifted
+        /// as much), every axis reachable, no material filter, axis field or region.
+        fn context(&self, allowance: f64) -> FinishingContext<'_> {
+            FinishingContext {
+                part: &self.collider,
+                rays: &self.rays,
+                tool: &self.tool,
+                chooser: &self.chooser,
+                reachable: &anywhere,
+                allowance,
+                lift: allowance,
+                material_filter: None,
+                axis_field: None,
+                region: None,
+            }
+        }
+    }
+
     fn block() -> Block {
         let part = crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0);
         Block {
@@ -734,19 +799,23 @@ mod tests {
         }
     }
 
-    /// A copy steps the way its source stepped: a pass with no pass direction (a ball rolled
-    /// round an edge, its drive point still) is copied whole, where the copy once split it at
-    /// every pose and kept none.
+    /// The flutes between two poses whose ends are clear: the axis turns a right angle about
+    /// a still ball centre, and half-way its flutes pass through a small cube the flutes at
+    /// either end miss; turned the other way round the move is clear.
     #[test]
-    fn a_copy_without_pass_directions_keeps_its_passes_whole() {
-        let Block {
-            part,
-            collider,
-            rays,
-            tool,
-            chooser,
-        } = block();
-        let anywhere = |_: &Vector3| true;
+    fn flutes_turning_through_a_post_between_two_clear_poses_are_caught() {
+        let tool = crate::collide::tool_bodies::tests::prepared();
+        let (length, _) = tool.flutes_above_ball().expect("a ball-end mill");
+        let r = tool.ball_radius;
+        // A 1 mm cube on the diagonal between +x and +y, a millimetre below the flutes' top.
+        let d = (length - 1.0) / 2f64.sqrt();
+        let post = crate::mesh::fixtures::box_between(
+            Point3::new(d - 0.5, d - 0.5, -0.5),
+            Point3::new(d + 0.5, d + 0.5, 0.5),
+        );
+        let collider = PartCollider::new(&post).unwrap();
+        let rays = RayScene::new(&post);
+        let chooser = AxisChooser::new(crate::orient::AxisOptions::default());
         let ctx = FinishingContext {
             part: &collider,
             rays: &rays,
@@ -759,13 +828,49 @@ mod tests {
             axis_field: None,
             region: None,
         };
+        let options = FinishingOptions::default();
+        let centre = Point3::origin();
+        let flutes_clear = |axis: &Vector3| {
+            !collider.surface().segment_within(
+                &centre,
+                &(centre + axis * length),
+                r - options.tolerance,
+            )
+        };
+        let (x, y) = (
+            Direction::new_normalize(Vector3::x()),
+            Direction::new_normalize(Vector3::y()),
+        );
+        assert!(flutes_clear(&x) && flutes_clear(&y), "both ends clear");
+        assert!(!flutes_clear_along(
+            &ctx,
+            &options,
+            (&centre, &x),
+            (&centre, &y)
+        ));
+        let (minus_x, minus_y) = (-x, -y);
+        assert!(flutes_clear_along(
+            &ctx,
+            &options,
+            (&centre, &minus_x),
+            (&centre, &minus_y)
+        ));
+    }
+
+    /// A copy steps the way its source stepped: a pass with no pass direction (a ball rolled
+    /// round an edge, its drive point still) is copied whole, where the copy once split it at
+    /// every pose and kept none.
+    #[test]
+    fn a_copy_without_pass_directions_keeps_its_passes_whole() {
+        let block = block();
+        let ctx = block.context(0.0);
         let options = FinishingOptions {
             scallop_height: 0.5,
             tolerance: 0.02,
             drive_normal: Vector3::y(),
             ..FinishingOptions::default()
         };
-        let mut source = finishing_passes(&part, &ctx, &options, &|| {});
+        let mut source = finishing_passes(&block.part, &ctx, &options, &|| {});
         for segment in &mut source.segments {
             segment.pass_directions.fill(Vector3::zeros());
         }
@@ -788,15 +893,9 @@ mod tests {
     /// plus the lead: no pose's ball centre lies beyond x = 12 + r + lead.
     #[test]
     fn an_offset_layer_holds_its_allowance_and_cuts_only_near_material() {
-        let Block {
-            part,
-            collider,
-            rays,
-            tool,
-            chooser,
-        } = block();
+        let block = block();
+        let (part, tool) = (&block.part, &block.tool);
         let r = tool.ball_radius;
-        let anywhere = |_: &Vector3| true;
         let (allowance, lead, least_cut) = (1.5, 2.0, 0.25);
         // The material: x < 12, up to 5 mm over the top face. A ball meets it when its
         // distance to that slab is below the radius.
@@ -815,16 +914,8 @@ mod tests {
             lead,
         };
         let ctx = FinishingContext {
-            part: &collider,
-            rays: &rays,
-            tool: &tool,
-            chooser: &chooser,
-            reachable: &anywhere,
-            allowance,
-            lift: allowance,
             material_filter: Some(&layer),
-            axis_field: None,
-            region: None,
+            ..block.context(allowance)
         };
         let options = FinishingOptions {
             scallop_height: 0.2,
@@ -832,7 +923,7 @@ mod tests {
             drive_normal: Vector3::y(),
             ..FinishingOptions::default()
         };
-        let passes = finishing_passes(&part, &ctx, &options, &|| {});
+        let passes = finishing_passes(part, &ctx, &options, &|| {});
         assert!(passes.points_in_air > 0, "the block's right end is air");
         let poses: Vec<&ToolPose> = passes.segments.iter().flat_map(|s| &s.poses).collect();
         assert!(poses.len() > 50, "{} poses", poses.len());
@@ -872,7 +963,7 @@ mod tests {
         );
         // Without the layer's test the whole block is driven.
         let all = finishing_passes(
-            &part,
+            part,
             &FinishingContext {
                 material_filter: None,
                 ..ctx
@@ -892,33 +983,16 @@ mod tests {
     /// relies on to bound its depth of cut): the passes' heights never rise.
     #[test]
     fn waterlines_against_minus_z_run_from_the_top_down() {
-        let Block {
-            part,
-            collider,
-            rays,
-            tool,
-            chooser,
-        } = block();
-        let anywhere = |_: &Vector3| true;
-        let ctx = FinishingContext {
-            part: &collider,
-            rays: &rays,
-            tool: &tool,
-            chooser: &chooser,
-            reachable: &anywhere,
-            allowance: 1.0,
-            lift: 1.0,
-            material_filter: None,
-            axis_field: None,
-            region: None,
-        };
+        let block = block();
+        let (part, tool) = (&block.part, &block.tool);
+        let ctx = block.context(1.0);
         let options = FinishingOptions {
             scallop_height: 0.3,
             tolerance: 0.02,
             drive_normal: -Vector3::z(),
             ..FinishingOptions::default()
         };
-        let passes = finishing_passes(&part, &ctx, &options, &|| {});
+        let passes = finishing_passes(part, &ctx, &options, &|| {});
         let heights: Vec<f64> = passes
             .segments
             .iter()
