@@ -1059,7 +1059,7 @@ pub fn plan_with_surfaces(
         surface,
         strategy: StrategySummary {
             kind: if impeller_finishing.is_some() {
-                "impeller: hub flow lines, parallel planes for the rest"
+                "impeller: hub flow lines, blade and splitter loops, swarf where ruled; parallel planes for the rest"
             } else {
                 "parallel-plane ball-end finishing"
             },
