@@ -384,8 +384,9 @@ pub fn safe_midpoint(options: &LinkOptions, from: &Move, to: &Move) -> Option<Mo
 /// How a segment is reached from the one before.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Link {
-    /// Straight across, cutting: the next segment starts within the ball's radius and the
-    /// move keeps the ball within the chord tolerance.
+    /// Straight across, cutting: the next segment starts within the ball's radius, the move
+    /// keeps the ball within the chord tolerance and the other bodies clear while the axis
+    /// turns (as far as a short link may).
     Across,
     /// Up this far along the axis, across, and down.
     Lifted(f64),
@@ -444,8 +445,12 @@ fn short_link(
         })
     };
     let (a, b) = (centre(exit, 0.0), centre(entry, 0.0));
+    // The axis may turn as far as on a lifted link: the rotaries take the same time either
+    // way, and the flutes, shank and holder are checked at every degree of it the same way.
+    // (Limited to 5° once, most short links on the real blower were neighbouring segments
+    // less than a millimetre apart whose axes differed by more, lifted and fed back in at
+    // the approach feed.)
     if distance <= r
-        && turn <= 5.0
         && !part
             .surface()
             .segment_within(&a, &b, r - options.chord_tolerance)
@@ -577,6 +582,62 @@ mod tests {
             vec![(MoveKind::Retract, 300.0), approach, cut, cut, retract]
         );
         assert_eq!(kinds(false)[1..], [cut, cut, cut, cut]);
+    }
+
+    /// Two passes on a plate's top whose ends are a millimetre apart, the second with its axis
+    /// turned 30°: the ball goes straight across at the cut feed, turning the axis, without
+    /// lifting; between axes 100° apart, further than a short link may turn, the tool leaves
+    /// by the safe plane.
+    #[test]
+    fn a_neighbouring_pass_with_a_turned_axis_is_reached_straight_across() {
+        let (part, tool) = plate_and_tool();
+        let r = 3.0;
+        let segment = |poses: Vec<ToolPose>| CutSegment {
+            pass_directions: vec![Vector3::x(); poses.len()],
+            poses,
+            leads: false,
+        };
+        let up = [0.0, 0.0, 1.0];
+        let first = segment(vec![
+            pose([30.0, 50.0, 20.0], up),
+            pose([40.0, 50.0, 20.0], up),
+        ]);
+        // The ball (centre r above the top) touching the plate under an axis turned `deg`
+        // about y, a millimetre on in y.
+        let turned = |x: f64, deg: f64| {
+            let (s, c) = deg.to_radians().sin_cos();
+            pose([x - r * s, 51.0, 23.0 - r * c], [s, 0.0, c])
+        };
+        let options = plate_options();
+        let second = segment(vec![turned(40.0, 30.0), turned(30.0, 30.0)]);
+        let (path, report) = link(&[first.clone(), second], &part, &tool, 1, &options);
+        assert_eq!(
+            (
+                report.links_across,
+                report.short_links,
+                report.safe_plane_retracts
+            ),
+            (1, 0, 1),
+            "{report:?}"
+        );
+        let across = path
+            .moves
+            .iter()
+            .position(|m| m.pose == turned(40.0, 30.0))
+            .expect("the second pass's start");
+        assert_eq!(path.moves[across - 1].pose, first.poses[1]);
+        assert_eq!(
+            (path.moves[across].kind, path.moves[across].feed),
+            (MoveKind::Approach, options.cut_feed)
+        );
+        let first = segment(vec![turned(30.0, -50.0), turned(40.0, -50.0)]);
+        let second = segment(vec![turned(40.0, 50.0), turned(30.0, 50.0)]);
+        let (_, report) = link(&[first, second], &part, &tool, 1, &options);
+        assert_eq!(
+            (report.links_across, report.safe_plane_turn),
+            (0, 1),
+            "{report:?}"
+        );
     }
 
     /// Two passes on a plate's top, 4 mm apart, the second with its axis turned 45°: linked by
