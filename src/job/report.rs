@@ -169,7 +169,8 @@ pub struct AxisSmoothingSummary {
     /// The bound, degrees per mm (0: off) and the averaging window, mm.
     pub max_change_deg_per_mm: f64,
     pub window_mm: f64,
-    /// Largest axis change per mm between neighbouring drive points, as chosen and as smoothed.
+    /// Largest axis change per mm between neighbouring drive points, as chosen and as smoothed
+    /// (on a 5-axis machine the larger of its rotaries' turns, `orient::AxisTurn`).
     pub max_rate_before_deg_per_mm: f64,
     pub max_rate_after_deg_per_mm: f64,
     /// Moves over the bound as chosen, and still over it after smoothing (no valid axis

@@ -9,8 +9,10 @@
 //! axes along each pass (bounded turn per mm), keeping every axis valid.
 
 mod smooth;
+mod turn;
 
 pub use smooth::{SmoothingOptions, SmoothingStats, smooth_axes};
+pub use turn::AxisTurn;
 
 use crate::access::RayScene;
 use crate::collide::{Collision, PartCollider, PreparedTool};
