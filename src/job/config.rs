@@ -501,8 +501,8 @@ pub struct StrategySection {
     pub max_axis_deviation_deg: f64,
     /// Largest axis change between consecutive poses, degrees.
     pub max_axis_turn_deg: f64,
-    /// Axis smoothing along each pass: largest axis change per mm of travel, degrees (on a
-    /// 5-axis machine, of each rotary axis); 0 keeps the point-by-point choice. Smoothed axes
+    /// Axis smoothing along each pass: largest axis change per mm of travel, degrees (on the
+    /// built-in A/C machine with a continuous C, of each rotary axis); 0 keeps the point-by-point choice. Smoothed axes
     /// are checked like chosen ones.
     pub max_axis_change_deg_per_mm: f64,
     /// Width (σ) of the Gaussian average of the axes along a pass, mm; 0 leaves only the rate

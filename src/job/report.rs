@@ -170,7 +170,8 @@ pub struct AxisSmoothingSummary {
     pub max_change_deg_per_mm: f64,
     pub window_mm: f64,
     /// Largest axis change per mm between neighbouring drive points, as chosen and as smoothed
-    /// (on a 5-axis machine the larger of its rotaries' turns, `orient::AxisTurn`).
+    /// (on the built-in A/C machine with a continuous C, the larger of its rotaries' turns,
+    /// `orient::AxisTurn`).
     pub max_rate_before_deg_per_mm: f64,
     pub max_rate_after_deg_per_mm: f64,
     /// Moves over the bound as chosen, and still over it after smoothing (no valid axis

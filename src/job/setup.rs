@@ -188,13 +188,7 @@ impl PlanSetup {
             &gcode_options,
             safe_distance + prepared_tool.ball_radius + kinematics.head_length(),
         )?;
-        // Axes are smoothed by how far the rotaries turn, not the tool. (Choosing them by it
-        // too measured slower on the blower's fixture, 29.0 against 27.1 min, its links
-        // between segments taking longer; the sample impeller gained nothing.)
-        let turn = match kinematics {
-            Machine::ThreeAxis(_) => AxisTurn::Angle,
-            _ => AxisTurn::Rotaries { pole: Self::POLE },
-        };
+        let turn = smoothing_turn(&kinematics);
         let chooser = AxisChooser::new(AxisOptions {
             lead_deg: job.strategy.lead_deg,
             tilt_deg: job.strategy.tilt_deg,
@@ -284,6 +278,22 @@ impl PlanSetup {
             axis_field: None,
             region: None,
         }
+    }
+}
+
+/// How the axes' change along a pass is measured for `machine`. On the built-in A/C machine,
+/// its C turning without end, by how far the rotaries turn, not the tool. Where C is limited,
+/// the great circle's passes by the pole let the post flip A's sign and bring C back (a dome on
+/// a head-head fork limited to ±100° did not post once smoothed by the rotaries: C ran out
+/// along a pass), and a machine definition's pole is its own. (Choosing the axes by the
+/// rotaries' turn too measured slower on the blower's fixture, 29.0 against 27.1 min, its
+/// links between segments taking longer; the sample impeller gained nothing.)
+fn smoothing_turn(machine: &Machine) -> AxisTurn {
+    match machine {
+        Machine::TableTableAc(ac) if ac.c_limits_deg.is_none() => AxisTurn::Rotaries {
+            pole: PlanSetup::POLE,
+        },
+        _ => AxisTurn::Angle,
     }
 }
 
@@ -462,7 +472,25 @@ mod tests {
     /// (`--feed`): it was once read and silently not used. (`output = "tcp"` needs a
     /// definition: the job file's validation refuses it.)
     #[test]
-    fn the_built_in_machine_takes_the_jobs_feed_and_output_modes() {
+    fn axes_are_smoothed_by_the_rotaries_only_where_c_turns_without_end() {
+        let ac = TableTableAC::new(Vector3::zeros());
+        assert_eq!(
+            smoothing_turn(&Machine::TableTableAc(ac.clone())),
+            AxisTurn::Rotaries { pole: Vector3::z() }
+        );
+        let limited = ac.with_c_limits(Some((-100.0, 100.0)));
+        assert_eq!(
+            smoothing_turn(&Machine::TableTableAc(limited)),
+            AxisTurn::Angle
+        );
+        assert_eq!(
+            smoothing_turn(&Machine::ThreeAxis(ThreeAxis)),
+            AxisTurn::Angle
+        );
+    }
+
+    #[test]
+    fn the_built_in_machine_takes_the_jobs_feed_mode() {
         let mut job = Job::default();
         let plain = gcode_options(&job).expect("options");
         assert_eq!(
