@@ -811,6 +811,8 @@ pub fn plan_with_surfaces(
         &setup.prepared_tool,
         setup.search,
     );
+    timings.verification = ms(t);
+    let t = Instant::now();
     // The scallop the finishing moves leave on the part, measured from the moves alone.
     let finish_scallop = planned
         .iter()
@@ -843,7 +845,7 @@ pub fn plan_with_surfaces(
                 labels.as_deref(),
             )
         });
-    timings.verification = ms(t);
+    timings.scallop = ms(t);
     let pose_failure = verification
         .passes(
             budget.chord_mm,

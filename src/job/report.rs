@@ -220,7 +220,10 @@ pub struct StageTimings {
     pub impeller_first_passage: f64,
     pub impeller_copies: f64,
     pub linking: f64,
+    /// The ball operations' poses checked against the part, and (apart) the scallop the
+    /// finishing leaves measured from its moves.
     pub verification: f64,
+    pub scallop: f64,
     pub post: f64,
     pub back_simulation: f64,
     /// The operations run on the stock (0 without a `[stock]` blank).

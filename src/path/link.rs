@@ -561,12 +561,25 @@ mod tests {
     fn plate_and_tool() -> (PartCollider, PreparedTool) {
         let plate = crate::mesh::fixtures::cuboid(100.0, 100.0, 20.0);
         let part = PartCollider::new(&plate).expect("plate");
+        (part, test_tool())
+    }
+
+    /// The collide module's test tool (ball radius 3) with these tests' margins.
+    fn test_tool() -> PreparedTool {
         let margins = Margins {
             shank: 0.5,
             holder: 2.0,
         };
-        let tool = PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins);
-        (part, tool)
+        PreparedTool::new(&crate::collide::tool_bodies::tests::tool(), &margins)
+    }
+
+    /// A pass through `poses` along x, without leads.
+    fn segment(poses: Vec<ToolPose>) -> CutSegment {
+        CutSegment {
+            pass_directions: vec![Vector3::x(); poses.len()],
+            poses,
+            leads: false,
+        }
     }
 
     /// Linking over the plate of these tests.
@@ -639,11 +652,6 @@ mod tests {
     fn a_neighbouring_pass_with_a_turned_axis_is_reached_straight_across() {
         let (part, tool) = plate_and_tool();
         let r = 3.0;
-        let segment = |poses: Vec<ToolPose>| CutSegment {
-            pass_directions: vec![Vector3::x(); poses.len()],
-            poses,
-            leads: false,
-        };
         let up = [0.0, 0.0, 1.0];
         let first = segment(vec![
             pose([30.0, 50.0, 20.0], up),
@@ -696,29 +704,19 @@ mod tests {
     fn neighbouring_passes_over_a_convex_ridge_are_joined_by_a_hop() {
         let sphere = crate::mesh::fixtures::uv_sphere(20.0, 90, 180);
         let part = PartCollider::new(&sphere).expect("sphere");
-        let tool = PreparedTool::new(
-            &crate::collide::tool_bodies::tests::tool(),
-            &Margins {
-                shank: 0.5,
-                holder: 2.0,
-            },
-        );
+        let tool = test_tool();
         let r = tool.ball_radius;
         let on_meridian = |polar: f64| {
             let u = [polar.sin(), 0.0, polar.cos()];
             pose(u.map(|v| v * 20.0), u)
         };
         let gap = 2.0 * (2.9 / (2.0 * (20.0 + r))).asin();
-        let segment = |from: f64, to: f64| CutSegment {
-            pass_directions: vec![Vector3::x(); 2],
-            poses: vec![on_meridian(from), on_meridian(to)],
-            leads: false,
-        };
+        let pass = |from: f64, to: f64| segment(vec![on_meridian(from), on_meridian(to)]);
         let options = LinkOptions {
             pivot: Point3::origin(),
             ..plate_options()
         };
-        let (first, second) = (segment(0.2, 0.3), segment(0.3 + gap, 0.5));
+        let (first, second) = (pass(0.2, 0.3), pass(0.3 + gap, 0.5));
         let (path, report) = link(&[first, second], &part, &tool, 1, &options);
         assert_eq!(
             (report.links_across, report.hops, report.short_links),
@@ -770,11 +768,6 @@ mod tests {
     fn a_turned_axis_a_few_millimetres_on_is_reached_by_a_short_link() {
         let (part, tool) = plate_and_tool();
         let (r, tilt) = (3.0, std::f64::consts::FRAC_1_SQRT_2);
-        let segment = |poses: Vec<ToolPose>| CutSegment {
-            pass_directions: vec![Vector3::x(); poses.len()],
-            poses,
-            leads: false,
-        };
         let first = segment(vec![
             pose([30.0, 50.0, 20.0], [0.0, 0.0, 1.0]),
             pose([40.0, 50.0, 20.0], [0.0, 0.0, 1.0]),

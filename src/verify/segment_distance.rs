@@ -557,6 +557,15 @@ mod tests {
             // A limit below the answer returns the limit.
             assert_eq!(tree.distance(&p, &q, exact * 0.5), exact * 0.5);
         }
+        // Short pieces and points a ball's radius or so off the surface, as the
+        // back-simulation asks.
+        for i in 0..400 {
+            let s = i as f64 * 0.173;
+            let p = Point3::new(s.cos(), s.sin(), (0.7 * s).sin()) * 12.0;
+            let length = [0.0, 1e-4, 0.01, 0.2][i % 4];
+            let q = p + Vector3::new((1.3 * s).sin(), (0.3 * s).cos(), -0.4) * length;
+            assert_eq!(tree.distance(&p, &q, f64::INFINITY), brute(&p, &q));
+        }
     }
 
     /// The tree's triangle and quadrilateral queries against every triangle, on slivers and
