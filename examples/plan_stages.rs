@@ -101,7 +101,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "least ball clearance over poses and chords: {:+.5} mm",
         poses.min_cutter_clearance.min(poses.min_chord_clearance)
     );
-    let header = job::program_header(&prepared, &job, &setup, &operations);
+    let as_impeller = planned
+        .iter()
+        .any(job::PlannedOperation::finished_as_impeller);
+    let header = job::program_header(&prepared, &job, &setup, &operations, as_impeller);
     let (blocks, gcode) = job::post_program(&setup, &toolpath, &header)?;
     let posted = check_posted(
         &gcode,

@@ -236,6 +236,19 @@ pub struct PlannedOperation {
     pub failure: Option<String>,
 }
 
+impl PlannedOperation {
+    /// Whether the operation finished the part as an impeller, with its own strategies.
+    pub fn finished_as_impeller(&self) -> bool {
+        matches!(
+            &self.details,
+            OperationDetails::Finish {
+                impeller: Some(_),
+                ..
+            }
+        )
+    }
+}
+
 /// What planning an operation measured, by kind.
 pub enum OperationDetails {
     /// Layers with a library end mill ([`super::plan_roughing`]); the summary as planned,
@@ -725,7 +738,8 @@ pub fn plan_with_surfaces(
     // ball's sections where a limit stops a pass, so that every check below sees those moves.
     let t = Instant::now();
     observer.stage("machine motion", 0);
-    let mut header = program_header(&prepared, job, &setup, &operations);
+    let impeller_finished = planned.iter().any(PlannedOperation::finished_as_impeller);
+    let mut header = program_header(&prepared, job, &setup, &operations, impeller_finished);
     if let Some(first) = roughing.first() {
         header.program_name = format!("wavemill roughing and finishing of {}", prepared.name);
         header.tool_description = vec![first.tool.describe()];
@@ -1060,11 +1074,7 @@ pub fn plan_with_surfaces(
         },
         surface,
         strategy: StrategySummary {
-            kind: if impeller_finishing.is_some() {
-                "impeller: hub flow lines, blade and splitter loops, swarf where ruled; parallel planes for the rest"
-            } else {
-                "parallel-plane ball-end finishing"
-            },
+            kind: finishing_strategy(impeller_finishing.is_some()),
             scallop_height_mm: finish.scallop_height,
             stepover_mm: stepover,
             tolerance_mm: setup.finishing.tolerance,
@@ -1447,12 +1457,23 @@ pub fn write_program(
     (program, writer.finish())
 }
 
-/// The program header: what was planned, with which tool, and the tolerance budget.
+/// What the finishing ran: the impeller's own strategies (`impeller`) or the parallel planes.
+fn finishing_strategy(impeller: bool) -> &'static str {
+    if impeller {
+        "impeller: hub flow lines, blade and splitter loops, swarf where ruled, parallel planes for the rest"
+    } else {
+        "parallel-plane ball-end finishing"
+    }
+}
+
+/// The program header: what was planned (`impeller`: the finishing ran the impeller's own
+/// strategies), with which tool, and the tolerance budget.
 pub fn program_header(
     prepared: &PreparedPart,
     job: &Job,
     setup: &PlanSetup,
     operations: &[Operation],
+    impeller: bool,
 ) -> ProgramHeader {
     let budget = &setup.budget;
     let mut header = ProgramHeader {
@@ -1464,7 +1485,8 @@ pub fn program_header(
         coolant: true,
         comments: vec![
             format!(
-                "ball-end finishing along parallel planes, scallop {} mm, tolerance {} mm",
+                "{}, scallop {} mm, tolerance {} mm",
+                finishing_strategy(impeller),
                 operations
                     .iter()
                     .rfind(|op| op.kind == OperationKind::Finish)

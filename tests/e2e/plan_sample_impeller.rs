@@ -152,6 +152,15 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     passes_never_step_backwards(&rows, r);
     posted_program_keeps_the_ball_within_the_tolerance(&out, &job, &oracle);
     a_real_control_reads_the_program_as_the_tests_do(&out.gcode);
+    // The program says what finished the part (once "parallel planes" for every plan).
+    assert!(report.impeller_finishing.is_some());
+    assert!(
+        out.gcode
+            .lines()
+            .take(20)
+            .any(|l| l.starts_with("(impeller: hub flow lines")),
+        "the header names the impeller strategies"
+    );
 
     // --- Report consistency --------------------------------------------------------------
     assert!(report.clearance.min_cutter_clearance >= -1e-6);
