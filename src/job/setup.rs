@@ -253,7 +253,9 @@ impl PlanSetup {
         self.kinematics.inverse(&pose, None).is_ok()
     }
 
-    /// The tool axis, in the part frame, at which the machine's rotary axes are singular.
+    /// The tool axis, in the part frame, at which the machine's rotary axes are singular: the
+    /// built-in A/C machine's C axis (+Z), which the impeller strategies keep the tool off. A
+    /// machine definition's own pole is not derived: +Z stands for it too.
     pub fn pole(&self) -> Vector3 {
         Self::POLE
     }
