@@ -60,27 +60,33 @@ impl AxisTurn {
     /// along the path the machine takes: the great circle for [`AxisTurn::Angle`], both
     /// rotary axes turning evenly on the nearer branch for [`AxisTurn::Rotaries`].
     pub fn toward(&self, from: &Vector3, to: &Vector3, max: f64) -> Vector3 {
-        let total = self.between(from, to);
-        if total <= max {
-            return *to;
-        }
-        let t = max / total;
         match self {
-            Self::Angle => slerp(from, to, t),
+            Self::Angle => {
+                let total = angle_between(from, to);
+                if total <= max {
+                    *to
+                } else {
+                    slerp(from, to, max / total)
+                }
+            }
             Self::Rotaries { pole } => {
                 let p = polar(pole, from);
                 let (same, across) = branches(&p, &polar(pole, to));
-                let (d_tilt, d_azimuth) = if larger(same) <= larger(across) {
-                    same
+                let (change, total) = if larger(same) <= larger(across) {
+                    (same, larger(same))
                 } else {
-                    across
+                    (across, larger(across))
                 };
+                if total <= max {
+                    return *to;
+                }
+                let t = max / total;
                 // A negative tilt is the other branch: the same axis across the pole.
                 from_polar(
                     pole,
                     &Polar {
-                        tilt: p.tilt + t * d_tilt,
-                        azimuth: p.azimuth + t * d_azimuth,
+                        tilt: p.tilt + t * change.0,
+                        azimuth: p.azimuth + t * change.1,
                     },
                 )
             }
