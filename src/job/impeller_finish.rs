@@ -32,7 +32,8 @@ use crate::impeller::{
 use crate::mesh::Mesh;
 use crate::orient::{away_from_pole, preferred_axis};
 use crate::path::{
-    self, CutSegment, Finishing, FinishingContext, FinishingOptions, LinkOptions, TurnedCopy,
+    self, CoverOptions, Covered, CutSegment, Finishing, FinishingContext, FinishingOptions,
+    LinkOptions, SweptBalls, TurnedCopy,
 };
 
 /// Distance between the stations along the hub's meridian, mm.
@@ -167,6 +168,9 @@ pub struct ImpellerFinishSummary {
     #[serde(skip)]
     pub copies_ms: f64,
     pub copies: TurnedCopy,
+    /// Stretches of the first passage's passes dropped because what their ball touches the
+    /// passes before them already came as near (the copies follow).
+    pub covered: Covered,
     /// Drive points of the planes over the regions the impeller strategies finish.
     pub plane_points_left_to_impeller: usize,
 }
@@ -201,6 +205,7 @@ pub fn finish_impeller(
         first_passage_ms: 0.0,
         copies_ms: 0.0,
         copies: TurnedCopy::default(),
+        covered: Covered::default(),
         plane_points_left_to_impeller: 0,
     };
     let mut handled = vec![false; part.triangles.len()];
@@ -372,7 +377,7 @@ pub fn finish_impeller(
             } else {
                 None
             };
-            let (swarf, blade, mut swarf_summary, not_swarfed) = match swarfed {
+            let (swarf, mut blade, mut swarf_summary, not_swarfed) = match swarfed {
                 Some(Ok((finishing, plan, summary))) => {
                     // Swept where the flutes pass within the scallop target of the flank.
                     let reach = radius + options.scallop_height;
@@ -409,6 +414,35 @@ pub fn finish_impeller(
                 };
                 splitters.push((plan_loops(&piece_loops, &piece_ctx, None), piece_ctx));
             }
+
+            // Passes are spaced on the drive surface, but in a corner tighter than the ball
+            // the balls placed against the part collapse onto one pass: at the blade's root
+            // the loops less than a radius above the hub and the flow lines beside the wall
+            // all become the pass touching both. What a pass's ball touches that the passes
+            // before it (swarf, loops, splitters, then the hub) came within half the scallop
+            // target of is dropped.
+            let mut swept = SweptBalls::new(CoverOptions {
+                ball_radius: radius,
+                slack: 0.5 * options.scallop_height,
+                min_gap: 2.0 * radius,
+                overlap: stepover,
+                around: 0.5 * stepover,
+            });
+            if let Some(swarf) = &swarf {
+                swarf.segments.iter().for_each(|s| swept.insert(s));
+            }
+            let surface = ctx.part.surface();
+            let mut keep_needed = |finishing: &mut Finishing, may_reverse: bool| {
+                let (kept, covered) =
+                    swept.keep_needed(std::mem::take(&mut finishing.segments), surface);
+                finishing.segments = path::nearest_order(kept, may_reverse);
+                summary.covered.merge(&covered);
+            };
+            keep_needed(&mut blade, blade_axes == BladeAxes::Blade);
+            for (splitter, _) in &mut splitters {
+                keep_needed(splitter, blade_axes == BladeAxes::Blade);
+            }
+            keep_needed(&mut hub, hub_axes != HubAxes::Walls);
             summary.first_passage_ms = round_ms(t);
 
             let t = Instant::now();

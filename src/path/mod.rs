@@ -14,10 +14,12 @@
 //! ([`crate::mesh::section`]) live below it, where every stage can use them.
 
 mod contact;
+mod covered;
 mod curves;
 mod link;
 
 pub use contact::{place_ball, place_ball_from};
+pub use covered::{CONTACT_BAND, CoverOptions, Covered, SweptBalls};
 pub use curves::{TurnedCopy, curve_passes, nearest_order, turned_copy};
 pub use link::{LinkOptions, LinkReport, can_leave, link, relink, safe_midpoint};
 
