@@ -5,16 +5,20 @@
 //! mesh is not an impeller; [`impeller_glb`] pictures what it found.
 
 pub mod blade;
+pub mod edges;
 pub mod frame;
 pub mod passage;
 pub mod picture;
 pub mod recognise;
+pub mod root;
 pub mod swarf;
 
 pub use blade::{BladeLoops, blade_loop_at, blade_loops};
+pub use edges::{BladeEdges, EdgeSide, blade_edges};
 pub use frame::AxisFrame;
 pub use passage::{FlowLine, HubPassage, PassageOptions, stepover_on_convex};
 pub use picture::impeller_glb;
+pub use root::{RootCorner, corner_ball};
 pub use swarf::{NotSwarf, Ruling, SwarfOptions, SwarfPlan, SwarfRun, swarf_runs};
 
 pub use recognise::{

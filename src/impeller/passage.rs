@@ -155,6 +155,33 @@ impl Meridian {
         best
     }
 
+    /// Like [`Meridian::project`]'s arc length, with the first and last segments run on
+    /// past the ends (negative before the inlet, beyond the length after the outlet): a point
+    /// high above the inlet still stands upstream of one beside it.
+    fn project_run_on(&self, q: [f64; 2]) -> f64 {
+        let (m, _) = self.project(q);
+        let n = self.points.len();
+        let along_segment = |k: usize| {
+            let (a, b) = (self.points[k], self.points[k + 1]);
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let len = d[0].hypot(d[1]);
+            if len > 0.0 {
+                ((q[0] - a[0]) * d[0] + (q[1] - a[1]) * d[1]) / len
+            } else {
+                0.0
+            }
+        };
+        if n < 2 {
+            m
+        } else if m <= 0.0 {
+            along_segment(0).min(0.0)
+        } else if m >= self.length() {
+            self.along[n - 2] + along_segment(n - 2).max(self.along[n - 1] - self.along[n - 2])
+        } else {
+            m
+        }
+    }
+
     /// The point at arc length `m` and the unit tangent there.
     fn at(&self, m: f64) -> ([f64; 2], [f64; 2]) {
         let k = match self.along.partition_point(|&a| a <= m) {
@@ -660,6 +687,23 @@ impl HubPassage {
         (above, up)
     }
 
+    /// The length of the hub's meridian, inlet to outlet, mm.
+    pub fn meridian_length(&self) -> f64 {
+        self.meridian.length()
+    }
+
+    /// Where `p` stands along the hub's meridian (the arc length of its nearest point from
+    /// the inlet, mm; the end segments run on past the ends, so negative above the inlet),
+    /// and the unit direction the meridian runs there, inlet to outlet, in `p`'s meridional
+    /// half-plane.
+    pub fn along(&self, p: &Point3) -> (f64, Vector3) {
+        let (radius, angle, height) = self.frame.cylindrical(p);
+        let m = self.meridian.project_run_on([height, radius]);
+        let (_, tangent) = self.meridian.at(m);
+        let downstream = self.frame.axis * tangent[0] + self.frame.radial(angle) * tangent[1];
+        (m, downstream)
+    }
+
     /// The mean of [`Self::wall_axis`] down the middle of passage 0, as (axial, radial,
     /// tangential) components at the passage's middle angle, and that angle.
     pub fn mean_wall_axis(&self) -> ([f64; 3], f64) {
@@ -962,7 +1006,7 @@ fn runs_of(flags: &[bool]) -> Vec<[usize; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::impeller::{RecogniseOptions, blade_loops, recognise};
+    use crate::impeller::{EdgeSide, RecogniseOptions, blade_loops, recognise};
 
     /// The bundled sample impeller, recognised, and its passage for a 4 mm ball at 0.01 mm.
     fn sample() -> (Mesh, Impeller, HubPassage, PassageOptions) {
@@ -976,6 +1020,51 @@ mod tests {
         };
         let passage = HubPassage::new(&mesh, &impeller, &options).expect("a passage");
         (mesh, impeller, passage, options)
+    }
+
+    /// The sample's flow comes in axially near the bore (radius 8–15 mm) and leaves radially
+    /// at the rim (45 mm): the leading edges face up and stand near the bore, the trailing
+    /// edges face out at the rim, upstream before downstream at every height.
+    #[test]
+    fn the_sample_blades_lead_at_the_inlet_and_trail_at_the_rim() {
+        let (mesh, impeller, passage, _) = sample();
+        let edges = crate::impeller::blade_edges(&mesh, &impeller, &passage);
+        // The inlet's edge runs most of the blade's height, the outlet's (low) a few levels.
+        assert!(edges.leading.len() >= 12, "{edges:?}");
+        assert!(edges.trailing.len() >= 2, "{edges:?}");
+        for lead in &edges.leading {
+            assert!(lead[2] < 20.0, "{lead:?}");
+        }
+        for trail in &edges.trailing {
+            assert!(trail[2] > 40.0, "{trail:?}");
+            assert!(edges.leading.iter().all(|lead| lead[1] + 10.0 < trail[1]));
+        }
+        assert!(edges.leading_area_mm2 > 0.0 && edges.trailing_area_mm2 > 0.0);
+        // Every blade's edges alike (the symmetry), the leading ones by the bore.
+        let mut per_blade = std::collections::BTreeMap::new();
+        for (t, side) in edges.sides.iter().enumerate() {
+            let Some(side) = side else { continue };
+            let [a, b, c] = mesh.corners(t);
+            let centre = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+            let (radius, _, _) = passage.frame.cylindrical(&centre);
+            match side {
+                EdgeSide::Leading => assert!(radius < 20.0, "{t}: {radius}"),
+                EdgeSide::Trailing => assert!(radius > 40.0, "{t}: {radius}"),
+            }
+            *per_blade
+                .entry(format!("{:?} {side:?}", impeller.regions[t]))
+                .or_insert(0.0) += 0.5 * (b - a).cross(&(c - a)).norm();
+        }
+        assert_eq!(per_blade.len(), 2 * impeller.blades, "{per_blade:?}");
+        for side in ["Leading", "Trailing"] {
+            let (least, most) = per_blade
+                .iter()
+                .filter(|(k, _)| k.ends_with(side))
+                .fold((f64::INFINITY, 0.0f64), |(l, m), (_, a)| {
+                    (l.min(*a), m.max(*a))
+                });
+            assert!(least > 0.0 && most - least < 0.05 * most, "{per_blade:?}");
+        }
     }
 
     /// Alg. 5.1's promise: at every station, neighbouring lines present there are no farther

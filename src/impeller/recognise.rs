@@ -28,6 +28,8 @@ use crate::geom::{Direction, Point3, Vector3};
 use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
 
+use super::root::{RootCorner, root_corners};
+
 use super::frame::AxisFrame;
 
 /// Why a mesh is not taken for an impeller.
@@ -115,6 +117,10 @@ pub struct Piece {
     /// Radius and height (along the axis, from the centre) ranges of its vertices, mm.
     pub radius_mm: [f64; 2],
     pub height_mm: [f64; 2],
+    /// Where a blade or splitter meets the hub: the crease and the fillet (the largest ball
+    /// that finishes the corner); `None` for other pieces and pieces off the hub.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub root: Option<RootCorner>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -267,10 +273,21 @@ pub fn recognise(mesh: &Mesh, options: &RecogniseOptions) -> Result<Impeller, No
 
     let (pieces, piece_of) = blade_pieces(mesh, &is_hub, &frame);
     let kinds = piece_kinds(&pieces, order);
+    // The largest ball tried in a root corner: a twentieth of the part's size (a fillet that
+    // large is a blade's whole foot).
+    let roots = root_corners(
+        mesh,
+        &surface,
+        &piece_of,
+        pieces.len(),
+        |k| kinds[k] != PieceKind::Other,
+        0.05 * mesh.aabb().diagonal(),
+    );
     let pieces: Vec<Piece> = pieces
         .into_iter()
         .zip(&kinds)
-        .map(|(p, &kind)| Piece { kind, ..p })
+        .zip(roots)
+        .map(|((p, &kind), root)| Piece { kind, root, ..p })
         .collect();
     let regions: Vec<Region> = (0..n)
         .map(|t| match piece_of[t] {
@@ -524,6 +541,7 @@ fn blade_pieces(mesh: &Mesh, is_hub: &[bool], frame: &AxisFrame) -> (Vec<Piece>,
                 angle_deg: angle.to_degrees(),
                 radius_mm: radius,
                 height_mm: height,
+                root: None,
             };
             (piece, first, members)
         })

@@ -704,14 +704,27 @@ fn info_reports_the_impeller_and_writes_its_picture() {
     assert_eq!(report["impeller"]["order"], 7);
     assert_eq!(report["impeller"]["blades"], 7);
     assert_eq!(report["triangles"], 38502, "the mesh report stays flat");
+    // The roots (sharp: no fillet), the edges (leading by the bore, trailing at the rim).
+    assert_eq!(
+        report["impeller"]["pieces"][0]["root"]["fillet_radius_mm"],
+        0.0
+    );
+    let edges = &report["blade_edges"];
+    assert!(edges["leading"].as_array().is_some_and(|c| !c.is_empty()));
+    assert!(edges["trailing"][0][2].as_f64().is_some_and(|r| r > 40.0));
     let dir = temp_dir("impeller-glb");
     std::fs::create_dir_all(&dir).unwrap();
     let glb = dir.join("impeller.glb");
     let out = wavemill(&["info", "data/impeller.glb", "--glb", glb.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stdout).contains("7 blades, 7-fold symmetric"));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("blade roots    sharp"), "{text}");
+    assert!(text.contains("leading edge   radius"), "{text}");
     let bytes = std::fs::read(&glb).unwrap();
     assert_eq!(&bytes[..4], b"glTF");
+    let named = |name: &str| bytes.windows(name.len()).any(|w| w == name.as_bytes());
+    assert!(named("blade 1 leading edge") && named("blade 7 trailing edge"));
     let blade = wavemill(&["info", "data/blade.glb"]);
     assert!(String::from_utf8_lossy(&blade.stdout).contains("impeller         no: "));
     let refused = wavemill(&["info", "data/blade.glb", "--glb", glb.to_str().unwrap()]);

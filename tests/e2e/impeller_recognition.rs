@@ -6,7 +6,8 @@
 
 use crate::common;
 use wavemill::impeller::{
-    HubPassage, NotAnImpeller, PassageOptions, RecogniseOptions, Region, blade_loops, recognise,
+    HubPassage, NotAnImpeller, PassageOptions, PieceKind, RecogniseOptions, Region, blade_loops,
+    recognise,
 };
 use wavemill::mesh::io::{Units, read_mesh};
 use wavemill::mesh::{Mesh, PrepareOptions, prepare};
@@ -44,6 +45,13 @@ fn the_sample_impeller_is_recognised_and_the_sample_blade_is_not() {
     assert!(found.axis[2] > 0.999, "{:?}", found.axis);
     let miss = turned_miss(&mesh, found.axis, found.centre, found.order);
     assert!(miss < 0.02, "{miss}");
+    // The blades stand on the hub at a crease (60–120°): no ball finishes the corner.
+    for piece in found.pieces.iter().filter(|p| p.kind == PieceKind::Blade) {
+        let root = piece.root.as_ref().expect("a blade stands on the hub");
+        assert_eq!(root.fillet_radius_mm, 0.0, "{root:?}");
+        assert!(root.crease_deg > 60.0, "{root:?}");
+        assert!(root.samples > 20, "{root:?}");
+    }
     let blade = load(&common::repo_file("data/blade.glb"));
     assert!(recognise(&blade, &RecogniseOptions::default()).is_err());
 }
@@ -56,6 +64,10 @@ fn the_real_impellers_are_recognised_with_their_blade_counts() {
     let blower = load(&dir.join("meshes/impeller_blower_9blade__necro-nemesis_aero2205.stl"));
     let found = recognise(&blower, &RecogniseOptions::default()).expect("the blower");
     assert_eq!((found.order, found.blades), (9, 9), "{found:?}");
+    for piece in found.pieces.iter().filter(|p| p.kind == PieceKind::Blade) {
+        let root = piece.root.as_ref().expect("a blade stands on the hub");
+        assert_eq!(root.fillet_radius_mm, 0.0, "{root:?}");
+    }
     let compressor =
         load(&dir.join("meshes/impeller_compressor_splitter__omorellAUS_Impellor-V3.stl"));
     let found = recognise(&compressor, &RecogniseOptions::default()).expect("the compressor");
@@ -64,6 +76,13 @@ fn the_real_impellers_are_recognised_with_their_blade_counts() {
         (6, 6, 6),
         "{found:?}"
     );
+    // Its blades and splitters are filleted to the hub: a 3 mm ball finishes the corner
+    // (measured 3.015 mm, the facets' dip allowed for), the crease across the root small.
+    for piece in found.pieces.iter().filter(|p| p.kind != PieceKind::Other) {
+        let root = piece.root.as_ref().expect("stands on the hub");
+        assert!((root.fillet_radius_mm - 3.0).abs() < 0.1, "{root:?}");
+        assert!(root.crease_deg < 20.0, "{root:?}");
+    }
     let turbine = load(&dir.join("meshes/turbine_blade_with_root__dengwirda_jigsaw-models.stl"));
     assert!(matches!(
         recognise(&turbine, &RecogniseOptions::default()),

@@ -6,6 +6,7 @@ use clap::Args;
 
 use crate::cli::values::*;
 use crate::error::{Error, Result};
+use crate::impeller::{BladeEdges, HubPassage, PassageOptions, PieceKind, RootCorner, blade_edges};
 use crate::job::{self};
 use crate::mesh::{PrepareOptions, prepare};
 
@@ -34,6 +35,9 @@ struct InfoReport<'a> {
     impeller: Option<&'a crate::impeller::Impeller>,
     #[serde(skip_serializing_if = "Option::is_none")]
     not_an_impeller: Option<String>,
+    /// The main blades' leading and trailing edges (along the hub's meridian).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    blade_edges: Option<&'a BladeEdges>,
 }
 
 /// Runs the command.
@@ -51,6 +55,17 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     } else {
         Err("the mesh is not closed".to_string())
     };
+    // The edges run along the hub's meridian: the passage's stations give it.
+    let edges = impeller.as_ref().ok().and_then(|found| {
+        let options = PassageOptions {
+            station_step: 0.25,
+            ball_radius: 1.0,
+            scallop_height: 0.01,
+            overlap: 0.0,
+        };
+        let passage = HubPassage::new(&mesh, found, &options).ok()?;
+        Some(blade_edges(&mesh, found, &passage))
+    });
     if let Some(path) = &args.glb {
         let found = impeller.as_ref().map_err(|reason| {
             Error::Usage(format!(
@@ -58,10 +73,13 @@ pub fn run(args: &InfoArgs) -> Result<()> {
                 path.display()
             ))
         })?;
-        let bytes = crate::impeller::impeller_glb(&mesh, found).map_err(|error| Error::Glb {
-            file: path.display().to_string(),
-            error,
-        })?;
+        let bytes =
+            crate::impeller::impeller_glb(&mesh, found, edges.as_ref()).map_err(|error| {
+                Error::Glb {
+                    file: path.display().to_string(),
+                    error,
+                }
+            })?;
         job::write_atomically(path, &bytes)?;
     }
     if args.json {
@@ -69,6 +87,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
             mesh: &report,
             impeller: impeller.as_ref().ok(),
             not_an_impeller: impeller.as_ref().err().cloned(),
+            blade_edges: edges.as_ref(),
         };
         say!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
         return Ok(());
@@ -170,6 +189,57 @@ pub fn run(args: &InfoArgs) -> Result<()> {
                     high[1],
                     high[0]
                 );
+            }
+            for (kind, label) in [
+                (PieceKind::Blade, "blade roots"),
+                (PieceKind::Splitter, "splitter roots"),
+            ] {
+                let roots: Vec<&RootCorner> = found
+                    .pieces
+                    .iter()
+                    .filter(|p| p.kind == kind)
+                    .filter_map(|p| p.root.as_ref())
+                    .collect();
+                if roots.is_empty() {
+                    continue;
+                }
+                let median = |mut v: Vec<f64>| {
+                    v.sort_by(f64::total_cmp);
+                    v[v.len() / 2]
+                };
+                let radius = median(roots.iter().map(|r| r.fillet_radius_mm).collect());
+                let smallest = roots
+                    .iter()
+                    .map(|r| r.fillet_radius_min_mm)
+                    .fold(f64::INFINITY, f64::min);
+                let crease = median(roots.iter().map(|r| r.crease_deg).collect());
+                say!(
+                    "    {label:<14} {}, crease {crease:.1} deg across the root edges",
+                    if radius > 0.0 {
+                        format!("fillet radius {radius:.3} mm (smallest {smallest:.3} mm)")
+                    } else {
+                        "sharp (no ball finishes the corner)".to_string()
+                    }
+                );
+            }
+            if let Some(edges) = &edges {
+                for (label, curve, area) in [
+                    ("leading edge", &edges.leading, edges.leading_area_mm2),
+                    ("trailing edge", &edges.trailing, edges.trailing_area_mm2),
+                ] {
+                    match (curve.first(), curve.last()) {
+                        (Some(low), Some(high)) => say!(
+                            "    {label:<14} radius {:.3} mm ({:.3} mm above the hub) to {:.3} mm \
+                             ({:.3} mm up), {:.1} mm^2 per blade",
+                            low[2],
+                            low[0],
+                            high[2],
+                            high[0],
+                            area / found.blades.max(1) as f64
+                        ),
+                        _ => say!("    {label:<14} none found (no loop ends facing the flow)"),
+                    }
+                }
             }
         }
         Err(reason) => say!("  impeller         no: {reason}"),
