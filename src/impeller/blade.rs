@@ -174,6 +174,20 @@ fn blade_heights(
     (blade, height, normals)
 }
 
+/// The curves on blade (or splitter) `piece` at `level` mm above the hub: a loop round it,
+/// or open stretches where the level runs into the hub.
+pub fn blade_section_at(
+    mesh: &Mesh,
+    impeller: &Impeller,
+    passage: &HubPassage,
+    piece: usize,
+    level: f64,
+) -> Vec<SectionCurve> {
+    let (blade, height, normals) = blade_heights(mesh, impeller, passage, piece);
+    let shifted: Vec<f64> = height.iter().map(|h| h - level).collect();
+    level_section(&blade, &normals, &shifted)
+}
+
 /// The longest closed loop round blade (or splitter) `piece` at `level` mm above the hub.
 pub fn blade_loop_at(
     mesh: &Mesh,
@@ -182,15 +196,13 @@ pub fn blade_loop_at(
     piece: usize,
     level: f64,
 ) -> Option<SectionCurve> {
-    let (blade, height, normals) = blade_heights(mesh, impeller, passage, piece);
-    let shifted: Vec<f64> = height.iter().map(|h| h - level).collect();
     let length = |c: &SectionCurve| {
         c.points
             .windows(2)
             .map(|w| (w[1].point - w[0].point).norm())
             .sum::<f64>()
     };
-    level_section(&blade, &normals, &shifted)
+    blade_section_at(mesh, impeller, passage, piece, level)
         .into_iter()
         .filter(|c| c.closed)
         .max_by(|a, b| length(a).total_cmp(&length(b)))

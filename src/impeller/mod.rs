@@ -13,7 +13,7 @@ pub mod recognise;
 pub mod root;
 pub mod swarf;
 
-pub use blade::{BladeLoops, blade_loop_at, blade_loops};
+pub use blade::{BladeLoops, blade_loop_at, blade_loops, blade_section_at};
 pub use edges::{BladeEdges, EdgeSide, blade_edges};
 pub use frame::AxisFrame;
 pub use passage::{FlowLine, HubPassage, PassageOptions, stepover_on_convex};

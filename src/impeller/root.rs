@@ -7,7 +7,7 @@
 //! beyond the fillet. At samples along the root (the midpoints of the edges the piece shares
 //! with the hub, 2 mm apart) the largest clear ball is found by bisection; at a sharp root (a
 //! crease) none is, to the bisection's resolution. A faceted fillet's vertices are concave:
-//! a ball touching one dips into the facets beside it, which [`CLEAR`] allows for.
+//! a ball touching one dips into the facets beside it, which a small allowance (`CLEAR`) lets pass.
 
 use std::collections::HashSet;
 

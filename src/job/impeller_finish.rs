@@ -27,7 +27,7 @@ use crate::geom::{Point3, Vector3};
 use crate::impeller::blade::needed_stretches;
 use crate::impeller::{
     HubPassage, Impeller, NotSwarf, PassageOptions, Region, Ruling, SwarfOptions, SwarfPlan,
-    blade_loop_at, blade_loops, swarf_runs,
+    blade_loop_at, blade_loops, blade_section_at, swarf_runs,
 };
 use crate::mesh::Mesh;
 use crate::orient::{away_from_pole, preferred_axis};
@@ -49,6 +49,52 @@ const OVERLAP_STEPOVERS: f64 = 4.0;
 /// How far a partial loop round a blade runs on past where it is needed, in stepovers: the
 /// ball's end covers its radius beyond the last centre, and every piece costs a link.
 const PARTIAL_LOOP_OVERLAP_STEPOVERS: f64 = 1.0;
+
+/// Height of the root pass's drive section above the hub, in the loops' level steps (the
+/// lowest loop stands at half a step): every ball of it comes to rest in the corner.
+const ROOT_LEVEL_STEPS: f64 = 0.25;
+
+/// What the root pass planned: its length, and how many of its balls touch hub and blade.
+fn root_pass_summary(
+    root: &Finishing,
+    level: f64,
+    radius: f64,
+    surface: &crate::mesh::SurfaceDistance,
+    regions: &[Region],
+    piece: usize,
+) -> RootPass {
+    let reach = radius + path::CONTACT_BAND;
+    let mut both = 0;
+    let mut poses = 0;
+    let mut length = 0.0;
+    for segment in &root.segments {
+        let centres: Vec<Point3> = segment
+            .poses
+            .iter()
+            .map(|p| p.tip + p.axis.into_inner() * radius)
+            .collect();
+        length += centres
+            .windows(2)
+            .map(|w| (w[1] - w[0]).norm())
+            .sum::<f64>();
+        for c in &centres {
+            poses += 1;
+            let hub = surface.closest_where(c, reach, |t| regions[t as usize] == Region::Hub);
+            let blade = surface.closest_where(c, reach, |t| {
+                regions[t as usize] == Region::Blade(piece as u32)
+            });
+            if hub.is_some() && blade.is_some() {
+                both += 1;
+            }
+        }
+    }
+    RootPass {
+        level_mm: level,
+        length_mm: length,
+        poses,
+        touching_both: both as f64 / poses.max(1) as f64,
+    }
+}
 
 /// How the impeller strategies are asked to run.
 #[derive(Clone, Debug, PartialEq)]
@@ -118,12 +164,29 @@ pub struct BladeSummary {
     pub height_mm: f64,
     pub axes: BladeAxes,
     pub lean_deg: f64,
+    /// The pass round the blade's root (its fillet, or the ball touching hub and blade where
+    /// the root is sharper than the ball), or why there is none.
+    pub root_pass: Result<RootPass, String>,
     /// The swarf runs that finish the blade's ruled stretches (the loops take the rest).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swarf: Option<SwarfSummary>,
     /// Why no stretch of the blade is swarfed (swarf asked for): the loops finish it all.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_swarfed: Option<NotSwarf>,
+}
+
+/// The pass round a blade's root: the loop just above the hub, where the ball placed against
+/// the part comes to rest in the corner (on the fillet where the fillet is as large as the
+/// ball, else touching hub and blade both: the pencil line).
+#[derive(Clone, Debug, Serialize)]
+pub struct RootPass {
+    /// Height of the drive loop above the hub, mm.
+    pub level_mm: f64,
+    /// Length of the ball centres' path and poses, as planned.
+    pub length_mm: f64,
+    pub poses: usize,
+    /// Share of the poses whose ball touches both hub and blade (within a micrometre).
+    pub touching_both: f64,
 }
 
 /// The swarf runs round one blade.
@@ -390,6 +453,32 @@ pub fn finish_impeller(
                 None => (None, plan_loops(&loops, &blade_ctx, None), None, None),
             };
 
+            // The root pass: the loop just above the hub, every ball in the corner.
+            // The section a quarter step above the hub: a loop round the blade, or stretches
+            // where the hub rises off its meridian's fit and the level runs into it.
+            let root_level = ROOT_LEVEL_STEPS * loops.level_step;
+            let root_curves =
+                blade_section_at(part, impeller, &passage, passage.first_blade, root_level);
+            let mut root = Finishing::default();
+            let root_pass = match root_curves.is_empty() {
+                false => {
+                    for result in path::curve_passes(&root_curves, &blade_ctx, options, advance) {
+                        root.merge(result);
+                    }
+                    Ok(root_pass_summary(
+                        &root,
+                        root_level,
+                        radius,
+                        ctx.part.surface(),
+                        &impeller.regions,
+                        passage.first_blade,
+                    ))
+                }
+                true => Err(format!(
+                    "the blade has no section {root_level:.3} mm above the hub"
+                )),
+            };
+
             // The splitters in the passage: loops round each, both its sides, like the blade.
             let splitter_pieces = passage.splitters(impeller);
             let splitter_fields: Vec<_> = splitter_pieces
@@ -439,6 +528,9 @@ pub fn finish_impeller(
                 summary.covered.merge(&covered);
             };
             keep_needed(&mut blade, blade_axes == BladeAxes::Blade);
+            keep_needed(&mut root, blade_axes == BladeAxes::Blade);
+            // Copied with the blade's loops, after them: they end at the root.
+            blade.merge(root);
             for (splitter, _) in &mut splitters {
                 keep_needed(splitter, blade_axes == BladeAxes::Blade);
             }
@@ -527,6 +619,7 @@ pub fn finish_impeller(
                 level_step_mm: loops.level_step,
                 height_mm: loops.top,
                 axes: blade_axes,
+                root_pass,
                 lean_deg: impeller_options.blade_lean_deg,
                 swarf: swarf_summary,
                 not_swarfed,

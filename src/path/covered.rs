@@ -126,7 +126,7 @@ impl SweptBalls {
     }
 
     /// Whether a swept ball's centre comes within `reach` of `p` (at most
-    /// [`SweptBalls::reach`]: the cells hold no more).
+    /// the radius, the slack and `around`: the cells hold no more).
     pub fn covers(&self, p: &Point3, reach: f64) -> bool {
         let reach = reach.min(self.reach());
         self.cells.get(&self.key(p)).is_some_and(|moves| {

@@ -153,7 +153,23 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     posted_program_keeps_the_ball_within_the_tolerance(&out, &job, &oracle);
     a_real_control_reads_the_program_as_the_tests_do(&out.gcode);
     // The program says what finished the part (once "parallel planes" for every plan).
-    assert!(report.impeller_finishing.is_some());
+    let impeller = report
+        .impeller_finishing
+        .as_ref()
+        .expect("impeller strategies");
+    // A pass round the blade's root, its balls in the corner (touching hub and blade where
+    // the root is sharp), and passes that cut nothing new dropped.
+    let blade = impeller.blade.as_ref().expect("blade finishing");
+    let root = blade.root_pass.as_ref().expect("a root pass");
+    assert!(
+        root.length_mm > 50.0 && root.touching_both > 0.5,
+        "{root:?}"
+    );
+    assert!(
+        impeller.covered.length_dropped_mm > 0.0,
+        "{:?}",
+        impeller.covered
+    );
     assert!(
         out.gcode
             .lines()
