@@ -166,7 +166,10 @@ pub struct BladeSummary {
     pub lean_deg: f64,
     /// The pass round the blade's root (its fillet, or the ball touching hub and blade where
     /// the root is sharper than the ball), or why there is none.
-    pub root_pass: Result<RootPass, String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub root_pass: Option<RootPass>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub no_root_pass: Option<String>,
     /// The swarf runs that finish the blade's ruled stretches (the loops take the rest).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swarf: Option<SwarfSummary>,
@@ -453,30 +456,29 @@ pub fn finish_impeller(
                 None => (None, plan_loops(&loops, &blade_ctx, None), None, None),
             };
 
-            // The root pass: the loop just above the hub, every ball in the corner.
-            // The section a quarter step above the hub: a loop round the blade, or stretches
-            // where the hub rises off its meridian's fit and the level runs into it.
+            // The root pass, every ball in the corner: the section a quarter step above the
+            // hub, a loop round the blade or stretches where the hub rises off its meridian's
+            // fit and the level runs into it.
             let root_level = ROOT_LEVEL_STEPS * loops.level_step;
             let root_curves =
                 blade_section_at(part, impeller, &passage, passage.first_blade, root_level);
             let mut root = Finishing::default();
-            let root_pass = match root_curves.is_empty() {
-                false => {
-                    for result in path::curve_passes(&root_curves, &blade_ctx, options, advance) {
-                        root.merge(result);
-                    }
-                    Ok(root_pass_summary(
-                        &root,
-                        root_level,
-                        radius,
-                        ctx.part.surface(),
-                        &impeller.regions,
-                        passage.first_blade,
-                    ))
-                }
-                true => Err(format!(
-                    "the blade has no section {root_level:.3} mm above the hub"
-                )),
+            for result in path::curve_passes(&root_curves, &blade_ctx, options, advance) {
+                root.merge(result);
+            }
+            let (root_pass, no_root_pass) = if root.segments.is_empty() {
+                let why = format!("no pass on the blade {root_level:.3} mm above the hub");
+                (None, Some(why))
+            } else {
+                let summary = root_pass_summary(
+                    &root,
+                    root_level,
+                    radius,
+                    ctx.part.surface(),
+                    &impeller.regions,
+                    passage.first_blade,
+                );
+                (Some(summary), None)
             };
 
             // The splitters in the passage: loops round each, both its sides, like the blade.
@@ -620,6 +622,7 @@ pub fn finish_impeller(
                 height_mm: loops.top,
                 axes: blade_axes,
                 root_pass,
+                no_root_pass,
                 lean_deg: impeller_options.blade_lean_deg,
                 swarf: swarf_summary,
                 not_swarfed,

@@ -161,6 +161,7 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     // the root is sharp), and passes that cut nothing new dropped.
     let blade = impeller.blade.as_ref().expect("blade finishing");
     let root = blade.root_pass.as_ref().expect("a root pass");
+    assert!(blade.no_root_pass.is_none());
     assert!(
         root.length_mm > 50.0 && root.touching_both > 0.5,
         "{root:?}"
