@@ -6,10 +6,12 @@
 //! stage's public API.
 
 mod aabb;
+mod runs;
 mod toolpath;
 mod triangle;
 
 pub use aabb::{Aabb, Aabb2};
+pub use runs::{arc_lengths, run_on, runs_of_set};
 pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
 pub use triangle::{
     ClosestFeature, closest_point_on_segment, closest_point_on_triangle,

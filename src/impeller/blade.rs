@@ -14,7 +14,7 @@
 
 use std::collections::HashMap;
 
-use crate::geom::{Point3, Vector3, closest_point_on_segment};
+use crate::geom::{Point3, Vector3, arc_lengths, closest_point_on_segment, run_on, runs_of_set};
 use crate::mesh::{Mesh, SectionCurve, level_section};
 
 use super::passage::HubPassage;
@@ -238,53 +238,16 @@ pub fn needed_stretches(curve: &SectionCurve, needed: &[bool], overlap: f64) -> 
     };
     let order: Vec<usize> = (0..n).map(|i| (start + i) % n).collect();
     let points: Vec<Point3> = order.iter().map(|&i| curve.points[i].point).collect();
-    let mut along = vec![0.0; n];
-    for i in 1..n {
-        along[i] = along[i - 1] + (points[i] - points[i - 1]).norm();
-    }
-    let mut keep = vec![false; n];
-    for (j, &i) in order.iter().enumerate() {
-        if needed[i] {
-            keep[j] = true;
-        }
-    }
-    // Run on by the overlap: from every needed point, both ways.
-    let mut grown = keep.clone();
-    let mut last: Option<f64> = None;
-    for j in 0..n {
-        if keep[j] {
-            last = Some(along[j]);
-        } else if last.is_some_and(|s| along[j] - s <= overlap) {
-            grown[j] = true;
-        }
-    }
-    let mut next: Option<f64> = None;
-    for j in (0..n).rev() {
-        if keep[j] {
-            next = Some(along[j]);
-        } else if next.is_some_and(|s| s - along[j] <= overlap) {
-            grown[j] = true;
-        }
-    }
-    let mut pieces = Vec::new();
-    let mut j = 0;
-    while j < n {
-        if !grown[j] {
-            j += 1;
-            continue;
-        }
-        let from = j;
-        while j < n && grown[j] {
-            j += 1;
-        }
-        if j - from >= 2 {
-            pieces.push(SectionCurve {
-                points: order[from..j].iter().map(|&i| curve.points[i]).collect(),
-                closed: false,
-            });
-        }
-    }
-    pieces
+    let along = arc_lengths(&points);
+    let keep: Vec<bool> = order.iter().map(|&i| needed[i]).collect();
+    runs_of_set(&run_on(&keep, &along, overlap))
+        .into_iter()
+        .filter(|run| run.len() >= 2)
+        .map(|run| SectionCurve {
+            points: order[run].iter().map(|&i| curve.points[i]).collect(),
+            closed: false,
+        })
+        .collect()
 }
 
 /// The segments of the loops kept so far, by level, in a uniform grid of cells as large as

@@ -23,7 +23,7 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
-use crate::geom::{Point3, Vector3, closest_point_on_segment};
+use crate::geom::{Point3, Vector3, arc_lengths, closest_point_on_segment, run_on, runs_of_set};
 use crate::mesh::SurfaceDistance;
 
 use super::CutSegment;
@@ -215,64 +215,25 @@ impl SweptBalls {
         if n < 2 || needed.iter().all(|&k| k) {
             return std::iter::once(0..n).collect();
         }
-        let centres = centres(segment, self.options.ball_radius);
-        let mut along = vec![0.0; n];
-        for i in 1..n {
-            along[i] = along[i - 1] + (centres[i] - centres[i - 1]).norm();
-        }
-        let mut keep = needed.to_vec();
-        // Run on by the overlap from every needed pose, both ways.
-        let mut last: Option<f64> = None;
-        for i in 0..n {
-            if needed[i] {
-                last = Some(along[i]);
-            } else if last.is_some_and(|s| along[i] - s <= self.options.overlap) {
-                keep[i] = true;
-            }
-        }
-        let mut next: Option<f64> = None;
-        for i in (0..n).rev() {
-            if needed[i] {
-                next = Some(along[i]);
-            } else if next.is_some_and(|s| s - along[i] <= self.options.overlap) {
-                keep[i] = true;
-            }
-        }
+        let along = arc_lengths(&centres(segment, self.options.ball_radius));
+        let mut keep = run_on(needed, &along, self.options.overlap);
         // Gaps between kept stretches shorter than `min_gap` are kept too.
-        let mut i = 0;
-        while i < n {
-            if keep[i] {
-                i += 1;
-                continue;
-            }
-            let start = i;
-            while i < n && !keep[i] {
-                i += 1;
-            }
-            let inner = start > 0 && i < n;
-            if inner && along[i] - along[start - 1] < self.options.min_gap {
-                keep[start..i].iter_mut().for_each(|k| *k = true);
+        let dropped: Vec<bool> = keep.iter().map(|k| !k).collect();
+        for gap in runs_of_set(&dropped) {
+            let inner = gap.start > 0 && gap.end < n;
+            if inner && along[gap.end] - along[gap.start - 1] < self.options.min_gap {
+                keep[gap].iter_mut().for_each(|k| *k = true);
             }
         }
-        let mut pieces = Vec::new();
-        let mut i = 0;
-        while i < n {
-            if !keep[i] {
-                i += 1;
-                continue;
-            }
-            let start = i;
-            while i < n && keep[i] {
-                i += 1;
-            }
-            // A lone needed pose (its neighbours farther than the overlap) keeps a move.
-            match i - start {
-                1 if start > 0 => pieces.push(start - 1..i),
-                1 => pieces.push(start..(i + 1).min(n)),
-                _ => pieces.push(start..i),
-            }
-        }
-        pieces
+        // A lone needed pose (its neighbours farther than the overlap) keeps a move.
+        runs_of_set(&keep)
+            .into_iter()
+            .map(|run| match run.len() {
+                1 if run.start > 0 => run.start - 1..run.end,
+                1 => run.start..(run.end + 1).min(n),
+                _ => run,
+            })
+            .collect()
     }
 }
 
