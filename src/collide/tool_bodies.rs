@@ -380,6 +380,14 @@ impl PartCollider {
             if limit <= 0.0 {
                 continue;
             }
+            let farther = if body.role == BodyRole::Flutes {
+                self.flutes_farther_than(&body.geometry, pose, limit)
+            } else {
+                self.farther_than(&body.geometry, pose, limit)
+            };
+            if farther {
+                continue;
+            }
             let at = body.place(pose, self);
             let shrink = if body.role == BodyRole::Flutes {
                 F32_SLACK
@@ -422,6 +430,59 @@ impl PartCollider {
         c
     }
 
+    /// Whether `body` at `pose`, measured as the prism or frustum parry measures, is surely
+    /// farther than `limit` from the part, by the f64 search alone.
+    ///
+    /// The body is cut along its axis into pieces about its narrower radius long; each lies
+    /// within its larger radius (the polygon's corners included) of its stretch of the axis,
+    /// so every point within `limit` of it lies within that radius and the limit of the
+    /// stretch. When no triangle comes that near any stretch, the body is farther: decided far
+    /// faster than by parry's f32 GJK over every triangle within the limit of its box, which
+    /// is left to the poses this cannot decide (the search stops at the first triangle near).
+    fn farther_than(&self, body: &Revolved, pose: &ToolPose, limit: f64) -> bool {
+        let length = body.to - body.from;
+        let narrow = body.radius_from.min(body.radius_to);
+        if !(length > 0.0 && narrow > 0.0 && limit > 0.0) {
+            return false;
+        }
+        let pieces = (length / narrow).ceil().clamp(1.0, 64.0) as usize;
+        let k = pose.axis.into_inner();
+        let radius_at = |h: f64| {
+            body.radius_from + (body.radius_to - body.radius_from) * (h - body.from) / length
+        };
+        let reach = limit + F32_SLACK;
+        (0..pieces).all(|i| {
+            let low = body.from + length * i as f64 / pieces as f64;
+            let high = body.from + length * (i + 1) as f64 / pieces as f64;
+            let radius = radius_at(low).max(radius_at(high)) * circumscribed();
+            !self.part.surface.segment_within(
+                &(pose.tip + k * low),
+                &(pose.tip + k * high),
+                radius + reach,
+            )
+        })
+    }
+
+    /// [`Self::farther_than`] for the flutes, which start at the ball's equator: the ball
+    /// touches the part, so a round end on their first stretch would always find it. Every
+    /// point within `limit` of their flat-ended cylinder lies in the cylinder wider and
+    /// longer at both ends by `limit`, which is searched instead; it holds the ball's contact
+    /// only where the ball cuts within `limit` of its equator.
+    fn flutes_farther_than(&self, body: &Revolved, pose: &ToolPose, limit: f64) -> bool {
+        if !(body.to > body.from && limit > 0.0) {
+            return false;
+        }
+        let k = pose.axis.into_inner();
+        let radius = body.radius_from.max(body.radius_to);
+        let reach = limit + F32_SLACK;
+        self.part.surface.cylinder_search(
+            &(pose.tip + k * (body.from - reach)),
+            &(pose.tip + k * (body.to + reach)),
+            radius + reach,
+            |_| true,
+        ) == SegmentSearch::Clear
+    }
+
     /// Whether a cylinder around the axis of `pose`, from `from` to `to` mm above the tip and of
     /// radius `radius` (a circumscribed 32-gon prism), stays clear of the part.
     pub fn cylinder_clear(&self, pose: &ToolPose, from: f64, to: f64, radius: f64) -> bool {
@@ -439,6 +500,14 @@ impl PartCollider {
             .map(|i| i.intersecting)
             .unwrap_or(true)
     }
+}
+
+/// Sides of the prism or frustum a body of revolution is measured as.
+const SIDES: usize = 32;
+
+/// The ratio of that polygon's corner radius to the body's.
+fn circumscribed() -> f64 {
+    1.0 / (std::f64::consts::PI / SIDES as f64).cos()
 }
 
 /// A body of revolution along the tool axis: heights from the tip, radii at both ends.
@@ -513,8 +582,7 @@ impl Revolved {
                 self.radius_from.max(self.radius_to) as f32,
             ));
         }
-        const SIDES: usize = 32;
-        let scale = 1.0 / (std::f64::consts::PI / SIDES as f64).cos();
+        let scale = circumscribed();
         let mut pts = Vec::with_capacity(2 * SIDES);
         for (y, r) in [(-half, self.radius_from), (half, self.radius_to)] {
             for k in 0..SIDES {
@@ -1132,6 +1200,82 @@ pub(crate) mod tests {
             decided * 5 >= judged * 4,
             "{decided} of {judged} decided, {meets} meet, {clear} clear"
         );
+    }
+
+    /// `farther_than` never says farther where the body comes within the limit (the distance
+    /// of a frustum to a sphere's centre, less the radius, in closed form; the facets lie
+    /// inside the sphere by at most their sagitta), and it decides most poses it should.
+    #[test]
+    fn farther_than_agrees_with_a_sphere_in_closed_form() {
+        let big_r = 20.0;
+        let collider =
+            PartCollider::new(&crate::mesh::fixtures::uv_sphere(big_r, 60, 120)).unwrap();
+        let body = Revolved {
+            from: 4.0,
+            to: 16.0,
+            radius_from: 3.0,
+            radius_to: 5.0,
+        };
+        // Distance from a point at height h, rho off the axis, to the frustum: 0 inside, else
+        // to the nearest side of its half-section (a trapezoid).
+        let to_frustum = |h: f64, rho: f64| -> f64 {
+            let corners = [
+                (body.from, 0.0),
+                (body.from, body.radius_from),
+                (body.to, body.radius_to),
+                (body.to, 0.0),
+            ];
+            let t = (h - body.from) / (body.to - body.from);
+            let slant = body.radius_from + (body.radius_to - body.radius_from) * t;
+            if (0.0..=1.0).contains(&t) && rho <= slant {
+                return 0.0;
+            }
+            (0..4)
+                .map(|i| {
+                    let (a, b) = (corners[i], corners[(i + 1) % 4]);
+                    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+                    let s =
+                        (((h - a.0) * dx + (rho - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+                    (h - a.0 - s * dx).hypot(rho - a.1 - s * dy)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (mut should, mut said) = (0, 0);
+        for i in 0..30 {
+            for j in 0..30 {
+                let (u, v) = (i as f64 / 30.0, j as f64 / 30.0);
+                let tip = Point3::new(
+                    40.0 * u - 20.0,
+                    36.0 * v - 18.0,
+                    30.0 * (u * 7.3 + v * 3.1).fract() + 10.0,
+                );
+                let axis = Vector3::new((u * 11.0).sin(), (v * 13.0).cos(), 0.6 + (u + v) * 0.5)
+                    .normalize();
+                let pose = pose(tip.into(), axis.into());
+                let to_centre = Point3::origin() - pose.tip;
+                let h = to_centre.dot(&axis);
+                let rho = (to_centre - h * axis).norm();
+                // Outside the sphere, the frustum's nearest point to the centre is nearest
+                // the sphere too.
+                let outside = to_frustum(h, rho) - big_r;
+                for limit in [0.5, 2.0, 7.0] {
+                    let far = collider.farther_than(&body, &pose, limit);
+                    if far {
+                        said += 1;
+                        // Facets lie inside the sphere: the mesh is no nearer than the sphere.
+                        assert!(outside >= limit - 1e-9, "{tip:?} {axis:?} {limit}: {outside}");
+                    }
+                    // Clear by more than the pieces' capsules reach past the body (a radius
+                    // past its ends, the slant over a piece, the prism's corners): it must
+                    // say so.
+                    if outside > limit + body.radius_to + 0.5 {
+                        should += 1;
+                        assert!(far, "{tip:?} {axis:?} {limit}: {outside}");
+                    }
+                }
+            }
+        }
+        assert!(said > 200 && should > 200, "{said} said, {should} should");
     }
 
     /// A tapered holder (cone 20 → 40 mm over 30 mm) beside the vertical edge of a tall block,

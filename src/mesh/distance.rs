@@ -88,6 +88,72 @@ pub struct SurfaceDistance {
     /// Per triangle, the pseudo-normal of each of its edges (edge k: corner k to k+1).
     edge_normals: Vec<[Vector3; 3]>,
     vertex_normals: Vec<Vector3>,
+    /// Per triangle, the half-planes it lies in, for a bound before the exact distance.
+    fences: Vec<Fence>,
+}
+
+/// A triangle's plane (unit normal and offset) and, in it, the outward unit normal and
+/// offset of each edge's line: the triangle is the plane's part behind all three lines. A
+/// point `h` off the plane and `g` beyond one line is at least `√(h² + g²)` from the triangle,
+/// and over a segment both are affine, least at an end: a bound of a few dot products that
+/// keeps most triangles near a query from the exact test. All zero for a degenerate triangle
+/// (no bound).
+#[derive(Clone, Copy, Debug)]
+struct Fence {
+    normal: Vector3,
+    offset: f64,
+    edges: [(Vector3, f64); 3],
+}
+
+/// f64 rounding of the fence's dot products is far below this, so a triangle the bound
+/// drops is farther than the limit by more than any rounding.
+const FENCE_SLACK: f64 = 1e-9;
+
+impl Fence {
+    fn new(corners: &[Point3; 3], normal: Vector3) -> Self {
+        let edges = std::array::from_fn(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % 3]);
+            // Counter-clockwise about the normal, edge × normal points out of the triangle.
+            let out: Vector3 = (b - a).cross(&normal);
+            let length = out.norm();
+            if length > 0.0 {
+                let unit = out / length;
+                (unit, unit.dot(&a.coords))
+            } else {
+                (Vector3::zeros(), 0.0)
+            }
+        });
+        Fence {
+            normal,
+            offset: normal.dot(&corners[0].coords),
+            edges,
+        }
+    }
+
+    /// A lower bound of the squared distance from the segment `a b` (a point when equal) to
+    /// the triangle.
+    #[inline(always)]
+    fn distance_squared_below(&self, a: &Point3, b: &Point3) -> f64 {
+        let (ha, hb) = (
+            self.normal.dot(&a.coords) - self.offset,
+            self.normal.dot(&b.coords) - self.offset,
+        );
+        let height = if (ha > 0.0) == (hb > 0.0) {
+            ha.abs().min(hb.abs())
+        } else {
+            0.0
+        };
+        let mut beyond: f64 = 0.0;
+        for (out, offset) in &self.edges {
+            let least = (out.dot(&a.coords) - offset).min(out.dot(&b.coords) - offset);
+            beyond = beyond.max(least);
+        }
+        let (h, g) = (
+            (height - FENCE_SLACK).max(0.0),
+            (beyond - FENCE_SLACK).max(0.0),
+        );
+        h * h + g * g
+    }
 }
 
 /// The answer of [`SurfaceDistance::segment_search`].
@@ -127,6 +193,9 @@ impl SurfaceDistance {
                 }
             }
         }
+        let fences = (0..n)
+            .map(|t| Fence::new(&mesh.corners(t), face_normals[t]))
+            .collect();
         let mut s = SurfaceDistance {
             positions: mesh.positions.clone(),
             triangles: mesh.triangles.clone(),
@@ -135,6 +204,7 @@ impl SurfaceDistance {
             face_normals,
             edge_normals,
             vertex_normals,
+            fences,
         };
         let centroids: Vec<Point3> = (0..n)
             .map(|t| {
@@ -217,7 +287,8 @@ impl SurfaceDistance {
             let node = &self.nodes[ni as usize];
             if node.count > 0 {
                 for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                    if !accept(t) {
+                    if self.fences[t as usize].distance_squared_below(p, p) > best_d2 || !accept(t)
+                    {
                         continue;
                     }
                     let [a, b, c] = self.corners(t);
@@ -313,7 +384,7 @@ impl SurfaceDistance {
         radius: f64,
         accept: impl FnMut(&Point3) -> bool,
     ) -> SegmentSearch {
-        self.search_near(a, b, radius, accept, |_, pair| Some(pair))
+        self.search_near(a, b, radius, accept, |_| true, |_, pair| Some(pair))
     }
 
     /// Like [`SurfaceDistance::segment_search`], for the solid cylinder of `radius` around
@@ -336,21 +407,30 @@ impl SurfaceDistance {
         let k = axis / length;
         // The slab a hair wider than the segment: widening only keeps more triangles near.
         let slack = 1e-9 * (1.0 + length);
-        self.search_near(a, b, radius, accept, |corners, whole| {
-            slab_nearest(a, b, &k, length + slack, -slack, corners, whole)
+        let (low, high) = (-slack, length + slack);
+        // A triangle wholly below or above the slab has no part in it: a ball's contacts,
+        // just below the flutes' lower end, are passed by without measuring them.
+        let in_slab = |corners: &[Point3; 3]| {
+            let heights = corners.map(|p| (p - a).dot(&k));
+            !(heights.iter().all(|&h| h < low) || heights.iter().all(|&h| h > high))
+        };
+        self.search_near(a, b, radius, accept, in_slab, |corners, whole| {
+            slab_nearest(a, b, &k, high, low, corners, whole)
         })
     }
 
     /// The search behind [`SurfaceDistance::segment_search`] and
     /// [`SurfaceDistance::cylinder_search`]: every triangle within `radius` of the segment
     /// (the closest pair of points of the two) goes to `nearest`, which may narrow the pair to
-    /// the part of the triangle that counts, or say none does.
+    /// the part of the triangle that counts, or say none does; `may_count` passes by, before
+    /// anything is measured, triangles with no part that counts.
     fn search_near(
         &self,
         a: &Point3,
         b: &Point3,
         radius: f64,
         mut accept: impl FnMut(&Point3) -> bool,
+        may_count: impl Fn(&[Point3; 3]) -> bool,
         nearest: impl Fn([Point3; 3], (Point3, Point3)) -> Option<(Point3, Point3)>,
     ) -> SegmentSearch {
         if self.nodes.is_empty() || radius.is_nan() || radius <= 0.0 {
@@ -359,28 +439,47 @@ impl SurfaceDistance {
         let r2 = radius * radius;
         let segment_box = Aabb::from_points([a, b]);
         let mut found = SegmentSearch::Clear;
-        self.visit_leaves(
-            |b| b.distance_squared_to_box(&segment_box) < r2,
-            |[p, q, r]| {
-                // The plain distance first: most triangles under the box are farther.
-                let pair = closest_points_of_segment_and_triangle(a, b, &p, &q, &r);
-                if (pair.0 - pair.1).norm_squared() >= r2 {
-                    return false;
-                }
-                let Some((on_segment, on_triangle)) = nearest([p, q, r], pair) else {
-                    return false;
-                };
-                if (on_segment - on_triangle).norm_squared() >= r2 {
-                    return false;
-                }
-                if accept(&on_triangle) {
-                    found = SegmentSearch::Accepted;
-                    return true;
-                }
-                found = SegmentSearch::Near;
-                false
-            },
-        );
+        let along = b - a;
+        let length2 = along.norm_squared();
+        // A long tilted segment's box holds much that is far from it: a box whose centre is
+        // farther from the segment than the radius and half its diagonal is passed by too.
+        let enter = |node: &Aabb| {
+            if node.distance_squared_to_box(&segment_box) >= r2 {
+                return false;
+            }
+            let centre = node.center();
+            let s = if length2 > 0.0 {
+                ((centre - a).dot(&along) / length2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let reach = radius + 0.5 * node.extent().norm() + FENCE_SLACK;
+            (a + along * s - centre).norm_squared() < reach * reach
+        };
+        self.visit_leaves(enter, |t, [p, q, r]| {
+            if self.fences[t as usize].distance_squared_below(a, b) >= r2
+                || !may_count(&[p, q, r])
+            {
+                return false;
+            }
+            // The plain distance first: most triangles under the box are farther.
+            let pair = closest_points_of_segment_and_triangle(a, b, &p, &q, &r);
+            if (pair.0 - pair.1).norm_squared() >= r2 {
+                return false;
+            }
+            let Some((on_segment, on_triangle)) = nearest([p, q, r], pair) else {
+                return false;
+            };
+            if (on_segment - on_triangle).norm_squared() >= r2 {
+                return false;
+            }
+            if accept(&on_triangle) {
+                found = SegmentSearch::Accepted;
+                return true;
+            }
+            found = SegmentSearch::Near;
+            false
+        });
         found
     }
 
@@ -401,7 +500,7 @@ impl SurfaceDistance {
     fn visit_leaves(
         &self,
         enter: impl Fn(&Aabb) -> bool,
-        mut visit: impl FnMut([Point3; 3]) -> bool,
+        mut visit: impl FnMut(u32, [Point3; 3]) -> bool,
     ) {
         if self.nodes.is_empty() {
             return;
@@ -418,7 +517,7 @@ impl SurfaceDistance {
                 continue;
             }
             for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                if visit(self.corners(t)) {
+                if visit(t, self.corners(t)) {
                     return;
                 }
             }
@@ -482,7 +581,7 @@ impl SurfaceDistance {
             near <= far
         };
         let mut count = 0;
-        self.visit_leaves(hits_box, |[a, b, c]| {
+        self.visit_leaves(hits_box, |_, [a, b, c]| {
             let (e1, e2) = (b - a, c - a);
             let p = direction.cross(&e2);
             let det = e1.dot(&p);
@@ -702,6 +801,34 @@ mod tests {
             }
         }
         assert!(clear > 20 && near > 20, "{clear} clear, {near} near");
+    }
+
+    /// The fences and the boxes' centre test only pass by what is out of reach: just above
+    /// and just below each segment's exact distance (every triangle measured), the search
+    /// answers near and clear.
+    #[test]
+    fn segment_search_answers_at_the_exact_distance() {
+        let m = torus(20.0, 6.0, 40, 20);
+        let s = SurfaceDistance::new(&m);
+        let (starts, ends) = (probe_points(300, 30.0), probe_points(600, 1.0));
+        for (i, a) in starts.iter().enumerate() {
+            // Short chords and long tilted shanks.
+            let length = [0.3, 4.0, 30.0][i % 3];
+            let b = a + (ends[2 * i + 1] - Point3::origin()).normalize() * length;
+            let exact = (0..m.triangles.len())
+                .map(|t| {
+                    let [p, q, r] = m.corners(t);
+                    crate::geom::segment_triangle_distance_squared(a, &b, &p, &q, &r)
+                })
+                .fold(f64::INFINITY, f64::min)
+                .sqrt();
+            if exact > 1e-6 {
+                assert!(s.segment_within(a, &b, exact * (1.0 + 1e-9) + 1e-12), "{a} {b}");
+                assert!(!s.segment_within(a, &b, exact * (1.0 - 1e-9)), "{a} {b}");
+            }
+            let c = s.closest(a, f64::INFINITY).map(|c| c.distance);
+            assert_eq!(c, Some(brute_force(&m, a)));
+        }
     }
 
     /// Filtering by facing: from just inside a thin slab, the nearest face is the far side; the

@@ -38,7 +38,9 @@
 //! an error bound of the same kind as the chords' ([`FluteSheets`]), so this minimum is a
 //! certified lower bound too. Where the flutes are nowhere near the part the pieces are few
 //! and far; the surface round the ball's contact lies below the ball's equator, where the
-//! axis is nearest the part at the ball's centre, and is left to the ball's measure.
+//! axis is nearest the part at the ball's centre, and is left to the ball's measure. The
+//! flutes' figure is the least of theirs and the ball's, so after the ball's pass a sheet is
+//! measured only where it could go below the ball's minimum.
 //!
 //! The path is one continuous curve from the program's first fully known position, which is
 //! checked to lie outside the part's bounding sphere about the pivot. A path that never comes
@@ -611,16 +613,6 @@ fn check_posted_pruned(
             m
         })
         .collect();
-    let flutes = (options.flutes_above_ball > 0.0).then(|| {
-        let sheets = FluteSheets {
-            machine,
-            tree: &tree,
-            r,
-            length: options.flutes_above_ball,
-            limit,
-        };
-        sheets.measure(&blocks, &pairs, options, prune)
-    });
     let mut total = Minima::new(options.search_mm);
     for m in per_chunk {
         total.pieces += m.pieces;
@@ -630,6 +622,24 @@ fn check_posted_pruned(
             total.note_feed(f, line);
         }
     }
+    // The flutes' figure is the least of theirs and the ball's, so a sheet matters only where
+    // it goes below the ball's: its minimum is their floor, raised like the ball's.
+    let flutes = (options.flutes_above_ball > 0.0).then(|| {
+        let sheets = FluteSheets {
+            machine,
+            tree: &tree,
+            r,
+            length: options.flutes_above_ball,
+            limit,
+        };
+        let raise = |c: f64| (c + r + 1e-9 < limit).then_some(c + 1e-9);
+        let floors = if prune {
+            (raise(total.feed.0), raise(total.rapid.0))
+        } else {
+            (None, None)
+        };
+        sheets.measure(&blocks, &pairs, options, floors)
+    });
     // The sheets leave the surface below the ball's equator to the ball's measure.
     let flutes = flutes.map(|mut f| {
         if total.feed.0 < f.min_feed_clearance_mm {
@@ -861,22 +871,16 @@ struct FluteSheets<'a> {
 }
 
 impl FluteSheets<'_> {
-    /// Every block's sheet, in the ball pass's fixed chunks, each pruned against the least
-    /// clearance its chunk has found (and, with `prune`, against the first pass's ceilings).
+    /// Every block's sheet, in the ball pass's fixed chunks, each wanted only below its
+    /// `floors` (feed, rapid; `None`: measured whole) and below the least clearance its chunk
+    /// has found.
     fn measure(
         &self,
         blocks: &[MotionBlock],
         pairs: &[BlockJoints],
         options: &PostedOptions,
-        prune: bool,
+        floors: (Option<f64>, Option<f64>),
     ) -> FluteClearance {
-        let floors = if prune {
-            let (feed, rapid) = self.ceilings(blocks, pairs);
-            let raise = |c: f64| (c + self.r + 1e-9 < self.limit).then_some(c + 1e-9);
-            (raise(feed), raise(rapid))
-        } else {
-            (None, None)
-        };
         let per_chunk: Vec<Minima> = pairs
             .par_chunks(256)
             .map(|chunk| {
@@ -915,39 +919,6 @@ impl FluteSheets<'_> {
             min_rapid_clearance_mm: total.rapid.0,
             min_rapid_line: total.rapid.1,
         }
-    }
-
-    /// Upper bounds (feed, rapid) of the least clearance [`Self::block`] finds: a block's
-    /// sheet ends on the axis segment of its end point, which the last pieces' triangles hold,
-    /// so the block's clearance is at most that segment's distance less the radius.
-    fn ceilings(&self, blocks: &[MotionBlock], pairs: &[BlockJoints]) -> (f64, f64) {
-        let far = self.limit - self.r;
-        let per_chunk: Vec<(f64, f64)> = pairs
-            .par_chunks(256)
-            .map(|chunk| {
-                let mut ceilings = (far, far);
-                for (i, _, j1) in chunk {
-                    let block = &blocks[*i];
-                    let ceiling = if block.rapid {
-                        &mut ceilings.1
-                    } else {
-                        &mut ceilings.0
-                    };
-                    let (centre, axis) = self.axis_at(j1, block.tool);
-                    let reach = *ceiling + self.r;
-                    let d = self
-                        .tree
-                        .distance(&centre, &(centre + axis * self.length), reach);
-                    if d < reach {
-                        *ceiling = d - self.r;
-                    }
-                }
-                ceilings
-            })
-            .collect();
-        per_chunk
-            .iter()
-            .fold((far, far), |(f, q), c| (f.min(c.0), q.min(c.1)))
     }
 
     /// The ball's centre and the unit axis at `joints`.

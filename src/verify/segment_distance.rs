@@ -42,6 +42,10 @@ pub struct SegmentDistance {
     /// it: a query held on one side of the plane is at least that far from the triangle, a
     /// bound of a few dot products before the exact distance.
     planes: Vec<(Vector3, f64)>,
+    /// Each triangle's three edges as in-plane unit normals pointing out of it, with their
+    /// offsets (zero for a degenerate triangle): the triangle lies in the half-plane of its
+    /// plane behind each edge, which sharpens the plane's bound (see [`Self::nearest`]).
+    edges: Vec<[(Vector3, f64); 3]>,
     order: Vec<u32>,
     nodes: Vec<BoxNode>,
 }
@@ -64,9 +68,28 @@ impl SegmentDistance {
                 (unit, unit.dot(&a.coords))
             })
             .collect();
+        let edges = corners
+            .iter()
+            .zip(&planes)
+            .map(|(triangle, (normal, _)): (&[Point3; 3], &(Vector3, f64))| {
+                std::array::from_fn(|k| {
+                    let (a, b) = (triangle[k], triangle[(k + 1) % 3]);
+                    // Counter-clockwise about the normal, edge × normal points out.
+                    let out: Vector3 = (b - a).cross(normal);
+                    let length = out.norm();
+                    if length > 0.0 {
+                        let unit = out / length;
+                        (unit, unit.dot(&a.coords))
+                    } else {
+                        (Vector3::zeros(), 0.0)
+                    }
+                })
+            })
+            .collect();
         let mut tree = SegmentDistance {
             order: (0..corners.len() as u32).collect(),
             planes,
+            edges,
             corners,
             nodes: Vec::new(),
         };
@@ -250,8 +273,29 @@ impl SegmentDistance {
                     }
                     // Beyond the best by more than the heights' rounding: a nearer triangle
                     // is never skipped.
-                    let gap = below.max(-above);
-                    if gap > best + 1e-12 * (1.0 + best + offset.abs()) {
+                    let slack = 1e-12 * (1.0 + best + offset.abs());
+                    let height = below.max(-above).max(0.0);
+                    if height > best + slack {
+                        continue;
+                    }
+                    // The triangle lies in the half-plane of its plane behind each edge. A
+                    // point `h` off the plane and `g` beyond the edge's line is
+                    // `√(h² + g²)` from that half-plane, and over the query's hull both are
+                    // affine, least at one of its points: the sum of their least squares
+                    // bounds the least distance from below.
+                    let (mut beyond, mut scale): (f64, f64) = (0.0, 0.0);
+                    for (out, edge_offset) in &self.edges[t as usize] {
+                        let least = points
+                            .iter()
+                            .map(|point| out.dot(&point.coords) - edge_offset)
+                            .fold(f64::INFINITY, f64::min);
+                        beyond = beyond.max(least);
+                        scale = scale.max(edge_offset.abs());
+                    }
+                    if beyond > 0.0
+                        && (height * height + beyond * beyond).sqrt()
+                            > best + slack + 1e-12 * (1.0 + scale)
+                    {
                         continue;
                     }
                     best = best.min(measure(t as usize, best));
@@ -565,6 +609,20 @@ mod tests {
             let length = [0.0, 1e-4, 0.01, 0.2][i % 4];
             let q = p + Vector3::new((1.3 * s).sin(), (0.3 * s).cos(), -0.4) * length;
             assert_eq!(tree.distance(&p, &q, f64::INFINITY), brute(&p, &q));
+        }
+        // Grazing the surface: every nearby plane and edge bound is within a hair of the
+        // answer, and a limit just above it must still find it.
+        for i in 0..400 {
+            let s = i as f64 * 0.291;
+            let p = Point3::new(s.cos(), s.sin(), (0.4 * s).sin())
+                .coords
+                .normalize()
+                * 10.002;
+            let q = Point3::from(p) + Vector3::new((0.7 * s).cos(), (1.9 * s).sin(), 0.3) * 0.3;
+            let p = Point3::from(p);
+            let exact = brute(&p, &q);
+            assert_eq!(tree.distance(&p, &q, f64::INFINITY), exact);
+            assert_eq!(tree.distance(&p, &q, exact + 1e-9), exact);
         }
     }
 
