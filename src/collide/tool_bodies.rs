@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use parry3d::math::Pose;
 use parry3d::query::{self, ClosestPoints};
-use parry3d::shape::{Capsule, ConvexPolyhedron, Cylinder, RoundCylinder, Shape, TriMesh};
+use parry3d::shape::{ConvexPolyhedron, Cylinder, RoundCylinder, Shape, TriMesh};
 
 use crate::geom::ToolPose;
 use crate::geom::{Point3, Vector3};
@@ -334,7 +334,10 @@ impl PartCollider {
         self.check_material(tool, pose, sweep)
     }
 
-    /// The ball swept `sweep` mm along the axis from `pose` (a capsule), tested without touching.
+    /// The ball swept `sweep` mm along the axis from `pose` (a capsule), tested without
+    /// touching: no triangle within the radius less [`F32_SLACK`] of the centre's sweep, in
+    /// f64 (the fences pass by the triangles the ball rests on at once, where parry's f32 GJK
+    /// ran over every triangle under the long capsule's box).
     pub fn check_ball_sweep(
         &self,
         tool: &PreparedTool,
@@ -342,13 +345,13 @@ impl PartCollider {
         sweep: f64,
     ) -> Result<(), Collision> {
         let r = tool.ball_radius;
-        let c = pose.tip + pose.axis.into_inner() * r;
-        let capsule = Capsule::new(
-            self.local(&c),
-            self.local(&(c + pose.axis.into_inner() * sweep)),
-            (r - F32_SLACK) as f32,
-        );
-        if self.intersects(&capsule, &Pose::IDENTITY) {
+        let k = pose.axis.into_inner();
+        let c = pose.tip + k * r;
+        if self
+            .part
+            .surface
+            .segment_within(&c, &(c + k * sweep.max(0.0)), r - F32_SLACK)
+        {
             Err(Collision::Gouge { depth: 0.0 })
         } else {
             Ok(())
