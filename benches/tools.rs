@@ -1,7 +1,8 @@
 //! Collision queries and tool choice (issue 5 items 4 and 6), on the sample impeller.
 //!
-//! Throughput in queries/s for the exact f64 ball test (BVH signed distance) against the same
-//! test triangle by triangle (the baseline, same run), and for the parry tests of a ball tool's
+//! Throughput in queries/s for the exact f64 ball test (BVH signed distance) and the ball's
+//! sweep up its axis to a safe plane (the BVH with the triangles' fences), each against the
+//! same test triangle by triangle (the baseline, same run), and for the parry tests of a ball tool's
 //! flutes/shank/holder and of flat and bull-nose ends touching the point along its normal; then
 //! the whole `choose_tools` over 2000 points with `data/tools.toml`.
 
@@ -10,7 +11,9 @@ use std::path::PathBuf;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use wavemill::collide::{Margins, PartCollider, PreparedTool};
 use wavemill::geom::ToolPose;
-use wavemill::geom::{Point3, Vector3, closest_point_on_triangle};
+use wavemill::geom::{
+    Point3, Vector3, closest_point_on_triangle, segment_triangle_distance_squared,
+};
 use wavemill::job;
 use wavemill::mesh::{Mesh, PrepareOptions, prepare};
 use wavemill::tool::{Cutter, Section, ToolAssembly, ToolLibrary};
@@ -117,6 +120,37 @@ fn collision_queries(c: &mut Criterion) {
                         axis: wavemill::geom::Direction::new_normalize(*n),
                     };
                     collider.check_bodies(&ball, &pose).is_ok()
+                })
+                .count()
+        })
+    });
+    // The ball leaving along its axis for a safe plane 60 mm up (linking's test), decided
+    // in f64 with the fences against the same test triangle by triangle.
+    let sweep = 60.0;
+    g.bench_function("ball_sweep_to_safe_plane_fenced", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .filter(|(p, n)| {
+                    let pose = ToolPose {
+                        tip: *p,
+                        axis: wavemill::geom::Direction::new_normalize(*n),
+                    };
+                    collider.check_ball_sweep(&ball, &pose, sweep).is_ok()
+                })
+                .count()
+        })
+    });
+    g.bench_function("ball_sweep_to_safe_plane_triangle_by_triangle", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .filter(|(p, n)| {
+                    let (from, to) = (p + n * r, p + n * (r + sweep));
+                    let limit = (r - 1e-3) * (r - 1e-3);
+                    triangles.iter().all(|[a, bb, cc]| {
+                        segment_triangle_distance_squared(&from, &to, a, bb, cc) >= limit
+                    })
                 })
                 .count()
         })

@@ -1266,7 +1266,10 @@ pub(crate) mod tests {
                     if far {
                         said += 1;
                         // Facets lie inside the sphere: the mesh is no nearer than the sphere.
-                        assert!(outside >= limit - 1e-9, "{tip:?} {axis:?} {limit}: {outside}");
+                        assert!(
+                            outside >= limit - 1e-9,
+                            "{tip:?} {axis:?} {limit}: {outside}"
+                        );
                     }
                     // Clear by more than the pieces' capsules reach past the body (a radius
                     // past its ends, the slant over a piece, the prism's corners): it must

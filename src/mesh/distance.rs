@@ -457,8 +457,7 @@ impl SurfaceDistance {
             (a + along * s - centre).norm_squared() < reach * reach
         };
         self.visit_leaves(enter, |t, [p, q, r]| {
-            if self.fences[t as usize].distance_squared_below(a, b) >= r2
-                || !may_count(&[p, q, r])
+            if self.fences[t as usize].distance_squared_below(a, b) >= r2 || !may_count(&[p, q, r])
             {
                 return false;
             }
@@ -823,7 +822,10 @@ mod tests {
                 .fold(f64::INFINITY, f64::min)
                 .sqrt();
             if exact > 1e-6 {
-                assert!(s.segment_within(a, &b, exact * (1.0 + 1e-9) + 1e-12), "{a} {b}");
+                assert!(
+                    s.segment_within(a, &b, exact * (1.0 + 1e-9) + 1e-12),
+                    "{a} {b}"
+                );
                 assert!(!s.segment_within(a, &b, exact * (1.0 - 1e-9)), "{a} {b}");
             }
             let c = s.closest(a, f64::INFINITY).map(|c| c.distance);
