@@ -1124,6 +1124,40 @@ pub(crate) mod tests {
         }
     }
 
+    /// The truncated cone the sphere tests measure: 4 to 16 mm up the axis, radius 3 to 5.
+    fn frustum() -> Revolved {
+        Revolved {
+            from: 4.0,
+            to: 16.0,
+            radius_from: 3.0,
+            radius_to: 5.0,
+        }
+    }
+
+    /// Distance from a point at height `h`, `rho` off the axis, to `body`: 0 inside, else to
+    /// the nearest side of its half-section (a trapezoid in the meridian half-plane).
+    fn to_frustum(body: &Revolved, h: f64, rho: f64) -> f64 {
+        let corners = [
+            (body.from, 0.0),
+            (body.from, body.radius_from),
+            (body.to, body.radius_to),
+            (body.to, 0.0),
+        ];
+        let t = (h - body.from) / (body.to - body.from);
+        let slant = body.radius_from + (body.radius_to - body.radius_from) * t;
+        if (0.0..=1.0).contains(&t) && rho <= slant {
+            return 0.0;
+        }
+        (0..4)
+            .map(|i| {
+                let (a, b) = (corners[i], corners[(i + 1) % 4]);
+                let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+                let s = (((h - a.0) * dx + (rho - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+                (h - a.0 - s * dx).hypot(rho - a.1 - s * dy)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// The capsule verdict against a closed form: a truncated cone meets a sphere's surface
     /// when its nearest point lies inside the sphere and its farthest outside. The nearest is
     /// the 2D distance from the centre to the cone's trapezoid in the meridian half-plane, the
@@ -1135,34 +1169,8 @@ pub(crate) mod tests {
         let collider =
             PartCollider::new(&crate::mesh::fixtures::uv_sphere(big_r, 60, 120)).unwrap();
         let sagitta = 2.0 * big_r * (1.0 - (std::f64::consts::PI / 60.0).cos());
-        let body = Revolved {
-            from: 4.0,
-            to: 16.0,
-            radius_from: 3.0,
-            radius_to: 5.0,
-        };
-        let distance_to_trapezoid = |h: f64, rho: f64| -> f64 {
-            let corners = [
-                (body.from, 0.0),
-                (body.from, body.radius_from),
-                (body.to, body.radius_to),
-                (body.to, 0.0),
-            ];
-            let slant = |t: f64| body.radius_from + (body.radius_to - body.radius_from) * t;
-            let t = (h - body.from) / (body.to - body.from);
-            if (0.0..=1.0).contains(&t) && rho <= slant(t) {
-                return 0.0;
-            }
-            (0..4)
-                .map(|i| {
-                    let (a, b) = (corners[i], corners[(i + 1) % 4]);
-                    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-                    let s =
-                        (((h - a.0) * dx + (rho - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
-                    (h - a.0 - s * dx).hypot(rho - a.1 - s * dy)
-                })
-                .fold(f64::INFINITY, f64::min)
-        };
+        let body = frustum();
+        let distance_to_trapezoid = |h: f64, rho: f64| to_frustum(&body, h, rho);
         let (mut decided, mut meets, mut clear, mut judged) = (0, 0, 0, 0);
         for i in 0..40 {
             for j in 0..40 {
@@ -1213,36 +1221,7 @@ pub(crate) mod tests {
         let big_r = 20.0;
         let collider =
             PartCollider::new(&crate::mesh::fixtures::uv_sphere(big_r, 60, 120)).unwrap();
-        let body = Revolved {
-            from: 4.0,
-            to: 16.0,
-            radius_from: 3.0,
-            radius_to: 5.0,
-        };
-        // Distance from a point at height h, rho off the axis, to the frustum: 0 inside, else
-        // to the nearest side of its half-section (a trapezoid).
-        let to_frustum = |h: f64, rho: f64| -> f64 {
-            let corners = [
-                (body.from, 0.0),
-                (body.from, body.radius_from),
-                (body.to, body.radius_to),
-                (body.to, 0.0),
-            ];
-            let t = (h - body.from) / (body.to - body.from);
-            let slant = body.radius_from + (body.radius_to - body.radius_from) * t;
-            if (0.0..=1.0).contains(&t) && rho <= slant {
-                return 0.0;
-            }
-            (0..4)
-                .map(|i| {
-                    let (a, b) = (corners[i], corners[(i + 1) % 4]);
-                    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-                    let s =
-                        (((h - a.0) * dx + (rho - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
-                    (h - a.0 - s * dx).hypot(rho - a.1 - s * dy)
-                })
-                .fold(f64::INFINITY, f64::min)
-        };
+        let body = frustum();
         let (mut should, mut said) = (0, 0);
         for i in 0..30 {
             for j in 0..30 {
@@ -1260,7 +1239,7 @@ pub(crate) mod tests {
                 let rho = (to_centre - h * axis).norm();
                 // Outside the sphere, the frustum's nearest point to the centre is nearest
                 // the sphere too.
-                let outside = to_frustum(h, rho) - big_r;
+                let outside = to_frustum(&body, h, rho) - big_r;
                 for limit in [0.5, 2.0, 7.0] {
                     let far = collider.farther_than(&body, &pose, limit);
                     if far {
