@@ -54,6 +54,47 @@ const PARTIAL_LOOP_OVERLAP_STEPOVERS: f64 = 1.0;
 /// lowest loop stands at half a step): every ball of it comes to rest in the corner.
 const ROOT_LEVEL_STEPS: f64 = 0.25;
 
+/// The root pass round blade or splitter `piece` (its region) of `passage`, every ball in the
+/// corner: the section a quarter of the loops' `level_step` above the hub, a loop round the
+/// piece or stretches where the hub rises off its meridian's fit and the level runs into it,
+/// planned like a loop. With what it planned, or why there is none.
+pub fn root_pass(
+    part: &Mesh,
+    impeller: &Impeller,
+    passage: &HubPassage,
+    piece: Region,
+    level_step: f64,
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+) -> (Finishing, Result<RootPass, String>) {
+    let (Region::Blade(index) | Region::Splitter(index)) = piece else {
+        return (
+            Finishing::default(),
+            Err(format!("{piece:?} is neither a blade nor a splitter")),
+        );
+    };
+    let level = ROOT_LEVEL_STEPS * level_step;
+    let curves = blade_section_at(part, impeller, passage, index as usize, level);
+    let mut root = Finishing::default();
+    // A pass of a few hundred poses: no progress of its own.
+    for result in path::curve_passes(&curves, ctx, options, &|| {}) {
+        root.merge(result);
+    }
+    if root.segments.is_empty() {
+        let why = format!("no pass on the piece {level:.3} mm above the hub");
+        return (root, Err(why));
+    }
+    let summary = root_pass_summary(
+        &root,
+        level,
+        ctx.tool.ball_radius,
+        ctx.part.surface(),
+        &impeller.regions,
+        piece,
+    );
+    (root, Ok(summary))
+}
+
 /// What the root pass planned: its length, and how many of its balls touch hub and blade.
 fn root_pass_summary(
     root: &Finishing,
@@ -61,7 +102,7 @@ fn root_pass_summary(
     radius: f64,
     surface: &crate::mesh::SurfaceDistance,
     regions: &[Region],
-    piece: usize,
+    piece: Region,
 ) -> RootPass {
     let reach = radius + path::CONTACT_BAND;
     let mut both = 0;
@@ -80,9 +121,7 @@ fn root_pass_summary(
         for c in &centres {
             poses += 1;
             let hub = surface.closest_where(c, reach, |t| regions[t as usize] == Region::Hub);
-            let blade = surface.closest_where(c, reach, |t| {
-                regions[t as usize] == Region::Blade(piece as u32)
-            });
+            let blade = surface.closest_where(c, reach, |t| regions[t as usize] == piece);
             if hub.is_some() && blade.is_some() {
                 both += 1;
             }
@@ -192,6 +231,16 @@ pub struct RootPass {
     pub touching_both: f64,
 }
 
+/// The root pass of one splitter (by its index in the impeller's pieces).
+#[derive(Clone, Debug, Serialize)]
+pub struct SplitterRootPass {
+    pub piece: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub root_pass: Option<RootPass>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub no_root_pass: Option<String>,
+}
+
 /// The swarf runs round one blade.
 #[derive(Clone, Debug, Serialize)]
 pub struct SwarfSummary {
@@ -223,6 +272,9 @@ pub struct ImpellerFinishSummary {
     /// round them in one passage.
     pub splitters: usize,
     pub splitter_loops: usize,
+    /// The pass round each splitter's root in the first passage (copied with it), or why
+    /// there is none.
+    pub splitter_root_passes: Vec<SplitterRootPass>,
     /// Why the hub and blades are finished by the planes instead, when they are.
     pub not_planned: Option<String>,
     /// Passages (each with its blade) planned, and copied from the first.
@@ -266,6 +318,7 @@ pub fn finish_impeller(
         blade: None,
         splitters: 0,
         splitter_loops: 0,
+        splitter_root_passes: Vec::new(),
         not_planned: None,
         passages: 0,
         first_passage_ms: 0.0,
@@ -456,29 +509,18 @@ pub fn finish_impeller(
                 None => (None, plan_loops(&loops, &blade_ctx, None), None, None),
             };
 
-            // The root pass, every ball in the corner: the section a quarter step above the
-            // hub, a loop round the blade or stretches where the hub rises off its meridian's
-            // fit and the level runs into it.
-            let root_level = ROOT_LEVEL_STEPS * loops.level_step;
-            let root_curves =
-                blade_section_at(part, impeller, &passage, passage.first_blade, root_level);
-            let mut root = Finishing::default();
-            for result in path::curve_passes(&root_curves, &blade_ctx, options, advance) {
-                root.merge(result);
-            }
-            let (root_pass, no_root_pass) = if root.segments.is_empty() {
-                let why = format!("no pass on the blade {root_level:.3} mm above the hub");
-                (None, Some(why))
-            } else {
-                let summary = root_pass_summary(
-                    &root,
-                    root_level,
-                    radius,
-                    ctx.part.surface(),
-                    &impeller.regions,
-                    passage.first_blade,
-                );
-                (Some(summary), None)
+            let (mut root, root_summary) = root_pass(
+                part,
+                impeller,
+                &passage,
+                Region::Blade(passage.first_blade as u32),
+                loops.level_step,
+                &blade_ctx,
+                options,
+            );
+            let (blade_root_pass, no_root_pass) = match root_summary {
+                Ok(summary) => (Some(summary), None),
+                Err(why) => (None, Some(why)),
             };
 
             // The splitters in the passage: loops round each, both its sides, like the blade.
@@ -503,7 +545,21 @@ pub fn finish_impeller(
                     axis_field: Some(field),
                     ..*ctx
                 };
-                splitters.push((plan_loops(&piece_loops, &piece_ctx, None), piece_ctx));
+                let (root, root_summary) = root_pass(
+                    part,
+                    impeller,
+                    &passage,
+                    Region::Splitter(piece as u32),
+                    piece_loops.level_step,
+                    &piece_ctx,
+                    options,
+                );
+                summary.splitter_root_passes.push(SplitterRootPass {
+                    piece,
+                    root_pass: root_summary.as_ref().ok().cloned(),
+                    no_root_pass: root_summary.err(),
+                });
+                splitters.push((plan_loops(&piece_loops, &piece_ctx, None), root, piece_ctx));
             }
 
             // Passes are spaced on the drive surface, but in a corner tighter than the ball
@@ -533,8 +589,11 @@ pub fn finish_impeller(
             keep_needed(&mut root, blade_axes == BladeAxes::Blade);
             // Copied with the blade's loops, after them: they end at the root.
             blade.merge(root);
-            for (splitter, _) in &mut splitters {
+            for (splitter, root, _) in &mut splitters {
                 keep_needed(splitter, blade_axes == BladeAxes::Blade);
+                keep_needed(root, blade_axes == BladeAxes::Blade);
+                // Copied with the splitter's loops, after them, as the blade's.
+                splitter.merge(std::mem::take(root));
             }
             keep_needed(&mut hub, hub_axes != HubAxes::Walls);
             summary.first_passage_ms = round_ms(t);
@@ -574,7 +633,7 @@ pub fn finish_impeller(
                     }
                     copies.push(copy);
                 }
-                for (splitter, piece_ctx) in &splitters {
+                for (splitter, _, piece_ctx) in &splitters {
                     let (copy, stats) =
                         path::turned_copy(splitter, &rotation, &centre, piece_ctx, options);
                     summary.copies.merge(&stats);
@@ -590,7 +649,7 @@ pub fn finish_impeller(
                 finishing.merge(swarf);
             }
             finishing.merge(blade);
-            for (splitter, _) in splitters {
+            for (splitter, _, _) in splitters {
                 finishing.merge(splitter);
             }
             for copy in copies {
@@ -621,7 +680,7 @@ pub fn finish_impeller(
                 level_step_mm: loops.level_step,
                 height_mm: loops.top,
                 axes: blade_axes,
-                root_pass,
+                root_pass: blade_root_pass,
                 no_root_pass,
                 lean_deg: impeller_options.blade_lean_deg,
                 swarf: swarf_summary,

@@ -64,7 +64,7 @@ pub use contour::{
     DEFAULT_MAX_OUTLINE_VERTICES, MethodFigures, StockSpec, contour_compare, contour_wavelet,
     write_contour_outputs,
 };
-pub use impeller_finish::{PassageVisibility, visible_passage_axis};
+pub use impeller_finish::{PassageVisibility, RootPass, root_pass, visible_passage_axis};
 pub use lens::{
     GRID_DISTANCE_TOLERANCE, LensOptions, LensOutput, LensReport, LoadedLens, lens, lens_failure,
     load_lens, write_lens_outputs,

@@ -248,3 +248,91 @@ fn the_sample_passage_axis_is_seen_from_as_many_points_as_any_direction() {
     );
     assert!(figures.from_walls_deg < 30.0, "{figures:?}");
 }
+
+/// The compressor's splitters get a root pass like its blades: on the splitter in passage 0,
+/// with an 8 mm ball, every ball touches the part within the tolerance and never cuts into
+/// it (the tests' own oracle), and rests beside the splitter: on its flank or fillet, or on
+/// the hub within half a millimetre of it where the corner opens wider than the ball (its
+/// nose, where it leans back). This coarse CAD hub lies off its surface of revolution by
+/// millimetres, so the level a quarter step above it runs partly up the flank: most balls,
+/// not all, touch the splitter.
+#[test]
+fn the_compressor_splitter_gets_a_root_pass_beside_it() {
+    let Some(dir) = common::testdata() else {
+        return;
+    };
+    let path = dir.join("meshes/impeller_compressor_splitter__omorellAUS_Impellor-V3.stl");
+    let job = wavemill::job::Job::from_toml(
+        "[part]\nup = [0.0, 1.0, 0.0]\n[stock]\nblank = \"none\"\n\
+         [tool]\ndiameter = 8.0\nflute_length = 25.0\nshank_diameter = 8.0\nstickout = 65.0\n\
+         [strategy]\nscallop_height = 0.02\ntolerance = 0.02\n",
+        "compressor.toml",
+    )
+    .expect("job");
+    let raw = read_mesh(&path, Units::Millimetres).expect("mesh");
+    let prepared = wavemill::job::prepare_part(&raw, "compressor", &job).expect("prepared");
+    let setup = wavemill::job::PlanSetup::new(&prepared, &job).expect("setup");
+    let part = &prepared.part;
+    let found = recognise(part, &RecogniseOptions::default()).expect("the compressor");
+    let r = 4.0;
+    let tolerance = 0.02;
+    let passage = HubPassage::new(
+        part,
+        &found,
+        &PassageOptions {
+            station_step: 0.25,
+            ball_radius: r,
+            scallop_height: tolerance,
+            overlap: 3.2,
+        },
+    )
+    .expect("a passage");
+    let splitter = passage.splitters(&found)[0];
+    let loops = blade_loops(part, &found, &passage, splitter, 0.8, 0.8);
+    let anywhere = |_: &nalgebra::Vector3<f64>| true;
+    let ctx = setup.finishing_context(&setup.collider, &setup.rays, &anywhere);
+    let (root, summary) = wavemill::job::root_pass(
+        part,
+        &found,
+        &passage,
+        Region::Splitter(splitter as u32),
+        loops.level_step,
+        &ctx,
+        &setup.finishing,
+    );
+    let summary = summary.expect("a root pass on the splitter");
+    // The splitter's root runs about 100 mm round it.
+    assert!(summary.length_mm > 50.0, "{summary:?}");
+
+    let oracle = common::Oracle::new(&part.positions, &part.triangles, 2.0 * r);
+    let own: Vec<[u32; 3]> = part
+        .triangles
+        .iter()
+        .zip(&found.regions)
+        .filter(|(_, region)| **region == Region::Splitter(splitter as u32))
+        .map(|(t, _)| *t)
+        .collect();
+    let on_splitter = common::Oracle::new(&part.positions, &own, 2.0 * r);
+    let (mut poses, mut touching) = (0, 0);
+    for pose in root.segments.iter().flat_map(|s| &s.poses) {
+        poses += 1;
+        let centre = pose.tip + pose.axis.into_inner() * r;
+        let d = oracle.distance_below(&centre, 2.0 * r);
+        assert!(
+            d >= r - 1e-6 && d <= r + tolerance,
+            "a ball {} mm off the part at {centre:?}",
+            d - r
+        );
+        let to_splitter = on_splitter.distance_below(&centre, 2.0 * r);
+        assert!(
+            to_splitter <= r + 0.5,
+            "a ball {to_splitter} mm from the splitter at {centre:?}"
+        );
+        touching += usize::from(to_splitter <= r + tolerance);
+    }
+    assert_eq!(poses, summary.poses);
+    assert!(
+        4 * touching >= 3 * poses,
+        "{touching} of {poses} touch the splitter"
+    );
+}
