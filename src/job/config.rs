@@ -65,8 +65,11 @@ pub struct ImpellerSection {
     /// the feed.
     pub hub_axes: HubAxes,
     /// The tool axes around a blade: `"blade"`, the passages' axis turned to the blade (the
-    /// rotary axes stand still round each loop), or `"lean"`, the blade's rising direction
-    /// leaned off its surface by `blade_lean_deg`.
+    /// rotary axes stand still round each loop); `"visibility"`, one axis per blade too, the
+    /// direction with the most room among those every point round it sees (from the
+    /// visibility maps of points on its loops, nearest the passages' axis among equals;
+    /// splitters take it turned to them); or `"lean"`, the blade's rising direction leaned off
+    /// its surface by `blade_lean_deg`.
     pub blade_axes: BladeAxes,
     /// How far the tool leans off a blade's surface with `blade_axes = "lean"`, degrees (0:
     /// along the blade, cutting with the ball's equator; 90: square to the surface).
@@ -83,6 +86,7 @@ pub struct ImpellerSection {
 #[serde(rename_all = "kebab-case")]
 pub enum BladeAxes {
     Blade,
+    Visibility,
     Lean,
 }
 

@@ -203,6 +203,10 @@ pub struct BladeSummary {
     pub height_mm: f64,
     pub axes: BladeAxes,
     pub lean_deg: f64,
+    /// With `blade_axes = "visibility"`: the maps of points round the blade and the axis
+    /// chosen from them (`from_walls_deg`: from the passages' axis turned to the blade).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility: Option<PassageVisibility>,
     /// The pass round the blade's root (its fillet, or the ball touching hub and blade where
     /// the root is sharper than the ball), or why there is none.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -404,21 +408,48 @@ pub fn finish_impeller(
             );
             let lean = impeller_options.blade_lean_deg.to_radians();
             let blade_axes = impeller_options.blade_axes;
+            // The blade stands half a pitch before the middle of its passage.
+            let blade_angle = middle - 0.5 * passage.pitch;
+            // The blade's one axis as (axial, radial, tangential) at its own angle: the
+            // passages' axis turned to it, or from the maps of points round it.
+            let mut blade_visibility = None;
+            let blade_mean = if blade_axes == BladeAxes::Visibility {
+                let t = Instant::now();
+                let radial = passage.frame.radial(blade_angle);
+                let tangent = passage.frame.axis.cross(&radial);
+                let default = passage.frame.axis * mean[0] + radial * mean[1] + tangent * mean[2];
+                let (direction, figures) = visible_axis(
+                    &blade_visibility_points(&loops),
+                    &default,
+                    ctx.rays,
+                    ctx.tool.ball_radius,
+                    ctx.tool.reach,
+                    t,
+                );
+                blade_visibility = Some(figures);
+                [
+                    direction.dot(&passage.frame.axis),
+                    direction.dot(&radial),
+                    direction.dot(&tangent),
+                ]
+            } else {
+                mean
+            };
             let (passage_ref, off_pole_ref) = (&passage, &off_pole);
             // The preferred axis round the blade or splitter standing at angle `reference`
             // (and its copies a pitch apart).
             let field_for = |reference: f64| {
                 move |p: &Point3, normal: &Vector3, _feed: &Vector3| {
                     let axis = match blade_axes {
-                        BladeAxes::Blade => {
-                            // The passages' axis, turned to the piece `p` is on.
+                        BladeAxes::Blade | BladeAxes::Visibility => {
+                            // The blade's axis, turned to the piece `p` is on.
                             let (_, angle, _) = passage_ref.frame.cylindrical(p);
                             let k = ((angle - reference) / passage_ref.pitch).round();
                             let radial =
                                 passage_ref.frame.radial(reference + k * passage_ref.pitch);
-                            passage_ref.frame.axis * mean[0]
-                                + radial * mean[1]
-                                + passage_ref.frame.axis.cross(&radial) * mean[2]
+                            passage_ref.frame.axis * blade_mean[0]
+                                + radial * blade_mean[1]
+                                + passage_ref.frame.axis.cross(&radial) * blade_mean[2]
                         }
                         BladeAxes::Lean => {
                             let (_, up) = passage_ref.above_hub(p);
@@ -435,8 +466,7 @@ pub fn finish_impeller(
                     off_pole_ref(p, &axis)
                 }
             };
-            // The blade stands half a pitch before the middle of its passage.
-            let blade_field = field_for(middle - 0.5 * passage.pitch);
+            let blade_field = field_for(blade_angle);
             let blade_ctx = FinishingContext {
                 axis_field: Some(&blade_field),
                 ..*ctx
@@ -468,7 +498,7 @@ pub fn finish_impeller(
                     }
                     finishing.segments = path::nearest_order(
                         std::mem::take(&mut finishing.segments),
-                        blade_axes == BladeAxes::Blade,
+                        blade_axes != BladeAxes::Lean,
                     );
                     finishing
                 };
@@ -585,13 +615,13 @@ pub fn finish_impeller(
                 finishing.segments = path::nearest_order(kept, may_reverse);
                 summary.covered.merge(&covered);
             };
-            keep_needed(&mut blade, blade_axes == BladeAxes::Blade);
-            keep_needed(&mut root, blade_axes == BladeAxes::Blade);
+            keep_needed(&mut blade, blade_axes != BladeAxes::Lean);
+            keep_needed(&mut root, blade_axes != BladeAxes::Lean);
             // Copied with the blade's loops, after them: they end at the root.
             blade.merge(root);
             for (splitter, root, _) in &mut splitters {
-                keep_needed(splitter, blade_axes == BladeAxes::Blade);
-                keep_needed(root, blade_axes == BladeAxes::Blade);
+                keep_needed(splitter, blade_axes != BladeAxes::Lean);
+                keep_needed(root, blade_axes != BladeAxes::Lean);
                 // Copied with the splitter's loops, after them, as the blade's.
                 splitter.merge(std::mem::take(root));
             }
@@ -682,6 +712,7 @@ pub fn finish_impeller(
                 axes: blade_axes,
                 root_pass: blade_root_pass,
                 no_root_pass,
+                visibility: blade_visibility,
                 lean_deg: impeller_options.blade_lean_deg,
                 swarf: swarf_summary,
                 not_swarfed,
@@ -756,6 +787,22 @@ pub fn visible_passage_axis(
             })
         })
         .collect();
+    let (direction, figures) = visible_axis(&points, &walls_axis, rays, ball_radius, reach, t);
+    (to_frame(&direction), figures, points)
+}
+
+/// The one axis for `points` from their visibility maps (seed 004 ch. 5 step 4): of the
+/// directions all of them see (or, where none is, the most), the one with the most room,
+/// ties to `default` (in the part frame); `default` where no point sees anything. `started`:
+/// when the caller began, for the figures' time.
+fn visible_axis(
+    points: &[SurfacePoint],
+    default: &Vector3,
+    rays: &RayScene,
+    ball_radius: f64,
+    reach: f64,
+    started: Instant,
+) -> (Vector3, PassageVisibility) {
     let set = DirectionSet::new(VISIBILITY_LEVEL);
     let options = VisibilityOptions {
         level: VISIBILITY_LEVEL,
@@ -763,25 +810,49 @@ pub fn visible_passage_axis(
         max_distance: reach,
         ..VisibilityOptions::default()
     };
-    let (maps, rays_cast) = match visibility_hierarchical(rays, &set, &points, &options) {
+    let (maps, rays_cast) = match visibility_hierarchical(rays, &set, points, &options) {
         Ok(maps) => (maps.maps, maps.rays_cast),
         Err(_) => (Vec::new(), 0),
     };
-    let chosen = region_axis(&set, VISIBILITY_LEVEL, &maps, &walls_axis);
+    let chosen = region_axis(&set, VISIBILITY_LEVEL, &maps, default);
     let spacing_deg = set.directions()[set.neighbours(VISIBILITY_LEVEL, 0)[0] as usize]
         .angle(&set.directions()[0])
         .to_degrees();
-    let direction = chosen.map_or(walls_axis, |c| c.direction);
+    let direction = chosen.map_or(*default, |c| c.direction);
     let figures = PassageVisibility {
         points: points.len(),
         seen_by: chosen.map_or(0, |c| c.seen_by),
         common_directions: chosen.map_or(0, |c| c.region_directions),
         room_deg: chosen.map_or(0.0, |c| c.room_steps as f64 * spacing_deg),
-        from_walls_deg: direction.angle(&walls_axis).to_degrees(),
+        from_walls_deg: direction.angle(default).to_degrees(),
         rays_cast,
-        ms: round_ms(t),
+        ms: round_ms(started),
     };
-    (to_frame(&direction), figures, points)
+    (direction, figures)
+}
+
+/// Levels between the loops whose points the blade's maps are computed at, and the least
+/// distance between two points of a loop, mm: a few hundred points round the blade.
+const VISIBILITY_LEVEL_STRIDE: usize = 4;
+const VISIBILITY_LOOP_SPACING_MM: f64 = 2.0;
+
+/// The points round a blade its maps are computed at: on every fourth of its full loops, at
+/// least 2 mm apart along each.
+fn blade_visibility_points(loops: &crate::impeller::BladeLoops) -> Vec<SurfacePoint> {
+    let mut points = Vec::new();
+    for curve in loops.curves.iter().step_by(VISIBILITY_LEVEL_STRIDE) {
+        let mut last: Option<Point3> = None;
+        for p in &curve.points {
+            if last.is_none_or(|q| (p.point - q).norm() >= VISIBILITY_LOOP_SPACING_MM) {
+                points.push(SurfacePoint {
+                    point: p.point,
+                    normal: p.normal,
+                });
+                last = Some(p.point);
+            }
+        }
+    }
+    points
 }
 
 fn round_ms(since: Instant) -> f64 {
@@ -1038,6 +1109,7 @@ mod tests {
     use super::*;
     use crate::collide::PartCollider;
     use crate::mesh::fixtures::{box_between, joined};
+    use crate::mesh::{DrivePoint, SectionCurve};
     use crate::orient::{AxisChooser, AxisOptions};
 
     /// Distance from `p` to the box `[lo, hi]` (closed form, outside it).
@@ -1134,5 +1206,62 @@ mod tests {
             ..ctx
         };
         assert_eq!(swarf_leads(&run, &ctx, tolerance, &link), None);
+    }
+
+    /// Points on the floor of a slot 10 mm wide and 10 deep (its ends open): every point sees
+    /// the directions within the slot's opening across it, so the one with the most room is
+    /// straight up, whatever the default leans toward; a default that every point sees is
+    /// kept where it has as much room. The blade's points: every fourth loop, 2 mm apart.
+    #[test]
+    fn the_visible_axis_of_a_slot_floor_is_straight_up() {
+        let part = joined(
+            [
+                ([-40.0, -20.0, -5.0], [40.0, 20.0, 0.0]),
+                ([-40.0, -20.0, 0.0], [40.0, -5.0, 10.0]),
+                ([-40.0, 5.0, 0.0], [40.0, 20.0, 10.0]),
+            ]
+            .map(|(lo, hi)| box_between(lo.into(), hi.into())),
+        );
+        let rays = RayScene::new(&part);
+        let points: Vec<SurfacePoint> = (-10..=10)
+            .map(|x| SurfacePoint {
+                point: Point3::new(x as f64, 0.0, 0.0),
+                normal: Vector3::z(),
+            })
+            .collect();
+        let leaning = Vector3::new(0.0, 0.4, 1.0).normalize();
+        let (axis, figures) = visible_axis(&points, &leaning, &rays, 1.0, 60.0, Instant::now());
+        assert_eq!(figures.seen_by, points.len(), "{figures:?}");
+        // Within the direction set's spacing (about 4°) of up, across the slot: its opening
+        // from a ball centre 1 mm up is ±29° across.
+        assert!(axis.y.abs() < 0.08 && axis.z > 0.99, "{axis:?} {figures:?}");
+        assert!(figures.room_deg > 20.0, "{figures:?}");
+        assert!((figures.from_walls_deg - axis.angle(&leaning).to_degrees()).abs() < 1e-9);
+
+        let loops = crate::impeller::BladeLoops {
+            curves: (0..9)
+                .map(|level| SectionCurve {
+                    points: (0..=40)
+                        .map(|k| DrivePoint {
+                            point: Point3::new(0.5 * k as f64, 0.0, level as f64),
+                            normal: Vector3::y(),
+                        })
+                        .collect(),
+                    closed: false,
+                })
+                .collect(),
+            partial: Vec::new(),
+            levels: 9,
+            level_step: 1.0,
+            top: 9.0,
+        };
+        let chosen = blade_visibility_points(&loops);
+        // Levels 0, 4 and 8; x = 0, 2, …, 20 on each.
+        assert_eq!(chosen.len(), 3 * 11);
+        assert!(
+            chosen
+                .iter()
+                .all(|p| p.point.z % 4.0 == 0.0 && p.point.x % 2.0 == 0.0)
+        );
     }
 }
