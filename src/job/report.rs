@@ -221,7 +221,9 @@ pub struct StageTimings {
     pub impeller_copies: f64,
     pub linking: f64,
     /// The ball operations' poses checked against the part, and (apart) the scallop the
-    /// finishing leaves measured from its moves.
+    /// finishing leaves measured from its moves: the two one after the other, beside the
+    /// back-simulation of the posted program (their times overlap it; the stages do not add
+    /// up to the total).
     pub verification: f64,
     pub scallop: f64,
     pub post: f64,
