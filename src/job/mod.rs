@@ -34,6 +34,7 @@ mod rough;
 mod rough_boxes;
 mod rough_stages;
 mod samples;
+mod scallop_picture;
 mod semi_finish;
 mod setup;
 mod simulate;

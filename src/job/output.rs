@@ -65,7 +65,13 @@ impl OutputKind {
         owns: |n| {
             matches!(
                 n,
-                "job.nc" | "cl.csv" | "cl.apt" | "report.json" | "paths.glb"
+                "job.nc"
+                    | "cl.csv"
+                    | "cl.apt"
+                    | "report.json"
+                    | "paths.glb"
+                    | "scallop.glb"
+                    | "scallop.png"
             ) || numbered(n, "stock-", ".glb")
         },
     };
@@ -297,7 +303,8 @@ pub(crate) fn json_bytes(name: &str, value: &impl serde::Serialize) -> Result<Ve
         .into_bytes())
 }
 
-/// Writes `job.nc`, `cl.csv`, `cl.apt`, `report.json`, `paths.glb` and, with a `[stock]` blank, the
+/// Writes `job.nc`, `cl.csv`, `cl.apt`, `report.json`, `paths.glb`, `scallop.glb` and
+/// `scallop.png` (what the finishing leaves) and, with a `[stock]` blank, the
 /// `stock-N.glb` after each operation into `dir` as one set (see the module docs). With `timings = false` the report leaves out the per-stage timings, the only
 /// part of the outputs that differs between runs. A path that failed verification gets only
 /// its report (for diagnosis; the folder then holds nothing else) and an
@@ -321,6 +328,7 @@ pub fn write_outputs(dir: &Path, output: &PlanOutput, timings: bool) -> Result<(
         ("paths.glb".into(), output.preview_glb.clone()),
         report,
     ];
+    files.extend(output.scallop_pictures.iter().cloned());
     files.extend(output.stock_models.iter().cloned());
     write_output_set(dir, &OutputKind::PLAN, &files)
 }

@@ -43,7 +43,7 @@ use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::stock::clearance::MaterialClearance;
 use crate::verify::{PostedClearance, PostedOptions, check_posted, verify};
-use crate::verify::{ScallopOptions, measure_scallop};
+use crate::verify::{ScallopOptions, measure_scallop_map};
 
 pub use super::observer::{Observer, Quiet};
 
@@ -61,6 +61,9 @@ pub struct PlanOutput {
     pub cl_apt: String,
     pub report: PlanReport,
     pub preview_glb: Vec<u8>,
+    /// `scallop.glb` and `scallop.png`: the part coloured by what the finishing leaves
+    /// (`job::scallop_picture`); none without a finishing operation.
+    pub scallop_pictures: Vec<(String, Vec<u8>)>,
     /// `stock-N.glb`: the stock after each operation, with a `[stock]` blank.
     pub stock_models: Vec<(String, Vec<u8>)>,
     /// What the independent re-check of the finished path found wrong, if anything. A path
@@ -891,7 +894,8 @@ pub fn plan_with_surfaces(
                                 })
                                 .collect()
                         });
-                    measure_scallop(
+                    let target = p.operation.scallop_height;
+                    let (report, found) = measure_scallop_map(
                         part,
                         &p.toolpath,
                         &ScallopOptions {
@@ -903,7 +907,8 @@ pub fn plan_with_surfaces(
                             flutes_above_ball: (p.operation.tool.flute_length - radius).max(0.0),
                         },
                         labels.as_deref(),
-                    )
+                    );
+                    (report, found, target)
                 });
             let scallop_ms = ms(t);
             (verification, verification_ms, finish_scallop, scallop_ms)
@@ -953,6 +958,10 @@ pub fn plan_with_surfaces(
         },
     );
     let (verification, verification_ms, finish_scallop, scallop_ms) = checks;
+    let (finish_scallop, scallop_map) = match finish_scallop {
+        Some((report, found, target)) => (Some(report), Some((found, target))),
+        None => (None, None),
+    };
     let (rapid_margin, posted, roughing_failure, back_simulation_ms) = back_simulation;
     let roughing_failure = roughing_failure?;
     timings.verification = verification_ms;
@@ -1000,6 +1009,10 @@ pub fn plan_with_surfaces(
     let t = Instant::now();
     observer.stage("preview", 0);
     let preview_glb = preview(part, &toolpath, 5.0, 2.0 * job.tool.diameter / 2.0 + 8.0)?;
+    let scallop_pictures = match &scallop_map {
+        Some((patches, target)) => super::scallop_picture::scallop_pictures(patches, *target)?,
+        None => Vec::new(),
+    };
     timings.preview = ms(t);
     timings.total = ms(started);
     observer.finish();
@@ -1141,6 +1154,9 @@ pub fn plan_with_surfaces(
                 .map(|(p, _)| p.coords.into())
                 .collect(),
         },
+        finish_scallop_colours: scallop_map
+            .as_ref()
+            .map(|(_, target)| super::scallop_picture::scallop_legend(*target)),
         finish_scallop,
         linking: link_report,
         nc_blocks: program.len(),
@@ -1156,6 +1172,7 @@ pub fn plan_with_surfaces(
         cl_apt,
         report,
         preview_glb,
+        scallop_pictures,
         stock_models: stock_run.map(|run| run.models).unwrap_or_default(),
         verification_failure,
     })

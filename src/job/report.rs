@@ -65,6 +65,10 @@ pub struct PlanReport {
     /// area they do not reach (the face on the table apart).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub finish_scallop: Option<crate::verify::ScallopReport>,
+    /// What the colours of `scallop.glb` and `scallop.png` mean (the part coloured by the
+    /// measure above, each triangle by the worst of its samples).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub finish_scallop_colours: Option<Vec<String>>,
     pub linking: LinkReport,
     /// Blocks in `job.nc` after linearisation.
     pub nc_blocks: usize,

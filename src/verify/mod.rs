@@ -21,7 +21,10 @@ pub use posted::{
     check_posted, program_toolpath,
 };
 pub use program::{MotionBlock, ProgramError, read_conversational, read_program};
-pub use scallop::{AreaSplit, ScallopOptions, ScallopReport, measure_scallop, ray_capsule_entry};
+pub use scallop::{
+    AreaSplit, SampleScallop, ScallopOptions, ScallopPatch, ScallopReport, measure_scallop,
+    measure_scallop_map, ray_capsule_entry,
+};
 pub use segment_distance::SegmentDistance;
 
 use rayon::prelude::*;

@@ -92,6 +92,45 @@ pub struct ScallopOptions {
     pub flutes_above_ball: f64,
 }
 
+/// What the measure found at a sample (or, for a patch of the surface, the worst of the
+/// samples it stands for).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SampleScallop {
+    /// Facing down on the table.
+    Table,
+    /// Reached, and within the target where the ball fits (the largest height there, mm).
+    Within(f64),
+    /// Concave more tightly than the ball, and nowhere open over the target.
+    Narrow,
+    /// No swept ball comes near.
+    NotReached,
+    /// Where the ball fits, over the target (the largest such height, mm): what the passes
+    /// are answerable for.
+    Over(f64),
+}
+
+impl SampleScallop {
+    /// Over the target first, then not reached, narrow, within, the table.
+    fn rank(self) -> (u8, f64) {
+        match self {
+            SampleScallop::Table => (0, 0.0),
+            SampleScallop::Within(h) => (1, h),
+            SampleScallop::Narrow => (2, 0.0),
+            SampleScallop::NotReached => (3, 0.0),
+            SampleScallop::Over(h) => (4, h),
+        }
+    }
+
+    fn worse(self, other: SampleScallop) -> SampleScallop {
+        let (a, b) = (self.rank(), other.rank());
+        if b.0 > a.0 || (b.0 == a.0 && b.1 > a.1) {
+            other
+        } else {
+            self
+        }
+    }
+}
+
 /// Measures the scallop `toolpath`'s cut moves leave on `part`; with `labels` (one per
 /// triangle) also split by label.
 pub fn measure_scallop(
@@ -100,6 +139,27 @@ pub fn measure_scallop(
     options: &ScallopOptions,
     labels: Option<&[&str]>,
 ) -> ScallopReport {
+    measure_scallop_map(part, toolpath, options, labels).0
+}
+
+/// A piece of the part's surface and what the measure found there: a triangle of the part
+/// too small for samples of its own (the worst of its pool's), or one of the sub-triangles a
+/// larger triangle's samples stand at the centres of (the worst of its own and its
+/// neighbours' for the sub-triangles between them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScallopPatch {
+    pub corners: [Point3; 3],
+    pub found: SampleScallop,
+}
+
+/// [`measure_scallop`], and what it found where, as patches covering the part (for a picture
+/// of where the passes leave what; a coarse mesh's long triangles are split as sampled).
+pub fn measure_scallop_map(
+    part: &Mesh,
+    toolpath: &Toolpath,
+    options: &ScallopOptions,
+    labels: Option<&[&str]>,
+) -> (ScallopReport, Vec<ScallopPatch>) {
     let ScallopOptions {
         radius,
         target,
@@ -192,28 +252,37 @@ pub fn measure_scallop(
     // completes a quantum, standing for the pool.
     let quantum = 0.5 * spacing * spacing;
     let mut samples: Vec<(Point3, Vector3, f64, usize)> = Vec::new();
+    // The pooled triangles each pool's sample stands for, as a range of `members`.
+    let mut members: Vec<usize> = Vec::new();
+    let mut stands_for: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
+    let mut pool: Vec<usize> = Vec::new();
     let mut pooled = 0.0;
+    let mut last_pooled = None;
+    // The triangles sampled on a grid: (triangle, k, index of its first sample).
+    let mut grids: Vec<(usize, usize, usize)> = Vec::new();
     for t in 0..part.triangles.len() {
         let [a, b, c] = part.corners(t);
         let n = (b - a).cross(&(c - a));
         let area = 0.5 * n.norm();
         let normal = n.try_normalize(1e-300).unwrap_or_else(Vector3::z);
         if area < quantum {
+            pool.push(t);
             pooled += area;
+            let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
             if pooled >= quantum {
-                samples.push((
-                    Point3::from((a.coords + b.coords + c.coords) / 3.0),
-                    normal,
-                    pooled,
-                    t,
-                ));
+                stands_for.push((samples.len(), members.len()..members.len() + pool.len()));
+                samples.push((centroid, normal, pooled, t));
+                members.append(&mut pool);
                 pooled = 0.0;
+            } else {
+                last_pooled = Some((centroid, normal, t));
             }
             continue;
         }
         // By area, not by the longest edge: an STL's long slivers would get thousands.
         let k = (area / quantum).sqrt().ceil().max(1.0) as usize;
         let count = (k * (k + 1) / 2) as f64;
+        grids.push((t, k, samples.len()));
         for i in 0..k {
             for j in 0..k - i {
                 // Centres of the sub-triangles pointing up: every sample inside.
@@ -222,6 +291,14 @@ pub fn measure_scallop(
                 samples.push((a + (b - a) * u + (c - a) * v, normal, area / count, t));
             }
         }
+    }
+    // A pool the triangles ran out before it filled stands at its last triangle.
+    if let Some((centroid, normal, t)) = last_pooled
+        && pooled > 0.0
+    {
+        stands_for.push((samples.len(), members.len()..members.len() + pool.len()));
+        samples.push((centroid, normal, pooled, t));
+        members.append(&mut pool);
     }
     let narrow: Vec<bool> = samples
         .par_iter()
@@ -264,6 +341,20 @@ pub fn measure_scallop(
     let mut facing_down = 0.0;
     let mut by_label: std::collections::BTreeMap<String, AreaSplit> = Default::default();
     let mut scratch = AreaSplit::default();
+    let found: Vec<SampleScallop> = heights
+        .iter()
+        .zip(&narrow)
+        .map(|(h, narrow)| match h {
+            Some(h) if h.is_nan() => SampleScallop::Table,
+            // Narrow and reached: within where it is, else the ball does not fit.
+            Some(h) if *narrow && *h > target => SampleScallop::Narrow,
+            Some(h) if *narrow => SampleScallop::Within(*h),
+            Some(h) if *h > target => SampleScallop::Over(*h),
+            Some(h) => SampleScallop::Within(*h),
+            None => SampleScallop::NotReached,
+        })
+        .collect();
+    let patches = scallop_patches(part, &grids, &members, &stands_for, &found);
     for (((_, normal, area, t), h), narrow) in samples.iter().zip(&heights).zip(&narrow) {
         if h.is_some_and(f64::is_nan) {
             table_area += area;
@@ -312,7 +403,7 @@ pub fn measure_scallop(
             .copied()
             .unwrap_or(0.0)
     };
-    ScallopReport {
+    let report = ScallopReport {
         samples: samples.len(),
         sample_spacing_mm: spacing,
         reached_area_mm2: reached_area,
@@ -333,7 +424,61 @@ pub fn measure_scallop(
         open_over_target_mm2: open_over,
         target_mm: target,
         by_region: by_label,
+    };
+    (report, patches)
+}
+
+/// The patches covering `part`: each grid-sampled triangle split into its k² sub-triangles
+/// (the k(k+1)/2 pointing up hold its samples, in the order they were taken; each one
+/// pointing down takes the worst of its three neighbours), each pooled triangle whole with the
+/// worst of its pool's samples (`stands_for[s]`: the range of `members` sample `s` stands
+/// for).
+fn scallop_patches(
+    part: &Mesh,
+    grids: &[(usize, usize, usize)],
+    members: &[usize],
+    stands_for: &[(usize, std::ops::Range<usize>)],
+    found: &[SampleScallop],
+) -> Vec<ScallopPatch> {
+    let mut patches = Vec::new();
+    for &(t, k, first) in grids {
+        let [a, b, c] = part.corners(t);
+        let at = |i: usize, j: usize| {
+            a + (b - a) * (i as f64 / k as f64) + (c - a) * (j as f64 / k as f64)
+        };
+        // Sample (i, j) was taken i-major: row i starts after the rows before it.
+        let up = |i: usize, j: usize| found[first + i * k - i * i.saturating_sub(1) / 2 + j];
+        for i in 0..k {
+            for j in 0..k - i {
+                patches.push(ScallopPatch {
+                    corners: [at(i, j), at(i + 1, j), at(i, j + 1)],
+                    found: up(i, j),
+                });
+                if i + j + 2 <= k {
+                    patches.push(ScallopPatch {
+                        corners: [at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)],
+                        found: up(i, j).worse(up(i + 1, j)).worse(up(i, j + 1)),
+                    });
+                }
+            }
+        }
     }
+    let mut pooled: Vec<Option<SampleScallop>> = vec![None; part.triangles.len()];
+    for (sample, range) in stands_for {
+        for &t in &members[range.clone()] {
+            let f = found[*sample];
+            pooled[t] = Some(pooled[t].map_or(f, |g| g.worse(f)));
+        }
+    }
+    for (t, f) in pooled.iter().enumerate() {
+        if let Some(f) = f {
+            patches.push(ScallopPatch {
+                corners: part.corners(t),
+                found: *f,
+            });
+        }
+    }
+    patches
 }
 
 /// Where the ray `p + t·d` (unit `d`, t ≥ 0) enters the capsule of radius `r` about segment
@@ -739,6 +884,78 @@ mod tests {
             (half.unreached_area_mm2 - 80.0 - 20.0 * (20.0 - last)).abs() < 0.5,
             "{half:?}"
         );
+    }
+
+    /// The patches cover the part, each what its sample found: over the plate's top the
+    /// cusp (over a 0.02 mm target) at most, its sides not reached, its bottom the table's; a
+    /// triangle too small for samples of its own is one patch with its pool's (samples 21 mm
+    /// apart stand for 220 mm²: the two halves of the top pool, and the eight sides, 80 mm²,
+    /// are the pool the triangles ran out before it filled, counted all the same).
+    #[test]
+    fn the_patches_cover_the_part_with_what_was_found_there() {
+        let plate = crate::mesh::fixtures::cuboid(20.0, 20.0, 1.0);
+        let (r, w) = (2.0, 0.8);
+        let path = passes((0..30).map(|k| -2.0 + k as f64 * w));
+        let options = ScallopOptions {
+            radius: r,
+            target: 0.02,
+            spacing: 0.5,
+            reach: 2.0 * r,
+            table_z: 0.0,
+            flutes_above_ball: 0.0,
+        };
+        let area = |p: &ScallopPatch| {
+            let [a, b, c] = p.corners;
+            0.5 * (b - a).cross(&(c - a)).norm()
+        };
+        let (report, patches) = measure_scallop_map(&plate, &path, &options, None);
+        let total: f64 = patches.iter().map(area).sum();
+        assert!((total - plate.surface_area()).abs() < 1e-6, "{total}");
+        let mut worst: f64 = 0.0;
+        for patch in &patches {
+            let [a, b, c] = patch.corners;
+            let normal = (b - a).cross(&(c - a)).normalize();
+            match patch.found {
+                SampleScallop::Table => assert!(normal.z < -0.99),
+                SampleScallop::NotReached => assert!(normal.z.abs() < 1e-9),
+                SampleScallop::Within(h) | SampleScallop::Over(h) => {
+                    assert!(normal.z > 0.99);
+                    worst = worst.max(h);
+                    assert_eq!(h > 0.02, matches!(patch.found, SampleScallop::Over(_)));
+                }
+                SampleScallop::Narrow => panic!("nothing is narrow on a plate"),
+            }
+        }
+        assert_eq!(worst, report.max_mm);
+        // The cusps run along x: both kinds lie on the top.
+        assert!(
+            patches
+                .iter()
+                .any(|p| matches!(p.found, SampleScallop::Over(_)))
+        );
+        assert!(
+            patches
+                .iter()
+                .any(|p| matches!(p.found, SampleScallop::Within(_)))
+        );
+
+        let coarse = ScallopOptions {
+            spacing: 21.0,
+            ..options
+        };
+        let (pooled_report, pooled) = measure_scallop_map(&plate, &path, &coarse, None);
+        assert_eq!(pooled_report.samples, 3);
+        assert_eq!(pooled.len(), plate.triangles.len());
+        assert_eq!(pooled[0].found, pooled[1].found);
+        assert_eq!(pooled[0].found, SampleScallop::Table);
+        assert_eq!(pooled[2].found, pooled[3].found);
+        assert!(
+            pooled[4..]
+                .iter()
+                .all(|p| p.found == SampleScallop::NotReached)
+        );
+        assert!((pooled_report.unreached_area_mm2 - 80.0).abs() < 1e-9);
+        assert!((pooled_report.reached_area_mm2 - 400.0).abs() < 1e-9);
     }
 
     /// An L-shaped bar, 20 long in y: a 20 × 5 floor and a 10 × 15 wall standing on it, the

@@ -142,7 +142,7 @@ fn regenerating_the_sample_parts_gives_identical_bytes() {
 /// A coarse plan through the CLI with 1 and with 2 threads: the four outputs exist, are
 /// complete, and are byte-identical (with --no-timings).
 #[test]
-fn plan_writes_four_identical_outputs_for_any_thread_count() {
+fn plan_writes_identical_outputs_for_any_thread_count() {
     let job = temp_dir("job").with_extension("toml");
     let text = std::fs::read_to_string(repo_file("data/impeller.toml")).unwrap();
     let text = text.replace(
@@ -174,10 +174,18 @@ fn plan_writes_four_identical_outputs_for_any_thread_count() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let files: Vec<Vec<u8>> = ["job.nc", "cl.csv", "report.json", "paths.glb", "cl.apt"]
-            .iter()
-            .map(|f| std::fs::read(dir.join(f)).unwrap())
-            .collect();
+        let files: Vec<Vec<u8>> = [
+            "job.nc",
+            "cl.csv",
+            "report.json",
+            "paths.glb",
+            "cl.apt",
+            "scallop.glb",
+            "scallop.png",
+        ]
+        .iter()
+        .map(|f| std::fs::read(dir.join(f)).unwrap())
+        .collect();
         let gcode = String::from_utf8_lossy(&files[0]);
         assert!(
             gcode.trim_end().ends_with('%') && gcode.contains("M30"),
@@ -189,9 +197,17 @@ fn plan_writes_four_identical_outputs_for_any_thread_count() {
         outputs.push(files);
         std::fs::remove_dir_all(&dir).unwrap();
     }
-    for (k, name) in ["job.nc", "cl.csv", "report.json", "paths.glb", "cl.apt"]
-        .iter()
-        .enumerate()
+    for (k, name) in [
+        "job.nc",
+        "cl.csv",
+        "report.json",
+        "paths.glb",
+        "cl.apt",
+        "scallop.glb",
+        "scallop.png",
+    ]
+    .iter()
+    .enumerate()
     {
         assert!(
             outputs[0][k] == outputs[1][k],

@@ -222,6 +222,34 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         preview.warnings
     );
 
+    // --- The scallop pictures: the part coloured by what the passes leave, and its views. --
+    let names: Vec<&str> = out
+        .scallop_pictures
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .collect();
+    assert_eq!(names, ["scallop.glb", "scallop.png"]);
+    let coloured = wavemill::mesh::io::read_mesh_bytes(
+        &out.scallop_pictures[0].1,
+        wavemill::mesh::io::Format::Glb,
+        "scallop.glb",
+        None,
+        wavemill::mesh::io::Units::Millimetres,
+    )
+    .unwrap();
+    // The part split as it was sampled: the same surface, in more pieces.
+    assert!(coloured.mesh.triangles.len() >= part.triangles.len());
+    let (painted, whole) = (coloured.mesh.surface_area(), part.surface_area());
+    assert!(
+        (painted - whole).abs() < 1e-4 * whole,
+        "{painted} vs {whole}"
+    );
+    assert!(out.scallop_pictures[1].1.starts_with(b"\x89PNG"));
+    assert_eq!(
+        report.finish_scallop_colours.as_ref().map(Vec::len),
+        Some(6)
+    );
+
     // --- Determinism across thread counts ------------------------------------------------
     let single = plan_with_threads(1);
     assert_eq!(
@@ -230,6 +258,7 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     );
     assert_eq!(single.cl_csv, out.cl_csv);
     assert_eq!(single.preview_glb, out.preview_glb);
+    assert_eq!(single.scallop_pictures, out.scallop_pictures);
     assert_eq!(single.report.to_json(false), out.report.to_json(false));
 }
 

@@ -180,6 +180,9 @@ pub(crate) fn summarise(r: &job::PlanReport, out: &Path) {
         }
     );
     let mut outputs = "job.nc, cl.csv, cl.apt, report.json, paths.glb".to_string();
+    if r.finish_scallop.is_some() {
+        outputs.push_str(", scallop.glb, scallop.png");
+    }
     if let Some(stock) = &r.stock {
         say!(
             "  stock            {} blank, {:.0} mm³ (dexels {:.3} mm apart)",
