@@ -139,7 +139,7 @@ fn regenerating_the_sample_parts_gives_identical_bytes() {
     }
 }
 
-/// A coarse plan through the CLI with 1 and with 2 threads: the four outputs exist, are
+/// A coarse plan through the CLI with 1 and with 2 threads: the outputs exist, are
 /// complete, and are byte-identical (with --no-timings).
 #[test]
 fn plan_writes_identical_outputs_for_any_thread_count() {
