@@ -145,6 +145,127 @@ pub fn blade_loops(
     }
 }
 
+/// Passes along a blade's tip: the curves across its land (see [`blade_tip_passes`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BladeTip {
+    pub curves: Vec<SectionCurve>,
+    /// Area of the land, mm², and its greatest width between the crest edges, mm.
+    pub land_area_mm2: f64,
+    pub width_mm: f64,
+}
+
+/// Least cosine between a land triangle's normal and the hub's rising direction at it (45°):
+/// the tip faces away from the hub, the flanks across (a raked leading edge's flank leans up to
+/// 60°: the loops finish it).
+const LAND_FACING: f64 = 0.7;
+
+/// The land stands at least this share of the blade's greatest height above the hub (a
+/// centrifugal wheel's blade is a quarter as tall at the rim as at the inducer; a fillet
+/// faces up too, but at the root).
+const LAND_LEAST_HEIGHT: f64 = 0.15;
+
+/// Passes along the tip of blade (or splitter) `piece`: its land is the blade's triangles
+/// facing away from the hub (normal within 45° of the hub's rising direction there), away
+/// from the root; the land meets the flanks along two crest edges, told apart by which way the
+/// flank beside them faces round the axis. Across the land, each point's position is half
+/// the difference of its distances to the two crest edges (0 half-way, ± half the width at
+/// the edges); the passes are the curves where it is constant, evenly across at most a
+/// `stepover` apart, the outermost half a spacing in from the edges. A level loop crosses a land that is nearly level far from the next loop's
+/// crossing; these follow it. Empty when the blade has no land or it meets only one side.
+pub fn blade_tip_passes(
+    mesh: &Mesh,
+    impeller: &Impeller,
+    passage: &HubPassage,
+    piece: usize,
+    stepover: f64,
+) -> BladeTip {
+    let none = BladeTip::default();
+    let (blade, height, normals) = blade_heights(mesh, impeller, passage, piece);
+    let top = height.iter().copied().fold(0.0, f64::max);
+    let centroid = |t: usize| {
+        let [a, b, c] = blade.corners(t);
+        Point3::from((a.coords + b.coords + c.coords) / 3.0)
+    };
+    let land: Vec<bool> = (0..blade.triangles.len())
+        .map(|t| {
+            let c = centroid(t);
+            let (above, up) = passage.above_hub(&c);
+            above >= LAND_LEAST_HEIGHT * top && normals[t].dot(&up) >= LAND_FACING
+        })
+        .collect();
+    // Crest points: land corners a flank triangle shares, on the side the flank faces.
+    let mut side = vec![0.0f64; blade.positions.len()];
+    let mut on_land = vec![false; blade.positions.len()];
+    for (t, tri) in blade.triangles.iter().enumerate() {
+        if land[t] {
+            tri.iter().for_each(|&v| on_land[v as usize] = true);
+        }
+    }
+    for (t, tri) in blade.triangles.iter().enumerate() {
+        if land[t] {
+            continue;
+        }
+        let (_, angle, _) = passage.frame.cylindrical(&centroid(t));
+        let round = passage.frame.axis.cross(&passage.frame.radial(angle));
+        let facing = normals[t].dot(&round);
+        for &v in tri {
+            if on_land[v as usize] {
+                side[v as usize] += facing;
+            }
+        }
+    }
+    let crest = |positive: bool| -> Vec<Point3> {
+        (0..blade.positions.len())
+            .filter(|&v| on_land[v] && side[v] != 0.0 && (side[v] > 0.0) == positive)
+            .map(|v| blade.positions[v])
+            .collect()
+    };
+    let (plus, minus) = (crest(true), crest(false));
+    if plus.is_empty() || minus.is_empty() {
+        return none;
+    }
+    let lands = Mesh::compacted(
+        &blade.positions,
+        blade
+            .triangles
+            .iter()
+            .zip(&land)
+            .filter(|(_, l)| **l)
+            .map(|(t, _)| *t),
+    );
+    let land_normals: Vec<Vector3> = (0..lands.triangles.len())
+        .map(|t| lands.face_normal(t))
+        .collect();
+    let nearest = |p: &Point3, set: &[Point3]| {
+        set.iter()
+            .map(|q| (q - p).norm_squared())
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    };
+    let across: Vec<f64> = lands
+        .positions
+        .iter()
+        .map(|p| 0.5 * (nearest(p, &minus) - nearest(p, &plus)))
+        .collect();
+    let half = across.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    // Evenly across, at most a stepover apart, the outermost half a spacing in from the
+    // crest edges.
+    let count = (2.0 * half / stepover.max(1e-3)).ceil().max(1.0) as usize;
+    let spacing = 2.0 * half / count as f64;
+    let curves = (0..count)
+        .flat_map(|k| {
+            let level = -half + (k as f64 + 0.5) * spacing;
+            let shifted: Vec<f64> = across.iter().map(|a| a - level).collect();
+            level_section(&lands, &land_normals, &shifted)
+        })
+        .collect();
+    BladeTip {
+        curves,
+        land_area_mm2: lands.surface_area(),
+        width_mm: 2.0 * half,
+    }
+}
+
 /// Blade (or splitter) `piece` of `impeller` as a mesh of its own, with each vertex's height
 /// above the hub and each triangle's normal.
 fn blade_heights(

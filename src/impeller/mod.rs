@@ -13,7 +13,9 @@ pub mod recognise;
 pub mod root;
 pub mod swarf;
 
-pub use blade::{BladeLoops, blade_loop_at, blade_loops, blade_section_at};
+pub use blade::{
+    BladeLoops, BladeTip, blade_loop_at, blade_loops, blade_section_at, blade_tip_passes,
+};
 pub use edges::{BladeEdges, EdgeSide, blade_edges};
 pub use frame::AxisFrame;
 pub use passage::{FlowLine, HubPassage, PassageOptions, stepover_on_convex};

@@ -1155,6 +1155,66 @@ mod tests {
         assert!(heights.last().is_some_and(|&h| h <= loops.level_step));
     }
 
+    /// The passes along the sample blade's tip lie on its land (triangles facing away from
+    /// the hub within 45°, away from the root), and every point of the land is within half a stepover of
+    /// one (brute force over their segments, at each land triangle's centroid and corners):
+    /// the level loops cross the nearly level land at the rim far apart.
+    #[test]
+    fn tip_passes_cover_the_blade_land_within_half_a_stepover() {
+        let (mesh, impeller, passage, _) = sample();
+        let stepover = 0.4;
+        let tip = crate::impeller::blade_tip_passes(
+            &mesh,
+            &impeller,
+            &passage,
+            passage.first_blade,
+            stepover,
+        );
+        assert!(tip.curves.len() >= 3 && tip.land_area_mm2 > 50.0, "{tip:?}");
+        let segments: Vec<[Point3; 2]> = tip
+            .curves
+            .iter()
+            .flat_map(|c| c.points.windows(2).map(|w| [w[0].point, w[1].point]))
+            .collect();
+        let blade = |t: usize| impeller.regions[t] == Region::Blade(passage.first_blade as u32);
+        let top = (0..mesh.triangles.len())
+            .filter(|&t| blade(t))
+            .flat_map(|t| mesh.corners(t))
+            .map(|p| passage.above_hub(&p).0)
+            .fold(0.0, f64::max);
+        let mut checked = 0;
+        let mut worst: f64 = 0.0;
+        for t in (0..mesh.triangles.len()).filter(|&t| blade(t)) {
+            let [a, b, c] = mesh.corners(t);
+            let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+            let (above, up) = passage.above_hub(&centroid);
+            if above < 0.15 * top || mesh.face_normal(t).dot(&up) < 0.7 {
+                continue;
+            }
+            for p in [centroid, a, b, c] {
+                let d = segments
+                    .iter()
+                    .map(|[q, r]| (p - crate::geom::closest_point_on_segment(&p, q, r)).norm())
+                    .fold(f64::INFINITY, f64::min);
+                worst = worst.max(d);
+                checked += 1;
+            }
+        }
+        assert!(checked > 100, "{checked}");
+        assert!(
+            worst <= 0.5 * stepover + 0.05,
+            "a land point {worst} mm from every pass"
+        );
+        // On the land: every pass point on a blade triangle facing away from the hub.
+        let surface = crate::mesh::SurfaceDistance::new(&mesh);
+        for p in tip.curves.iter().flat_map(|c| &c.points) {
+            let near = surface.closest(&p.point, 1e-6).expect("on the part");
+            assert!(blade(near.triangle as usize));
+            let (_, up) = passage.above_hub(&p.point);
+            assert!(p.normal.dot(&up) >= 0.7 - 1e-9, "{p:?}");
+        }
+    }
+
     /// Alg. 5.1 round the blade: where the flank leans, the full levels stand farther apart
     /// than the stepover (some points on it farther than half a stepover from every loop);
     /// with the partial loops every point of the flank between the top and bottom loops is

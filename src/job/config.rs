@@ -79,6 +79,9 @@ pub struct ImpellerSection {
     /// cutting the flank; the loops finish the rest (`report.json` says where and why). On by
     /// default; the posted program is checked along the flutes as along the ball.
     pub swarf: bool,
+    /// Passes along each blade's tip (its land, facing away from the hub), kept where the
+    /// loops leave it; off when the tips are turned to the shroud's contour afterwards.
+    pub tip: bool,
 }
 
 /// How the tool axes are set around a blade.
@@ -110,6 +113,7 @@ impl Default for ImpellerSection {
             blade_axes: BladeAxes::Blade,
             blade_lean_deg: 20.0,
             swarf: true,
+            tip: true,
         }
     }
 }

@@ -27,7 +27,7 @@ use crate::geom::{Point3, Vector3};
 use crate::impeller::blade::needed_stretches;
 use crate::impeller::{
     HubPassage, Impeller, NotSwarf, PassageOptions, Region, Ruling, SwarfOptions, SwarfPlan,
-    blade_loop_at, blade_loops, blade_section_at, swarf_runs,
+    blade_loop_at, blade_loops, blade_section_at, blade_tip_passes, swarf_runs,
 };
 use crate::mesh::Mesh;
 use crate::orient::{away_from_pole, preferred_axis};
@@ -144,6 +144,8 @@ pub struct ImpellerFinishOptions {
     pub blade_lean_deg: f64,
     /// Swarf a blade where it is ruled within the tolerance (the loops for the rest).
     pub swarf: bool,
+    /// Passes along the blade's tip where the loops leave its land.
+    pub tip: bool,
     /// The tool axis at which the machine's rotary axes are singular (part frame).
     pub pole: Vector3,
     /// How the segments will be linked: a swarf run counts as cut only where the tool can
@@ -213,6 +215,9 @@ pub struct BladeSummary {
     pub root_pass: Option<RootPass>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub no_root_pass: Option<String>,
+    /// The passes along the tip's land (where the loops leave it), if it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tip: Option<TipPasses>,
     /// The swarf runs that finish the blade's ruled stretches (the loops take the rest).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub swarf: Option<SwarfSummary>,
@@ -233,6 +238,16 @@ pub struct RootPass {
     pub poses: usize,
     /// Share of the poses whose ball touches both hub and blade (within a micrometre).
     pub touching_both: f64,
+}
+
+/// The passes along a blade's tip: the curves across its land, the land's area and width,
+/// and the segments kept where the loops leave it.
+#[derive(Clone, Debug, Serialize)]
+pub struct TipPasses {
+    pub curves: usize,
+    pub land_area_mm2: f64,
+    pub width_mm: f64,
+    pub segments_kept: usize,
 }
 
 /// The root pass of one splitter (by its index in the impeller's pieces).
@@ -539,6 +554,17 @@ pub fn finish_impeller(
                 None => (None, plan_loops(&loops, &blade_ctx, None), None, None),
             };
 
+            // Passes along the tip's land, where the level loops cross it far apart.
+            let tip = if impeller_options.tip {
+                blade_tip_passes(part, impeller, &passage, passage.first_blade, stepover)
+            } else {
+                crate::impeller::BladeTip::default()
+            };
+            let mut tip_passes = Finishing::default();
+            for result in path::curve_passes(&tip.curves, &blade_ctx, options, advance) {
+                tip_passes.merge(result);
+            }
+
             let (mut root, root_summary) = root_pass(
                 part,
                 impeller,
@@ -616,6 +642,15 @@ pub fn finish_impeller(
                 summary.covered.merge(&covered);
             };
             keep_needed(&mut blade, blade_axes != BladeAxes::Lean);
+            // The tip's passes where the loops leave its land.
+            keep_needed(&mut tip_passes, blade_axes != BladeAxes::Lean);
+            let tip_summary = (!tip.curves.is_empty()).then_some(TipPasses {
+                curves: tip.curves.len(),
+                land_area_mm2: tip.land_area_mm2,
+                width_mm: tip.width_mm,
+                segments_kept: tip_passes.segments.len(),
+            });
+            blade.merge(tip_passes);
             keep_needed(&mut root, blade_axes != BladeAxes::Lean);
             // Copied with the blade's loops, after them: they end at the root.
             blade.merge(root);
@@ -712,6 +747,7 @@ pub fn finish_impeller(
                 axes: blade_axes,
                 root_pass: blade_root_pass,
                 no_root_pass,
+                tip: tip_summary,
                 visibility: blade_visibility,
                 lean_deg: impeller_options.blade_lean_deg,
                 swarf: swarf_summary,

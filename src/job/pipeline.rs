@@ -359,6 +359,7 @@ pub fn plan_operation(
                             blade_axes: setup.impeller.blade_axes,
                             blade_lean_deg: setup.impeller.blade_lean_deg,
                             swarf: setup.impeller.swarf,
+                            tip: setup.impeller.tip,
                             pole: setup.pole(),
                             link: setup.link.clone(),
                         },

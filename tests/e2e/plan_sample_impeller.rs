@@ -160,6 +160,9 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     // A pass round the blade's root, its balls in the corner (touching hub and blade where
     // the root is sharp), and passes that cut nothing new dropped.
     let blade = impeller.blade.as_ref().expect("blade finishing");
+    // The blade's tip has a land the tip passes run along.
+    let tip = blade.tip.as_ref().expect("tip passes");
+    assert!(tip.curves >= 1 && tip.land_area_mm2 > 50.0, "{tip:?}");
     let root = blade.root_pass.as_ref().expect("a root pass");
     assert!(blade.no_root_pass.is_none());
     assert!(
