@@ -208,6 +208,23 @@ pub(crate) fn draw_mesh(
     }
 }
 
+/// Side of one view of [`VIEWS`] in a picture, pixels.
+pub(crate) const PANEL: usize = 600;
+
+/// `mesh` (coloured per vertex) from each of [`VIEWS`], side by side, with a strip below for
+/// a legend (drawn from `(10, PANEL + 12)`).
+pub(crate) fn two_views(mesh: &Mesh, colours: &[[f32; 4]]) -> Canvas {
+    let mut canvas = Canvas::new(2 * PANEL, PANEL + 40);
+    for (k, (eye, up)) in VIEWS.iter().enumerate() {
+        let view = View {
+            towards_eye: Vector3::from(*eye),
+            up: Vector3::from(*up),
+        };
+        draw_mesh(&mut canvas, (k * PANEL, 0, PANEL), mesh, colours, &view);
+    }
+    canvas
+}
+
 /// A row of swatches with their labels, from `(x, y)`.
 pub(crate) fn legend(canvas: &mut Canvas, x: usize, y: usize, items: &[([f32; 4], String)]) {
     let scale = 3;

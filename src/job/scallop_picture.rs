@@ -7,7 +7,6 @@
 //! so a coarse mesh's long triangles show where along them the passes fall short.
 
 use crate::error::{Error, Result};
-use crate::geom::Vector3;
 use crate::mesh::Mesh;
 use crate::verify::{SampleScallop, ScallopPatch};
 
@@ -81,26 +80,12 @@ pub fn scallop_pictures(patches: &[ScallopPatch], target: f64) -> Result<Vec<(St
             })?;
     }
 
-    let panel = 600;
-    let mut canvas = render::Canvas::new(2 * panel, panel + 40);
-    for (k, (eye, up)) in render::VIEWS.iter().enumerate() {
-        let view = render::View {
-            towards_eye: Vector3::from(*eye),
-            up: Vector3::from(*up),
-        };
-        render::draw_mesh(
-            &mut canvas,
-            (k * panel, 0, panel),
-            &surface,
-            &colours,
-            &view,
-        );
-    }
+    let mut canvas = render::two_views(&surface, &colours);
     let far = FAR_OVER_FACTOR * target;
     render::legend(
         &mut canvas,
         10,
-        panel + 12,
+        render::PANEL + 12,
         &[
             (WITHIN, format!("0-{target}mm")),
             (OVER, format!("{target}-{far}mm")),

@@ -24,7 +24,6 @@ use super::stock_model::{
     enclosure_warning, stock_error,
 };
 use crate::error::{Error, JobError, Result};
-use crate::geom::Vector3;
 use crate::mesh::Mesh;
 use crate::mesh::io::RawMesh;
 use crate::post::read_cl_csv;
@@ -210,25 +209,11 @@ fn pictures(stock: &Stock, part: &Mesh, tolerance: f64) -> Result<(Files, Vec<St
         band,
         deep,
     } = coloured_stock(stock, part, tolerance)?;
-    let panel = 600;
-    let mut canvas = render::Canvas::new(2 * panel, panel + 40);
-    for (k, (eye, up)) in render::VIEWS.iter().enumerate() {
-        let view = render::View {
-            towards_eye: Vector3::from(*eye),
-            up: Vector3::from(*up),
-        };
-        render::draw_mesh(
-            &mut canvas,
-            (k * panel, 0, panel),
-            &surface,
-            &colours,
-            &view,
-        );
-    }
+    let mut canvas = render::two_views(&surface, &colours);
     render::legend(
         &mut canvas,
         10,
-        panel + 12,
+        render::PANEL + 12,
         &[
             (
                 distance_colour(-2.0 * band, band, deep),

@@ -139,6 +139,17 @@ fn regenerating_the_sample_parts_gives_identical_bytes() {
     }
 }
 
+/// What `plan` writes (the report third: the test reads it).
+const PLAN_FILES: [&str; 7] = [
+    "job.nc",
+    "cl.csv",
+    "report.json",
+    "paths.glb",
+    "cl.apt",
+    "scallop.glb",
+    "scallop.png",
+];
+
 /// A coarse plan through the CLI with 1 and with 2 threads: the outputs exist, are
 /// complete, and are byte-identical (with --no-timings).
 #[test]
@@ -174,18 +185,10 @@ fn plan_writes_identical_outputs_for_any_thread_count() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let files: Vec<Vec<u8>> = [
-            "job.nc",
-            "cl.csv",
-            "report.json",
-            "paths.glb",
-            "cl.apt",
-            "scallop.glb",
-            "scallop.png",
-        ]
-        .iter()
-        .map(|f| std::fs::read(dir.join(f)).unwrap())
-        .collect();
+        let files: Vec<Vec<u8>> = PLAN_FILES
+            .iter()
+            .map(|f| std::fs::read(dir.join(f)).unwrap())
+            .collect();
         let gcode = String::from_utf8_lossy(&files[0]);
         assert!(
             gcode.trim_end().ends_with('%') && gcode.contains("M30"),
@@ -197,18 +200,7 @@ fn plan_writes_identical_outputs_for_any_thread_count() {
         outputs.push(files);
         std::fs::remove_dir_all(&dir).unwrap();
     }
-    for (k, name) in [
-        "job.nc",
-        "cl.csv",
-        "report.json",
-        "paths.glb",
-        "cl.apt",
-        "scallop.glb",
-        "scallop.png",
-    ]
-    .iter()
-    .enumerate()
-    {
+    for (k, name) in PLAN_FILES.iter().enumerate() {
         assert!(
             outputs[0][k] == outputs[1][k],
             "{name} differs between 1 and 2 threads"
