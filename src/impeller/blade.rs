@@ -10,7 +10,8 @@
 //! neighbouring loops are a stepover apart along the blade where they are farthest apart:
 //! the spacing in height is the stepover times the surface gradient of the height (1 on a
 //! flank square to the hub, less on a leaning one), taken at its low percentile over the
-//! flanks.
+//! flanks. Where the tip's land is nearly level the loops cross it far apart: passes along
+//! the land itself follow it ([`blade_tip_passes`]).
 
 use std::collections::HashMap;
 
@@ -170,8 +171,9 @@ const LAND_LEAST_HEIGHT: f64 = 0.15;
 /// flank beside them faces round the axis. Across the land, each point's position is half
 /// the difference of its distances to the two crest edges (0 half-way, ± half the width at
 /// the edges); the passes are the curves where it is constant, evenly across at most a
-/// `stepover` apart, the outermost half a spacing in from the edges. A level loop crosses a land that is nearly level far from the next loop's
-/// crossing; these follow it. Empty when the blade has no land or it meets only one side.
+/// `stepover` apart, the outermost half a spacing in from the edges. A level loop crosses a
+/// land that is nearly level far from the next loop's crossing; these follow it. Empty when
+/// the blade has no land or it meets only one side.
 pub fn blade_tip_passes(
     mesh: &Mesh,
     impeller: &Impeller,

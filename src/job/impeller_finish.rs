@@ -250,14 +250,36 @@ pub struct TipPasses {
     pub segments_kept: usize,
 }
 
-/// The root pass of one splitter (by its index in the impeller's pieces).
+/// The root pass and tip passes of one splitter (by its index in the impeller's pieces).
 #[derive(Clone, Debug, Serialize)]
-pub struct SplitterRootPass {
+pub struct SplitterPasses {
     pub piece: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub root_pass: Option<RootPass>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub no_root_pass: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tip: Option<TipPasses>,
+}
+
+/// A splitter of the first passage as planned: its loops, the passes along its tip and its
+/// root pass (before the coverage rule), and the context they were planned in.
+struct PlannedSplitter<'a> {
+    loops: Finishing,
+    tip: crate::impeller::BladeTip,
+    tip_passes: Finishing,
+    root: Finishing,
+    ctx: FinishingContext<'a>,
+}
+
+/// What the tip passes planned, when the piece has a land.
+fn tip_summary_of(tip: &crate::impeller::BladeTip, kept: &Finishing) -> Option<TipPasses> {
+    (!tip.curves.is_empty()).then_some(TipPasses {
+        curves: tip.curves.len(),
+        land_area_mm2: tip.land_area_mm2,
+        width_mm: tip.width_mm,
+        segments_kept: kept.segments.len(),
+    })
 }
 
 /// The swarf runs round one blade.
@@ -292,8 +314,8 @@ pub struct ImpellerFinishSummary {
     pub splitters: usize,
     pub splitter_loops: usize,
     /// The pass round each splitter's root in the first passage (copied with it), or why
-    /// there is none.
-    pub splitter_root_passes: Vec<SplitterRootPass>,
+    /// there is none, and the passes along its tip.
+    pub splitter_passes: Vec<SplitterPasses>,
     /// Why the hub and blades are finished by the planes instead, when they are.
     pub not_planned: Option<String>,
     /// Passages (each with its blade) planned, and copied from the first.
@@ -337,7 +359,7 @@ pub fn finish_impeller(
         blade: None,
         splitters: 0,
         splitter_loops: 0,
-        splitter_root_passes: Vec::new(),
+        splitter_passes: Vec::new(),
         not_planned: None,
         passages: 0,
         first_passage_ms: 0.0,
@@ -610,12 +632,28 @@ pub fn finish_impeller(
                     &piece_ctx,
                     options,
                 );
-                summary.splitter_root_passes.push(SplitterRootPass {
+                summary.splitter_passes.push(SplitterPasses {
                     piece,
                     root_pass: root_summary.as_ref().ok().cloned(),
                     no_root_pass: root_summary.err(),
+                    tip: None,
                 });
-                splitters.push((plan_loops(&piece_loops, &piece_ctx, None), root, piece_ctx));
+                let tip = if impeller_options.tip {
+                    blade_tip_passes(part, impeller, &passage, piece, stepover)
+                } else {
+                    crate::impeller::BladeTip::default()
+                };
+                let mut tip_passes = Finishing::default();
+                for result in path::curve_passes(&tip.curves, &piece_ctx, options, advance) {
+                    tip_passes.merge(result);
+                }
+                splitters.push(PlannedSplitter {
+                    loops: plan_loops(&piece_loops, &piece_ctx, None),
+                    tip,
+                    tip_passes,
+                    root,
+                    ctx: piece_ctx,
+                });
             }
 
             // Passes are spaced on the drive surface, but in a corner tighter than the ball
@@ -644,23 +682,28 @@ pub fn finish_impeller(
             keep_needed(&mut blade, blade_axes != BladeAxes::Lean);
             // The tip's passes where the loops leave its land.
             keep_needed(&mut tip_passes, blade_axes != BladeAxes::Lean);
-            let tip_summary = (!tip.curves.is_empty()).then_some(TipPasses {
-                curves: tip.curves.len(),
-                land_area_mm2: tip.land_area_mm2,
-                width_mm: tip.width_mm,
-                segments_kept: tip_passes.segments.len(),
-            });
+            let tip_summary = tip_summary_of(&tip, &tip_passes);
             blade.merge(tip_passes);
             keep_needed(&mut root, blade_axes != BladeAxes::Lean);
             // Copied with the blade's loops, after them: they end at the root.
             blade.merge(root);
-            for (splitter, root, _) in &mut splitters {
-                keep_needed(splitter, blade_axes != BladeAxes::Lean);
-                keep_needed(root, blade_axes != BladeAxes::Lean);
+            let mut splitter_tips = Vec::new();
+            for splitter in &mut splitters {
+                let may_reverse = blade_axes != BladeAxes::Lean;
+                keep_needed(&mut splitter.loops, may_reverse);
                 // Copied with the splitter's loops, after them, as the blade's.
-                splitter.merge(std::mem::take(root));
+                keep_needed(&mut splitter.tip_passes, may_reverse);
+                splitter_tips.push(tip_summary_of(&splitter.tip, &splitter.tip_passes));
+                splitter
+                    .loops
+                    .merge(std::mem::take(&mut splitter.tip_passes));
+                keep_needed(&mut splitter.root, may_reverse);
+                splitter.loops.merge(std::mem::take(&mut splitter.root));
             }
             keep_needed(&mut hub, hub_axes != HubAxes::Walls);
+            for (passes, tip) in summary.splitter_passes.iter_mut().zip(splitter_tips) {
+                passes.tip = tip;
+            }
             summary.first_passage_ms = round_ms(t);
 
             let t = Instant::now();
@@ -698,9 +741,14 @@ pub fn finish_impeller(
                     }
                     copies.push(copy);
                 }
-                for (splitter, _, piece_ctx) in &splitters {
-                    let (copy, stats) =
-                        path::turned_copy(splitter, &rotation, &centre, piece_ctx, options);
+                for splitter in &splitters {
+                    let (copy, stats) = path::turned_copy(
+                        &splitter.loops,
+                        &rotation,
+                        &centre,
+                        &splitter.ctx,
+                        options,
+                    );
                     summary.copies.merge(&stats);
                     copies.push(copy);
                 }
@@ -714,8 +762,8 @@ pub fn finish_impeller(
                 finishing.merge(swarf);
             }
             finishing.merge(blade);
-            for (splitter, _, _) in splitters {
-                finishing.merge(splitter);
+            for splitter in splitters {
+                finishing.merge(splitter.loops);
             }
             for copy in copies {
                 finishing.merge(copy);

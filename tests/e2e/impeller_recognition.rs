@@ -7,7 +7,7 @@
 use crate::common;
 use wavemill::impeller::{
     HubPassage, NotAnImpeller, PassageOptions, PieceKind, RecogniseOptions, Region, blade_loops,
-    recognise,
+    blade_tip_passes, recognise,
 };
 use wavemill::mesh::io::{Units, read_mesh};
 use wavemill::mesh::{Mesh, PrepareOptions, prepare};
@@ -249,7 +249,8 @@ fn the_sample_passage_axis_is_seen_from_as_many_points_as_any_direction() {
     assert!(figures.from_walls_deg < 30.0, "{figures:?}");
 }
 
-/// The compressor's splitters get a root pass like its blades: on the splitter in passage 0,
+/// The compressor's splitters get a root pass and tip passes like its blades: on the
+/// splitter in passage 0,
 /// with an 8 mm ball, every ball touches the part within the tolerance and never cuts into
 /// it (the tests' own oracle), and rests beside the splitter: on its flank or fillet, or on
 /// the hub within half a millimetre of it where the corner opens wider than the ball (its
@@ -257,7 +258,7 @@ fn the_sample_passage_axis_is_seen_from_as_many_points_as_any_direction() {
 /// millimetres, so the level a quarter step above it runs partly up the flank: most balls,
 /// not all, touch the splitter.
 #[test]
-fn the_compressor_splitter_gets_a_root_pass_beside_it() {
+fn the_compressor_splitter_gets_root_and_tip_passes() {
     let Some(dir) = common::testdata() else {
         return;
     };
@@ -335,4 +336,12 @@ fn the_compressor_splitter_gets_a_root_pass_beside_it() {
         4 * touching >= 3 * poses,
         "{touching} of {poses} touch the splitter"
     );
+
+    // Its tip has a land, and the passes along it lie on the splitter's own triangles.
+    let tip = blade_tip_passes(part, &found, &passage, splitter, 0.8);
+    assert!(!tip.curves.is_empty() && tip.land_area_mm2 > 0.0, "{tip:?}");
+    for p in tip.curves.iter().flat_map(|c| &c.points) {
+        let d = on_splitter.distance_below(&p.point, 1.0);
+        assert!(d < 1e-6, "a tip pass point {d} mm off the splitter");
+    }
 }
