@@ -35,6 +35,11 @@ pub struct Job {
     pub roughing: RoughingSection,
     pub cutting: CuttingSection,
     pub impeller: ImpellerSection,
+    /// `[corner_tool]`: a ball smaller than `[tool]`'s that finishes the corners after it
+    /// (a `corner-finish` operation last, in a job without `[[operation]]` tables); left out:
+    /// none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub corner_tool: Option<ToolSection>,
     /// The operations, in order (`[[operation]]` tables); empty: the ones today's
     /// `[strategy]` keys describe (see [`Job::operations`]).
     #[serde(rename = "operation", skip_serializing_if = "Vec::is_empty")]
@@ -998,6 +1003,10 @@ pub enum OperationKind {
     SemiFinish,
     /// Ball-end passes over the part itself (stock to leave 0).
     Finish,
+    /// After finishing, a smaller ball (its own `[operation.tool]`) along the concave corners
+    /// the finishing ball leaves material in: an impeller's blade and splitter roots, from
+    /// the corner out to where the finishing ball's passes touch.
+    CornerFinish,
 }
 
 impl OperationKind {
@@ -1010,6 +1019,7 @@ impl OperationKind {
             OperationKind::ChannelRough => "channel-rough",
             OperationKind::SemiFinish => "semi-finish",
             OperationKind::Finish => "finish",
+            OperationKind::CornerFinish => "corner-finish",
         }
     }
 
@@ -1134,6 +1144,7 @@ impl Job {
     pub fn operations(&self) -> Result<Vec<Operation>, JobError> {
         let default_name = |kind: OperationKind, stock: f64| match kind {
             OperationKind::Finish => "finish".to_string(),
+            OperationKind::CornerFinish => "corner-finish".to_string(),
             kind => format!("{} to {stock} mm", kind.name()),
         };
         let layers = |kind: OperationKind,
@@ -1202,6 +1213,10 @@ impl Job {
                     self.strategy.semi_finish_scallop_height,
                 )
             });
+            let corner = self.corner_tool.as_ref().map(|tool| Operation {
+                tool: tool.clone(),
+                ..operation(OperationKind::CornerFinish, 0.0, self.strategy.scallop_height)
+            });
             rough
                 .chain(indexed)
                 .chain(channel)
@@ -1211,12 +1226,20 @@ impl Job {
                     0.0,
                     self.strategy.scallop_height,
                 )))
+                .chain(corner)
                 .collect()
         } else {
             if !self.strategy.semi_finish_allowances.is_empty() {
                 return Err(JobError::Operations(
                     "strategy.semi_finish_allowances and [[operation]] tables both list \
                      operations; write the semi-finishing as [[operation]] tables"
+                        .into(),
+                ));
+            }
+            if self.corner_tool.is_some() {
+                return Err(JobError::Operations(
+                    "[corner_tool] and [[operation]] tables both list operations; give the \
+                     corner-finish operation its [operation.tool]"
                         .into(),
                 ));
             }
@@ -1243,6 +1266,17 @@ impl Job {
                         "roughing takes its end mill from the tool library: name it by \
                          tool_id, not by an [operation.tool] table",
                     ));
+                }
+                if s.kind == OperationKind::CornerFinish && s.tool.is_none() {
+                    return Err(fail(
+                        "corner-finish needs its own ball, smaller than [tool]'s: an \
+                         [operation.tool] table",
+                    ));
+                }
+                if let Some(tool) = &s.tool {
+                    tool.assembly()
+                        .validate()
+                        .map_err(|e| fail(&format!("its [operation.tool]: {e}")))?;
                 }
                 if !s.kind.is_roughing() && s.tool_id.is_some() {
                     return Err(fail(
@@ -1351,17 +1385,22 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
                 }
                 previous_stock = op.stock_to_leave;
             }
-            OperationKind::Finish => {
+            OperationKind::Finish | OperationKind::CornerFinish => {
                 if op.stock_to_leave != 0.0 {
                     return Err(fail(format!(
                         "finishing leaves no stock; stock_to_leave must be 0, got {}",
                         op.stock_to_leave
                     )));
                 }
-                if i + 1 != operations.len() {
+                let after = operations.len() - i - 1;
+                if op.kind == OperationKind::Finish
+                    && operations[i + 1..]
+                        .iter()
+                        .any(|o| o.kind != OperationKind::CornerFinish)
+                {
                     return Err(fail(format!(
-                        "finishing must be the last operation ({} follow it)",
-                        operations.len() - i - 1
+                        "finishing must be the last operation but for a corner-finish ({after} \
+                         follow it)"
                     )));
                 }
             }
@@ -1397,7 +1436,37 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
             }
             _ => {}
         }
-        if !op.kind.is_roughing() && op.tool != *job_tool {
+        if op.kind == OperationKind::CornerFinish {
+            op.tool
+                .assembly()
+                .validate()
+                .map_err(|e| fail(format!("its tool: {e}")))?;
+            if previous_kind != Some(OperationKind::Finish) {
+                return Err(fail(
+                    "corner-finish follows the finishing operation (and comes once)".into(),
+                ));
+            }
+            if !(op.tool.diameter < job_tool.diameter) {
+                return Err(fail(format!(
+                    "its ball ({} mm) must be smaller than the finishing ball ({} mm): it \
+                     reaches into the corners that one cannot",
+                    op.tool.diameter, job_tool.diameter
+                )));
+            }
+            if op.tool.id == job_tool.id {
+                return Err(fail(format!(
+                    "its tool has the finishing tool's number T{}: give it its own id",
+                    op.tool.id
+                )));
+            }
+            if op.scallop_height >= op.tool.diameter / 2.0 {
+                return Err(fail(format!(
+                    "scallop_height {} must be smaller than its ball's radius {}",
+                    op.scallop_height,
+                    op.tool.diameter / 2.0
+                )));
+            }
+        } else if !op.kind.is_roughing() && op.tool != *job_tool {
             return Err(fail(
                 "uses another ball than [tool]; the semi-finishing and finishing passes run \
                  the job's tool (roughing operations take theirs from the library)"
@@ -1406,7 +1475,8 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
         }
     }
     if operations
-        .last()
+        .iter()
+        .rfind(|op| op.kind != OperationKind::CornerFinish)
         .is_none_or(|op| op.kind != OperationKind::Finish)
     {
         return Err(JobError::Operations(

@@ -151,6 +151,10 @@ pub struct ImpellerFinishOptions {
     /// How the segments will be linked: a swarf run counts as cut only where the tool can
     /// leave its ends to the safe plane.
     pub link: LinkOptions,
+    /// Corner finishing with a smaller ball: only the band this far (mm) from each blade's and
+    /// splitter's root, on the hub beside it and up its sides (the loops, the flow lines
+    /// beside it and the root pass), no swarf, tip passes or planes. `None`: the whole part.
+    pub corner_band: Option<f64>,
 }
 
 /// What the hub finishing planned.
@@ -386,7 +390,30 @@ pub fn finish_impeller(
 
             // The hub: flow lines across passage 0.
             let lines = passage.flow_lines(&passage_options);
-            let curves = passage.drive_curves(&lines, ctx.part.surface());
+            let mut curves = passage.drive_curves(&lines, ctx.part.surface());
+            let corner_band = impeller_options.corner_band;
+            if let Some(band) = corner_band {
+                // The stretches of the flow lines beside a blade or splitter.
+                let surface = ctx.part.surface();
+                let beside_wall = |p: &Point3| {
+                    surface
+                        .closest_where(p, band, |t| {
+                            matches!(
+                                impeller.regions[t as usize],
+                                Region::Blade(_) | Region::Splitter(_)
+                            )
+                        })
+                        .is_some()
+                };
+                curves = curves
+                    .iter()
+                    .flat_map(|curve| {
+                        let needed: Vec<bool> =
+                            curve.points.iter().map(|p| beside_wall(&p.point)).collect();
+                        needed_stretches(curve, &needed, PARTIAL_LOOP_OVERLAP_STEPOVERS * stepover)
+                    })
+                    .collect();
+            }
             let lead = ctx.chooser.options().lead_deg;
             let (mean, middle) = passage.mean_wall_axis();
             let hub_axes = impeller_options.hub_axes;
@@ -556,7 +583,13 @@ pub fn finish_impeller(
                     &impeller_options.link,
                 )
             };
-            let swarfed = if impeller_options.swarf {
+            // In a corner finish the loops are wanted only up the band.
+            let above_band = |p: &Point3| {
+                corner_band.is_some_and(|band| passage.above_hub(p).0 > band)
+            };
+            let band_covered: Option<&(dyn Fn(&Point3) -> bool + Sync)> =
+                corner_band.map(|_| &above_band as &(dyn Fn(&Point3) -> bool + Sync));
+            let swarfed = if impeller_options.swarf && corner_band.is_none() {
                 Some(swarf_blade(
                     part, impeller, &passage, &swarf_ctx, options, pole, &leads,
                 ))
@@ -572,12 +605,17 @@ pub fn finish_impeller(
                     let loops = plan_loops(&loops, &blade_ctx, Some(&covered));
                     (Some(finishing), loops, Some(summary), None)
                 }
-                Some(Err(why)) => (None, plan_loops(&loops, &blade_ctx, None), None, Some(why)),
-                None => (None, plan_loops(&loops, &blade_ctx, None), None, None),
+                Some(Err(why)) => (
+                    None,
+                    plan_loops(&loops, &blade_ctx, band_covered),
+                    None,
+                    Some(why),
+                ),
+                None => (None, plan_loops(&loops, &blade_ctx, band_covered), None, None),
             };
 
             // Passes along the tip's land, where the level loops cross it far apart.
-            let tip = if impeller_options.tip {
+            let tip = if impeller_options.tip && corner_band.is_none() {
                 blade_tip_passes(part, impeller, &passage, passage.first_blade, stepover)
             } else {
                 crate::impeller::BladeTip::default()
@@ -638,7 +676,7 @@ pub fn finish_impeller(
                     no_root_pass: root_summary.err(),
                     tip: None,
                 });
-                let tip = if impeller_options.tip {
+                let tip = if impeller_options.tip && corner_band.is_none() {
                     blade_tip_passes(part, impeller, &passage, piece, stepover)
                 } else {
                     crate::impeller::BladeTip::default()
@@ -648,7 +686,7 @@ pub fn finish_impeller(
                     tip_passes.merge(result);
                 }
                 splitters.push(PlannedSplitter {
-                    loops: plan_loops(&piece_loops, &piece_ctx, None),
+                    loops: plan_loops(&piece_loops, &piece_ctx, band_covered),
                     tip,
                     tip_passes,
                     root,
@@ -803,6 +841,9 @@ pub fn finish_impeller(
             });
         }
         Err(reason) => summary.not_planned = Some(reason),
+    }
+    if impeller_options.corner_band.is_some() {
+        return (finishing, summary);
     }
     // The planes take every drive point whose nearest part triangle no strategy above took.
     let surface = ctx.part.surface();

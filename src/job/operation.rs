@@ -145,6 +145,45 @@ mod tests {
                 "tool_id names a library end mill",
             ),
             ("[[operation]]\nkind = \"face\"\n", "unknown variant `face`"),
+            (
+                "[[operation]]\nkind = \"finish\"\n[[operation]]\nkind = \"corner-finish\"\n",
+                "corner-finish needs its own ball",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\n[[operation]]\nkind = \"corner-finish\"\n\
+                 [operation.tool]\nid = 2\ndiameter = 6.0\n",
+                "its ball (6 mm) must be smaller than the finishing ball (4 mm)",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\n[[operation]]\nkind = \"corner-finish\"\n\
+                 [operation.tool]\ndiameter = 2.0\n",
+                "give it its own id",
+            ),
+            (
+                "[[operation]]\nkind = \"corner-finish\"\n[operation.tool]\nid = 2\ndiameter = 2.0\n\
+                 [[operation]]\nkind = \"finish\"\n",
+                "operation 1 (corner-finish): corner-finish follows the finishing operation",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\n\
+                 [[operation]]\nkind = \"corner-finish\"\n[operation.tool]\nid = 2\ndiameter = 2.0\n\
+                 [[operation]]\nkind = \"corner-finish\"\n[operation.tool]\nid = 3\ndiameter = 1.0\n",
+                "operation 3 (corner-finish): corner-finish follows the finishing operation (and comes once)",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\n[[operation]]\nkind = \"corner-finish\"\n\
+                 scallop_height = 1.5\n[operation.tool]\nid = 2\ndiameter = 2.0\n",
+                "scallop_height 1.5 must be smaller than its ball's radius 1",
+            ),
+            (
+                "[[operation]]\nkind = \"finish\"\n[[operation]]\nkind = \"corner-finish\"\n\
+                 [operation.tool]\nid = 2\ndiameter = 2.0\nstickout = -1.0\n",
+                "operation 2 (corner-finish): its [operation.tool]:",
+            ),
+            (
+                "[corner_tool]\nid = 2\ndiameter = 2.0\n[[operation]]\nkind = \"finish\"\n",
+                "[corner_tool] and [[operation]] tables both list operations",
+            ),
         ] {
             let err = job(text).expect_err(text);
             assert!(err.contains(says), "{text}: {err}");
@@ -183,6 +222,24 @@ mod tests {
         assert_eq!(listed[0].library_tool, Some(3));
         assert_eq!(listed[0].stock_to_leave, 0.5);
         assert_eq!(listed[1].library_tool, None);
+    }
+
+    /// A `[corner_tool]` puts a corner finish with it after the finishing; listed, it is the
+    /// same operation.
+    #[test]
+    fn a_corner_tool_finishes_the_corners_last() {
+        let ops = job("[stock]\nblank = \"none\"\n[corner_tool]\nid = 2\ndiameter = 2.0\n")
+            .expect("job");
+        let kinds: Vec<OperationKind> = ops.iter().map(|o| o.kind).collect();
+        assert_eq!(kinds, [OperationKind::Finish, OperationKind::CornerFinish]);
+        assert_eq!(ops[1].tool.diameter, 2.0);
+        assert_eq!(ops[1].tool.id, 2);
+        assert_eq!(ops[1].stock_to_leave, 0.0);
+        assert_eq!(ops[0].tool.diameter, 4.0);
+        let listed = job("[stock]\nblank = \"none\"\n[[operation]]\nkind = \"finish\"\n\
+             [[operation]]\nkind = \"corner-finish\"\n[operation.tool]\nid = 2\ndiameter = 2.0\n")
+        .expect("job");
+        assert_eq!(listed, ops);
     }
 
     /// `bound = "hull-boxes"` sets a rough or rest-rough operation's boxes (the seed's model

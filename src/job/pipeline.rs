@@ -21,7 +21,7 @@ use std::time::Instant;
 
 use super::budget::ToleranceBudget;
 use super::channel_rough::channel_rough;
-use super::config::{Job, Operation, OperationKind, SurfaceSection};
+use super::config::{Job, Operation, OperationKind, SurfaceSection, ToolSection};
 use super::impeller_finish::{ImpellerFinishOptions, ImpellerFinishSummary, finish_impeller};
 use super::offsets::stock_shapes;
 use super::operation::InProcessStock;
@@ -31,6 +31,7 @@ use super::rapids::{MAX_RAPID_TURN_DEG, split_turning_rapids};
 use super::report::*;
 use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
+use crate::collide::PreparedTool;
 use crate::error::{Error, JobError, Result};
 use crate::geom::{Move, MoveKind, Toolpath, Vector3};
 use crate::impeller::Impeller;
@@ -43,7 +44,7 @@ use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::stock::clearance::MaterialClearance;
 use crate::verify::{PostedClearance, PostedOptions, check_posted, verify};
-use crate::verify::{ScallopOptions, measure_scallop_map};
+use crate::verify::{Ball, ScallopOptions, measure_scallop_map_of};
 
 pub use super::observer::{Observer, Quiet};
 
@@ -282,6 +283,8 @@ pub enum OperationTarget<'a> {
         drive: &'a Mesh,
         part: &'a Mesh,
         impeller: &'a Impeller,
+        /// A corner finish's band round the roots, mm (see [`ImpellerFinishOptions`]).
+        corner_band: Option<f64>,
     },
 }
 
@@ -297,8 +300,10 @@ pub fn plan_operation(
     material: Option<Arc<MaterialClearance>>,
     advance: &(dyn Fn() + Sync),
 ) -> Result<PlannedOperation> {
+    // A corner finish leaves the finish's 0 mm, taking what the finishing ball could not reach.
     if let InProcessStock::AtLeast { stock_to_leave } = *stock
         && operation.stock_to_leave >= stock_to_leave
+        && operation.kind != OperationKind::CornerFinish
     {
         return Err(Error::JobFile(JobError::Operations(format!(
             "operation '{}' leaves {} mm where the operations before it already leave \
@@ -331,7 +336,8 @@ pub fn plan_operation(
         (
             OperationKind::Finish,
             target @ (OperationTarget::DriveSurface(_) | OperationTarget::Impeller { .. }),
-        ) => {
+        )
+        | (OperationKind::CornerFinish, target @ OperationTarget::Impeller { .. }) => {
             let reachable = |axis: &Vector3| setup.reachable(axis);
             let with_material = material.map(|m| setup.collider.with_material(m));
             let collider = with_material.as_ref().unwrap_or(&setup.collider);
@@ -347,6 +353,7 @@ pub fn plan_operation(
                     drive,
                     part,
                     impeller,
+                    corner_band,
                 } => {
                     let (passes, summary) = finish_impeller(
                         part,
@@ -362,6 +369,7 @@ pub fn plan_operation(
                             tip: setup.impeller.tip,
                             pole: setup.pole(),
                             link: setup.link.clone(),
+                            corner_band,
                         },
                         advance,
                     );
@@ -503,9 +511,7 @@ pub fn plan_with_surfaces(
     // of the blower's plan, is not built.
     let impeller_finishes = job.impeller.finishing
         && matches!(impeller, Some(Ok(_)))
-        && operations
-            .last()
-            .is_some_and(|op| op.kind == OperationKind::Finish);
+        && operations.iter().any(|op| op.kind == OperationKind::Finish);
     let settings = SurfaceSection {
         remesh: job.surface.remesh && !impeller_finishes,
         ..job.surface.clone()
@@ -545,22 +551,34 @@ pub fn plan_with_surfaces(
     let mut ball_feed_control = Vec::new();
     let has_blank = job.stock.blank_spec()?.is_some();
     // How every ball operation comes off the planning stock after roughing.
-    let ball_take_off = BallTakeOff {
-        ball: &setup.tool,
+    fn take_off_with<'a>(
+        job: &Job,
+        ball: &'a crate::tool::ToolAssembly,
+        tool: &ToolSection,
+    ) -> BallTakeOff<'a> {
+        BallTakeOff {
+        ball,
         approach_feed: job.feeds.approach,
         clearance: job.feeds.clearance,
         tolerance: job.strategy.tolerance,
         feed_control: job.cutting.model().map(|model| {
             let cutter = crate::feed::Cutter {
-                diameter: job.tool.diameter,
-                spindle_rpm: f64::from(job.tool.spindle_rpm),
+                diameter: tool.diameter,
+                spindle_rpm: f64::from(tool.spindle_rpm),
                 pass_feed: job.feeds.cut,
                 rapid_feed: job.machine.rapid_feed,
                 speed_up: false,
             };
             (model, cutter)
         }),
-    };
+    }
+    }
+    let ball_take_off = take_off_with(job, &setup.tool, &job.tool);
+    // The corner finish's smaller ball, in the same cell.
+    let corner_setup = operations
+        .iter()
+        .find(|op| op.kind == OperationKind::CornerFinish)
+        .map(|op| setup.with_ball(&op.tool));
     for operation in &operations {
         if operation.kind.is_roughing() {
             let t = Instant::now();
@@ -679,8 +697,40 @@ pub fn plan_with_surfaces(
                         drive: &drive,
                         part,
                         impeller,
+                        corner_band: None,
                     },
                     _ => OperationTarget::DriveSurface(&drive),
+                }
+            }
+            OperationKind::CornerFinish => {
+                observer.stage(&format!("corner finishing: {}", operation.name), 0);
+                let band = corner_band(job, operation);
+                match impeller.as_ref() {
+                    Some(Ok(impeller)) if job.impeller.finishing => OperationTarget::Impeller {
+                        drive: &drive,
+                        part,
+                        impeller,
+                        corner_band: Some(band),
+                    },
+                    Some(Ok(_)) => {
+                        return Err(Error::JobFile(JobError::Operations(format!(
+                            "operation '{}': corner finishing runs along the roots the \
+                             impeller strategies finish, and [impeller] finishing = false",
+                            operation.name
+                        ))));
+                    }
+                    _ => {
+                        return Err(Error::JobFile(JobError::Operations(format!(
+                            "operation '{}': corner finishing runs along an impeller's blade \
+                             and splitter roots, and {part_name} was not recognised as an \
+                             impeller{}",
+                            operation.name,
+                            impeller
+                                .as_ref()
+                                .and_then(|r| r.as_ref().err())
+                                .map_or(String::new(), |why| format!(" ({why})"))
+                        ))));
+                    }
                 }
             }
             OperationKind::Rough
@@ -692,9 +742,16 @@ pub fn plan_with_surfaces(
         };
         let t = Instant::now();
         let material = roughing_context.as_ref().map(RoughingContext::material);
+        let op_setup = match (&corner_setup, operation.kind) {
+            (Some(corner), OperationKind::CornerFinish) => corner,
+            _ => &setup,
+        };
         let mut operation_planned =
-            plan_operation(&setup, operation, target, &stock, material, &advance)?;
-        if operation.kind == OperationKind::Finish {
+            plan_operation(op_setup, operation, target, &stock, material, &advance)?;
+        if matches!(
+            operation.kind,
+            OperationKind::Finish | OperationKind::CornerFinish
+        ) {
             timings.finishing_passes += ms(t);
         }
         // With a blank, every move is also read as a straight sweep through the stock: rapids
@@ -705,7 +762,7 @@ pub fn plan_with_surfaces(
             split_turning_rapids(
                 &mut operation_planned.toolpath,
                 before.as_ref(),
-                setup.program_kinematics().as_ref(),
+                op_setup.program_kinematics().as_ref(),
                 MAX_RAPID_TURN_DEG,
             );
         }
@@ -716,7 +773,7 @@ pub fn plan_with_surfaces(
             let taken = context.take_off_ball_operation(
                 &mut operation_planned.toolpath,
                 last_ball_move.as_ref(),
-                &ball_take_off,
+                &take_off_with(job, &op_setup.tool, &operation.tool),
             );
             *rapids_fed.get_or_insert(0) += taken.rapids_fed;
             if let Some(feed_control) = taken.feed_control {
@@ -729,7 +786,7 @@ pub fn plan_with_surfaces(
         }
         last_ball_move = operation_planned.toolpath.moves.last().copied();
         planned.push(operation_planned);
-        tools.push(setup.tool.clone());
+        tools.push(op_setup.tool.clone());
         stock = stock.after(operation);
     }
 
@@ -772,14 +829,22 @@ pub fn plan_with_surfaces(
     let section_starts: Vec<usize> = std::iter::once(0)
         .chain(changes.iter().map(|c| c.at))
         .collect();
-    let unwind_sections: Vec<bool> = section_starts
+    // The ball each operation cuts with, prepared (`None` for the roughing end mills).
+    let ball_of = |op: &Operation| -> Option<&PreparedTool> {
+        match (op.kind, &corner_setup) {
+            (kind, _) if kind.is_roughing() => None,
+            (OperationKind::CornerFinish, Some(corner)) => Some(&corner.prepared_tool),
+            _ => Some(&setup.prepared_tool),
+        }
+    };
+    let unwind_sections: Vec<Option<&PreparedTool>> = section_starts
         .iter()
         .map(|&at| {
             spans
                 .iter()
                 .zip(&operations)
                 .find(|(span, _)| span.moves.contains(&at))
-                .is_some_and(|(_, op)| !op.kind.is_roughing())
+                .and_then(|(_, op)| ball_of(op))
         })
         .collect();
     let linearised = linearise_program(
@@ -812,7 +877,7 @@ pub fn plan_with_surfaces(
     let t = Instant::now();
     observer.stage("post-processing", 0);
     let (program, gcode) = write_program(&setup, &linearised, &changes, &header);
-    let cl_csv = if roughing.is_empty() {
+    let cl_csv = if tools.iter().all(|t| t.id == setup.tool.id) {
         post::write_cl_csv(&toolpath)
     } else {
         let rows: Vec<(u32, Move)> = spans
@@ -858,26 +923,50 @@ pub fn plan_with_surfaces(
         || {
             let t = Instant::now();
             observer.stage("verification", 0);
-            // Every pose of the ball operations against the part and the machine; the roughing
-            // tools' moves are checked exactly as posted below.
+            // Every pose of the ball operations against the part and the machine, each ball's
+            // moves with its bodies; the roughing tools' moves are checked exactly as posted
+            // below.
             let ball_start = spans
                 .iter()
                 .zip(&operations)
                 .find(|(_, op)| !op.kind.is_roughing())
                 .map_or(toolpath.moves.len(), |(span, _)| span.moves.start);
-            let ball_moves = Toolpath {
-                tool_id: setup.tool.id,
-                moves: toolpath.moves[ball_start..].to_vec(),
+            let corner_start = spans
+                .iter()
+                .zip(&operations)
+                .find(|(_, op)| op.kind == OperationKind::CornerFinish)
+                .map_or(toolpath.moves.len(), |(span, _)| span.moves.start);
+            let moves_of = |range: std::ops::Range<usize>, tool_id: u32| Toolpath {
+                tool_id,
+                moves: toolpath.moves[range].to_vec(),
             };
-            let verification = verify(
-                &ball_moves,
+            let mut verification = verify(
+                &moves_of(ball_start..corner_start, setup.tool.id),
                 &setup.collider,
                 &setup.prepared_tool,
                 setup.search,
             );
+            if let Some(corner) = &corner_setup {
+                verification = verification.merge(&verify(
+                    &moves_of(corner_start..toolpath.moves.len(), corner.tool.id),
+                    &corner.collider,
+                    &corner.prepared_tool,
+                    corner.search,
+                ));
+            }
             let verification_ms = ms(t);
             let t = Instant::now();
             // The scallop the finishing moves leave on the part, measured from the moves alone.
+            let ball_of = |p: &PlannedOperation| {
+                let radius = p.operation.tool.diameter / 2.0;
+                Ball {
+                    radius,
+                    flutes_above_ball: (p.operation.tool.flute_length - radius).max(0.0),
+                }
+            };
+            let corner = planned
+                .iter()
+                .find(|p| p.operation.kind == OperationKind::CornerFinish);
             let finish_scallop = planned
                 .iter()
                 .rfind(|p| p.operation.kind == OperationKind::Finish)
@@ -896,9 +985,13 @@ pub fn plan_with_surfaces(
                                 .collect()
                         });
                     let target = p.operation.scallop_height;
-                    let (report, found) = measure_scallop_map(
+                    let passes: Vec<(&Toolpath, Ball)> = std::iter::once(p)
+                        .chain(corner)
+                        .map(|p| (&p.toolpath, ball_of(p)))
+                        .collect();
+                    let (report, found) = measure_scallop_map_of(
                         part,
-                        &p.toolpath,
+                        &passes,
                         &ScallopOptions {
                             radius,
                             target: p.operation.scallop_height,
@@ -924,23 +1017,31 @@ pub fn plan_with_surfaces(
                 .chain(std::iter::once((setup.tool.id, setup.tool.total_length())))
                 .collect();
             let model = setup.verifier_model(&gauges);
-            let posted = check_posted(
-                &gcode,
-                &model,
-                part,
-                &PostedOptions {
-                    ball_radius: setup.prepared_tool.ball_radius,
-                    feed_error_mm: budget.verification_mm,
-                    rapid_error_mm: (0.1 * rapid_margin).max(budget.verification_mm),
-                    search_mm: setup.search,
-                    tool: Some(setup.tool.id),
-                    rounding_mm: budget.rounding_mm,
-                    flutes_above_ball: setup
-                        .prepared_tool
-                        .flutes_above_ball()
-                        .map_or(0.0, |(length, _)| length),
-                },
-            );
+            // Each ball's blocks with that ball.
+            let posted_for = |ball: &PlanSetup| {
+                check_posted(
+                    &gcode,
+                    &model,
+                    part,
+                    &PostedOptions {
+                        ball_radius: ball.prepared_tool.ball_radius,
+                        feed_error_mm: budget.verification_mm,
+                        rapid_error_mm: (0.1 * rapid_margin).max(budget.verification_mm),
+                        search_mm: ball.search,
+                        tool: Some(ball.tool.id),
+                        rounding_mm: budget.rounding_mm,
+                        flutes_above_ball: ball
+                            .prepared_tool
+                            .flutes_above_ball()
+                            .map_or(0.0, |(length, _)| length),
+                    },
+                )
+            };
+            let posted = match &corner_setup {
+                None => posted_for(&setup),
+                Some(corner) => posted_for(&setup)
+                    .and_then(|finish| Ok(finish.merge(posted_for(corner)?))),
+            };
             let roughing_failure = check_posted_roughing(
                 &gcode,
                 &model,
@@ -1021,8 +1122,36 @@ pub fn plan_with_surfaces(
     let mut semi_summaries = Vec::new();
     let mut channel_summaries = Vec::new();
     let mut finishing = None;
+    let mut corner_finishing = None;
     for p in planned {
         match p.details {
+            OperationDetails::Finish {
+                passes,
+                linking,
+                impeller: Some(impeller),
+            } if p.operation.kind == OperationKind::CornerFinish => {
+                let radius = p.operation.tool.diameter / 2.0;
+                let stepover = path::stepover_for_scallop(radius, p.operation.scallop_height);
+                let cutting_length_mm = p
+                    .toolpath
+                    .moves
+                    .windows(2)
+                    .filter(|w| w[1].kind == MoveKind::Cut)
+                    .map(|w| (w[1].pose.tip - w[0].pose.tip).norm())
+                    .sum();
+                corner_finishing = Some(CornerFinishSummary {
+                    tool: p.operation.tool.assembly().describe(),
+                    ball_radius_mm: radius,
+                    scallop_height_mm: p.operation.scallop_height,
+                    stepover_mm: stepover,
+                    band_mm: corner_band(job, &p.operation),
+                    drive_points: passes.drive_points,
+                    cutting_length_mm,
+                    unreachable: passes.unreachable.len(),
+                    impeller: *impeller,
+                    linking,
+                });
+            }
             OperationDetails::Rough(_) => {}
             OperationDetails::ChannelRough(summary) => channel_summaries.push(*summary),
             OperationDetails::SemiFinish(summary) => semi_summaries.push(summary),
@@ -1065,11 +1194,14 @@ pub fn plan_with_surfaces(
             }
         )));
     }
-    let finish = operations.last().ok_or_else(|| {
-        Error::JobFile(JobError::Operations(
-            "a job needs at least one operation".into(),
-        ))
-    })?;
+    let finish = operations
+        .iter()
+        .rfind(|op| op.kind == OperationKind::Finish)
+        .ok_or_else(|| {
+            Error::JobFile(JobError::Operations(
+                "a job needs a finishing operation".into(),
+            ))
+        })?;
     let stepover = path::stepover_for_scallop(finish.tool.diameter / 2.0, finish.scallop_height);
     let report = PlanReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),
@@ -1127,6 +1259,7 @@ pub fn plan_with_surfaces(
             },
         },
         impeller_finishing,
+        corner_finishing,
         not_an_impeller: impeller.as_ref().and_then(|r| r.as_ref().err().cloned()),
         impeller: impeller.and_then(|r| r.ok()),
         stock_to_leave: semi_summaries,
@@ -1227,8 +1360,9 @@ pub struct ToolChange {
 }
 
 /// Where the plan's program changes tools: at the start of every roughing operation after
-/// the first (each roughing tool's moves stand apart in the program, for its check), and at
-/// the first ball operation after roughing.
+/// the first (each roughing tool's moves stand apart in the program, for its check), at the
+/// first ball operation after roughing, and where a ball operation's ball is another (a
+/// corner finish's); a ball's change sets its centre as the control point.
 fn tool_changes(
     job: &Job,
     spans: &[OperationSpan],
@@ -1238,7 +1372,8 @@ fn tool_changes(
     let mut changes = Vec::new();
     for k in 1..operations.len() {
         let (before, now) = (&operations[k - 1], &operations[k]);
-        if now.kind.is_roughing() || before.kind.is_roughing() {
+        if now.kind.is_roughing() || before.kind.is_roughing() || tools[k].id != tools[k - 1].id
+        {
             let tool = &tools[k];
             changes.push(ToolChange {
                 at: spans[k].moves.start,
@@ -1248,8 +1383,9 @@ fn tool_changes(
                     spindle_rpm: if now.kind.is_roughing() {
                         job.roughing.spindle_rpm
                     } else {
-                        job.tool.spindle_rpm
+                        now.tool.spindle_rpm
                     },
+                    control_point_mm: (!now.kind.is_roughing()).then(|| now.tool.diameter / 2.0),
                     ..Default::default()
                 },
                 gauge_length: tool.total_length(),
@@ -1321,7 +1457,8 @@ const UNWIND_SEARCH_POSES: usize = 400;
 
 /// The post's first half: `toolpath` linearised for `setup`'s machine, each section between
 /// tool changes on its own with its tool's gauge length, in the output mode's kinematics.
-/// In the sections `unwind[k]` marks (cut by the job's ball), where no branch or turn of the
+/// In the sections `unwind[k]` names a ball for (the job's, or a corner finish's: its centre
+/// the control point, its bodies checked on the way out), where no branch or turn of the
 /// rotary axes carries a pass within the machine's limits, the program unwinds: the tool
 /// leaves along its axis from the last cut pose before the limit that it can leave without
 /// touching the part (the link's exact swept-body check, [`path::relink`]), the rotaries
@@ -1333,19 +1470,18 @@ pub fn linearise_program(
     toolpath: &Toolpath,
     changes: &[ToolChange],
     first_gauge_length: f64,
-    unwind: &[bool],
+    unwind: &[Option<&PreparedTool>],
 ) -> Result<LinearisedProgram> {
     // The flutes' top too: they may touch the part (and dip the tolerance on a swarf run),
     // and 0.1° of axis is 0.014 mm at the top of 8 mm of flutes.
-    let linearise = LineariseOptions::default()
-        .with_tolerance_mm(setup.budget.linearisation_mm)
-        .with_control_point_mm(setup.prepared_tool.ball_radius)
-        .with_flutes_above_control_mm(
-            setup
-                .prepared_tool
-                .flutes_above_ball()
-                .map_or(0.0, |(length, _)| length),
-        );
+    let linearise_for = |tool: &PreparedTool| {
+        LineariseOptions::default()
+            .with_tolerance_mm(setup.budget.linearisation_mm)
+            .with_control_point_mm(tool.ball_radius)
+            .with_flutes_above_control_mm(
+                tool.flutes_above_ball().map_or(0.0, |(length, _)| length),
+            )
+    };
     let tcp = setup.gcode_options.output == post::OutputMode::Tcp;
     let mut starts: Vec<usize> = std::iter::once(0)
         .chain(changes.iter().map(|c| c.at))
@@ -1372,10 +1508,10 @@ pub fn linearise_program(
             k => changes[k - 1].gauge_length,
         };
         let kinematics = setup.kinematics.with_gauge_length(gauge);
+        let ball = unwind.get(k).copied().flatten();
+        let linearise = linearise_for(ball.unwrap_or(&setup.prepared_tool));
         let mut hook = |moves: &[Move], start: usize, stop: usize| {
-            if !unwind.get(k).copied().unwrap_or(false) {
-                return None;
-            }
+            let ball = ball?;
             // A rapid between two poses on the safe plane: a stop halfway, where the rotaries
             // turn in place (halved again while the limit still stops one of the halves).
             if stop >= 1
@@ -1412,7 +1548,7 @@ pub fn linearise_program(
                 };
                 path::relink(
                     &setup.collider,
-                    &setup.prepared_tool,
+                    ball,
                     &setup.link,
                     &moves[at].pose,
                     entry,
@@ -1501,6 +1637,14 @@ fn finishing_strategy(impeller: bool) -> &'static str {
     }
 }
 
+/// How far from each root a corner finish runs: a stepover of its ball past where the
+/// finishing ball's passes touch, which is the finishing ball's radius from a square root's
+/// corner.
+fn corner_band(job: &Job, corner: &Operation) -> f64 {
+    job.tool.diameter / 2.0
+        + path::stepover_for_scallop(corner.tool.diameter / 2.0, corner.scallop_height)
+}
+
 /// The program header: what was planned (`impeller`: the finishing ran the impeller's own
 /// strategies), with which tool, and the tolerance budget.
 pub fn program_header(
@@ -1518,6 +1662,7 @@ pub fn program_header(
         tool_number: setup.tool.id,
         spindle_rpm: job.tool.spindle_rpm,
         coolant: true,
+        control_point_mm: None,
         comments: vec![
             format!(
                 "{}, scallop {} mm, tolerance {} mm",

@@ -26,6 +26,9 @@ pub struct PlanReport {
     /// What the impeller finishing strategies planned, when they finished the part.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub impeller_finishing: Option<super::impeller_finish::ImpellerFinishSummary>,
+    /// The corner finish with a smaller ball along the roots, when the job has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub corner_finishing: Option<CornerFinishSummary>,
     /// The semi-finishing operations before finishing, in machining order: which shapes were
     /// used as stock to leave, and what the checks measured (issue 4 point 5). Empty: none.
     pub stock_to_leave: Vec<super::semi_finish::SemiFinishSummary>,
@@ -250,4 +253,21 @@ impl PlanReport {
         s.push('\n');
         s
     }
+}
+
+/// What a corner finish (`kind = "corner-finish"`) planned: its ball, the band round the
+/// roots it covers, its passes and how they were linked.
+#[derive(Clone, Debug, Serialize)]
+pub struct CornerFinishSummary {
+    pub tool: String,
+    pub ball_radius_mm: f64,
+    pub scallop_height_mm: f64,
+    pub stepover_mm: f64,
+    /// From each root out to this far (mm): the finishing ball's radius and a stepover.
+    pub band_mm: f64,
+    pub drive_points: usize,
+    pub cutting_length_mm: f64,
+    pub unreachable: usize,
+    pub impeller: super::impeller_finish::ImpellerFinishSummary,
+    pub linking: LinkReport,
 }

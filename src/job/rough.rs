@@ -461,6 +461,7 @@ pub fn rough(
         tool_number: assembly.id,
         spindle_rpm: options.spindle_rpm,
         coolant: true,
+        control_point_mm: None,
         comments: vec![format!(
             "roughing to the part + {} mm from {}, 3-axis, work offset at the part's origin",
             options.allowance,

@@ -87,7 +87,7 @@ pub struct PlanSetup {
     /// The part with the table, for exact distances and tool-body collisions.
     pub collider: PartCollider,
     /// The part for visibility rays.
-    pub rays: RayScene,
+    pub rays: std::sync::Arc<RayScene>,
     pub tool: ToolAssembly,
     pub prepared_tool: PreparedTool,
     pub margins: Margins,
@@ -151,7 +151,7 @@ impl PlanSetup {
                 reason: e.to_string(),
             })?
             .with_table(table);
-        let rays = RayScene::new(&part.part);
+        let rays = std::sync::Arc::new(RayScene::new(&part.part));
         let tool = job.tool.assembly();
         let margins = Margins {
             shank: job.safety.shank_margin,
@@ -241,6 +241,31 @@ impl PlanSetup {
             link,
             search,
         })
+    }
+
+    /// The same cell with another ball in the spindle (a corner finish's): its bodies for the
+    /// collision checks and its gauge length for the machine; the part's structures shared.
+    pub fn with_ball(&self, tool: &super::config::ToolSection) -> PlanSetup {
+        let assembly = tool.assembly();
+        PlanSetup {
+            collider: self.collider.clone(),
+            rays: self.rays.clone(),
+            prepared_tool: PreparedTool::new(&assembly, &self.margins),
+            kinematics: self.kinematics.with_gauge_length(assembly.total_length()),
+            tool: assembly,
+            margins: self.margins,
+            table: self.table,
+            part_origin_in_table: self.part_origin_in_table,
+            pivot: self.pivot,
+            safe_distance: self.safe_distance,
+            budget: self.budget,
+            gcode_options: self.gcode_options.clone(),
+            chooser: AxisChooser::new(self.chooser.options().clone()),
+            finishing: self.finishing.clone(),
+            link: self.link.clone(),
+            search: self.search,
+            impeller: self.impeller.clone(),
+        }
     }
 
     /// Whether the machine can point the tool along `axis` (the inverse kinematics has a

@@ -354,6 +354,7 @@ impl ContourProgram {
             tool_number: 1,
             spindle_rpm: self.params.spindle_rpm.map_or(0, |s| s.round() as u32),
             coolant: false,
+            control_point_mm: None,
             comments: vec![format!(
                 "cutting depth Z{}, safe height Z{}",
                 super::format::fixed(self.params.cut_z, self.gcode.linear_decimals),

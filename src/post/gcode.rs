@@ -428,6 +428,9 @@ impl ProgramSink for GcodeWriter {
         }
         self.line(&format!("T{} M6", h.tool_number));
         self.tool_number = h.tool_number;
+        if let Some(control_point) = h.control_point_mm {
+            self.opts.control_point_mm = control_point;
+        }
         self.spindle = h.spindle_rpm > 0;
         if self.spindle {
             self.line(&format!("S{} M3", h.spindle_rpm));

@@ -94,6 +94,9 @@ pub struct ProgramHeader {
     pub coolant: bool,
     /// Free comments, one line each.
     pub comments: Vec<String>,
+    /// At a tool change, the new tool's control point (mm up its axis from the tip: a ball's
+    /// centre), where its inverse-time feeds are timed; `None` keeps the writer's.
+    pub control_point_mm: Option<f64>,
 }
 
 /// Receives a posted program: one `begin`, one `motion` per block, one `end`. Implemented by

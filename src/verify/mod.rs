@@ -22,8 +22,8 @@ pub use posted::{
 };
 pub use program::{MotionBlock, ProgramError, read_conversational, read_program};
 pub use scallop::{
-    AreaSplit, SampleScallop, ScallopOptions, ScallopPatch, ScallopReport, measure_scallop,
-    measure_scallop_map, ray_capsule_entry,
+    AreaSplit, Ball, SampleScallop, ScallopOptions, ScallopPatch, ScallopReport, measure_scallop,
+    measure_scallop_map, measure_scallop_map_of, ray_capsule_entry,
 };
 pub use segment_distance::SegmentDistance;
 
@@ -58,6 +58,22 @@ pub struct Verification {
 }
 
 impl Verification {
+    /// The verification of two paths checked apart (each with its own tool) as one: counts
+    /// added, every clearance the least of the two.
+    pub fn merge(&self, other: &Verification) -> Verification {
+        Verification {
+            checked_poses: self.checked_poses + other.checked_poses,
+            checked_midpoints: self.checked_midpoints + other.checked_midpoints,
+            min_cutter_clearance: self.min_cutter_clearance.min(other.min_cutter_clearance),
+            min_chord_clearance: self.min_chord_clearance.min(other.min_chord_clearance),
+            min_flutes_clearance: self.min_flutes_clearance.min(other.min_flutes_clearance),
+            min_shank_clearance: self.min_shank_clearance.min(other.min_shank_clearance),
+            min_holder_clearance: self.min_holder_clearance.min(other.min_holder_clearance),
+            min_table_clearance: self.min_table_clearance.min(other.min_table_clearance),
+            search_distance: self.search_distance.min(other.search_distance),
+        }
+    }
+
     /// Whether the path respects the tolerances and margins it was planned with; else every
     /// check it fails.
     pub fn passes(

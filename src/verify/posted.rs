@@ -440,6 +440,49 @@ pub struct PostedClearance {
     pub problems: Vec<String>,
 }
 
+impl PostedClearance {
+    /// The checks of one program's blocks for two tools (each measured with its own ball) as
+    /// one: the least clearances with their lines, pieces added, the fastest feed, each
+    /// problem once.
+    pub fn merge(mut self, other: PostedClearance) -> PostedClearance {
+        let least = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
+        (self.min_feed_clearance_mm, self.min_feed_line) = least(
+            (self.min_feed_clearance_mm, self.min_feed_line),
+            (other.min_feed_clearance_mm, other.min_feed_line),
+        );
+        (self.min_rapid_clearance_mm, self.min_rapid_line) = least(
+            (self.min_rapid_clearance_mm, self.min_rapid_line),
+            (other.min_rapid_clearance_mm, other.min_rapid_line),
+        );
+        self.pieces += other.pieces;
+        self.fastest_part_feed = match (self.fastest_part_feed, other.fastest_part_feed) {
+            (Some(a), Some(b)) => Some(if b.0 > a.0 { b } else { a }),
+            (a, b) => a.or(b),
+        };
+        self.flutes = match (self.flutes.take(), other.flutes) {
+            (Some(mut a), Some(b)) => {
+                (a.min_feed_clearance_mm, a.min_feed_line) = least(
+                    (a.min_feed_clearance_mm, a.min_feed_line),
+                    (b.min_feed_clearance_mm, b.min_feed_line),
+                );
+                (a.min_rapid_clearance_mm, a.min_rapid_line) = least(
+                    (a.min_rapid_clearance_mm, a.min_rapid_line),
+                    (b.min_rapid_clearance_mm, b.min_rapid_line),
+                );
+                a.cells += b.cells;
+                Some(a)
+            }
+            (a, b) => a.or(b),
+        };
+        for problem in other.problems {
+            if !self.problems.contains(&problem) {
+                self.problems.push(problem);
+            }
+        }
+        self
+    }
+}
+
 /// The least clearance of the ball and its flutes together: of the cylinder of the ball's
 /// radius round the axis from the ball's centre to the flutes' top (capped by half a ball
 /// there), which holds the ball-end mill's cutting part. Measured as the distance from the

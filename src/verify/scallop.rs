@@ -160,15 +160,71 @@ pub fn measure_scallop_map(
     options: &ScallopOptions,
     labels: Option<&[&str]>,
 ) -> (ScallopReport, Vec<ScallopPatch>) {
-    let ScallopOptions {
-        radius,
-        target,
-        spacing,
-        reach,
-        table_z,
-        flutes_above_ball,
-    } = *options;
+    let ball = Ball {
+        radius: options.radius,
+        flutes_above_ball: options.flutes_above_ball,
+    };
+    measure_scallop_map_of(part, &[(toolpath, ball)], options, labels)
+}
+
+/// A ball-end mill as the scallop measure sweeps it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ball {
+    pub radius: f64,
+    /// The flutes' length above the ball's centre, mm (0: the ball alone).
+    pub flutes_above_ball: f64,
+}
+
+/// [`measure_scallop_map`] of several toolpaths, each cut by its own ball (a finish, then a
+/// corner finish with a smaller one): what is left is what none of them sweeps. A sample is
+/// narrow where the smallest ball does not fit; `options.radius` and
+/// `options.flutes_above_ball` are not used (each path's ball is).
+pub fn measure_scallop_map_of(
+    part: &Mesh,
+    passes: &[(&Toolpath, Ball)],
+    options: &ScallopOptions,
+    labels: Option<&[&str]>,
+) -> (ScallopReport, Vec<ScallopPatch>) {
+    let ScallopOptions { target, reach, .. } = *options;
     let distance = SurfaceDistance::new(part);
+    let smallest = passes
+        .iter()
+        .map(|(_, ball)| ball.radius)
+        .fold(f64::INFINITY, f64::min);
+    let largest = passes
+        .iter()
+        .map(|(_, ball)| ball.radius)
+        .fold(0.0, f64::max);
+    let mut swept: Vec<Swept> = Vec::new();
+    let mut radii: Vec<f64> = Vec::new();
+    for (toolpath, ball) in passes {
+        let bodies = swept_bodies(&distance, toolpath, ball, target);
+        radii.extend(std::iter::repeat_n(ball.radius, bodies.len()));
+        swept.extend(bodies);
+    }
+    let grid = Grid::new(&swept, largest, (2.0 * largest).max(reach));
+    let spheres: Vec<(Point3, f64)> = swept
+        .iter()
+        .zip(&radii)
+        .map(|(s, r)| s.bounding_sphere(*r))
+        .collect();
+    scallop_of_samples(
+        part, &distance, &swept, &radii, &grid, &spheres, smallest, options, labels,
+    )
+}
+
+/// The bodies `ball` sweeps along `toolpath`'s cut moves: a capsule per move, and the flutes'
+/// sheet where they cut (see below).
+fn swept_bodies(
+    distance: &SurfaceDistance,
+    toolpath: &Toolpath,
+    ball: &Ball,
+    target: f64,
+) -> Vec<Swept> {
+    let Ball {
+        radius,
+        flutes_above_ball,
+    } = *ball;
     // The flutes sweep too where they come within twice the target of the part (a flank cut
     // with their side): the sheet their axis sweeps between the move's two poses, thickened
     // by the radius. The sheet is a bilinear patch; it is split into strips up the axis, two
@@ -178,7 +234,7 @@ pub fn measure_scallop_map(
     // Balls this far apart up the axis leave a quarter of the target between two (s²/8r).
     let flute_step = (2.0 * radius * target).sqrt().max(1e-3);
     let balls = (flutes_above_ball / flute_step).ceil() as usize;
-    let swept: Vec<Swept> = toolpath
+    toolpath
         .moves
         .windows(2)
         .filter(|w| w[1].kind == MoveKind::Cut)
@@ -242,9 +298,30 @@ pub fn measure_scallop_map(
             }
             swept
         })
-        .collect();
-    let grid = Grid::new(&swept, radius, (2.0 * radius).max(reach));
-    let spheres: Vec<(Point3, f64)> = swept.iter().map(|s| s.bounding_sphere(radius)).collect();
+        .collect()
+}
+
+/// The measure itself, on the swept bodies (each with its ball's radius in `radii`, listed in
+/// `grid`, held by `spheres`); narrow where the ball of radius `narrow_radius` does not fit.
+#[allow(clippy::too_many_arguments)]
+fn scallop_of_samples(
+    part: &Mesh,
+    distance: &SurfaceDistance,
+    swept: &[Swept],
+    radii: &[f64],
+    grid: &Grid,
+    spheres: &[(Point3, f64)],
+    narrow_radius: f64,
+    options: &ScallopOptions,
+    labels: Option<&[&str]>,
+) -> (ScallopReport, Vec<ScallopPatch>) {
+    let ScallopOptions {
+        target,
+        spacing,
+        reach,
+        table_z,
+        ..
+    } = *options;
 
     // Samples: on a triangle of more than `quantum` area, a barycentric grid of k² cells of
     // about that area each; smaller triangles (a finely tessellated STL has
@@ -302,7 +379,9 @@ pub fn measure_scallop_map(
     }
     let narrow: Vec<bool> = samples
         .par_iter()
-        .map(|(p, n, _, _)| distance.any_within(&(p + n * radius), radius - target))
+        .map(|(p, n, _, _)| {
+            distance.any_within(&(p + n * narrow_radius), narrow_radius - target)
+        })
         .collect();
     let heights: Vec<Option<f64>> = samples
         .par_iter()
@@ -323,7 +402,7 @@ pub fn measure_scallop_map(
                 {
                     return;
                 }
-                if let Some(t) = swept[i].entry(p, n, radius)
+                if let Some(t) = swept[i].entry(p, n, radii[i])
                     && t <= reach
                     && best.is_none_or(|h| t < h)
                 {

@@ -104,6 +104,7 @@ fn header() -> ProgramHeader {
         spindle_rpm: 12000,
         coolant: true,
         comments: vec!["finish pass".into()],
+        control_point_mm: None,
     }
 }
 

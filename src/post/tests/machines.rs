@@ -100,6 +100,7 @@ fn header() -> ProgramHeader {
         spindle_rpm: 9000,
         coolant: true,
         comments: vec![],
+        control_point_mm: None,
     }
 }
 
