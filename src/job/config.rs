@@ -1215,7 +1215,11 @@ impl Job {
             });
             let corner = self.corner_tool.as_ref().map(|tool| Operation {
                 tool: tool.clone(),
-                ..operation(OperationKind::CornerFinish, 0.0, self.strategy.scallop_height)
+                ..operation(
+                    OperationKind::CornerFinish,
+                    0.0,
+                    self.strategy.scallop_height,
+                )
             });
             rough
                 .chain(indexed)

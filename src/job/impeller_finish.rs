@@ -584,9 +584,8 @@ pub fn finish_impeller(
                 )
             };
             // In a corner finish the loops are wanted only up the band.
-            let above_band = |p: &Point3| {
-                corner_band.is_some_and(|band| passage.above_hub(p).0 > band)
-            };
+            let above_band =
+                |p: &Point3| corner_band.is_some_and(|band| passage.above_hub(p).0 > band);
             let band_covered: Option<&(dyn Fn(&Point3) -> bool + Sync)> =
                 corner_band.map(|_| &above_band as &(dyn Fn(&Point3) -> bool + Sync));
             let swarfed = if impeller_options.swarf && corner_band.is_none() {
@@ -611,7 +610,12 @@ pub fn finish_impeller(
                     None,
                     Some(why),
                 ),
-                None => (None, plan_loops(&loops, &blade_ctx, band_covered), None, None),
+                None => (
+                    None,
+                    plan_loops(&loops, &blade_ctx, band_covered),
+                    None,
+                    None,
+                ),
             };
 
             // Passes along the tip's land, where the level loops cross it far apart.

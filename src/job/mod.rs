@@ -86,7 +86,7 @@ pub use pipeline::{
 pub use plan_roughing::{
     PlannedRoughing, RoughingContext, RoughingSummary, check_posted_roughing, plan_roughing,
 };
-pub use report::{PlanReport, PoseCounts, StageTimings};
+pub use report::{CornerFinishSummary, PlanReport, PoseCounts, StageTimings};
 pub use rough::{
     HullBoxesReport, LayerBound, RoughOptions, RoughOutput, RoughReport, RoughToolRun, SlicingRow,
     rough, write_rough_outputs,

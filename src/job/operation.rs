@@ -228,16 +228,18 @@ mod tests {
     /// same operation.
     #[test]
     fn a_corner_tool_finishes_the_corners_last() {
-        let ops = job("[stock]\nblank = \"none\"\n[corner_tool]\nid = 2\ndiameter = 2.0\n")
-            .expect("job");
+        let ops =
+            job("[stock]\nblank = \"none\"\n[corner_tool]\nid = 2\ndiameter = 2.0\n").expect("job");
         let kinds: Vec<OperationKind> = ops.iter().map(|o| o.kind).collect();
         assert_eq!(kinds, [OperationKind::Finish, OperationKind::CornerFinish]);
         assert_eq!(ops[1].tool.diameter, 2.0);
         assert_eq!(ops[1].tool.id, 2);
         assert_eq!(ops[1].stock_to_leave, 0.0);
         assert_eq!(ops[0].tool.diameter, 4.0);
-        let listed = job("[stock]\nblank = \"none\"\n[[operation]]\nkind = \"finish\"\n\
-             [[operation]]\nkind = \"corner-finish\"\n[operation.tool]\nid = 2\ndiameter = 2.0\n")
+        let listed = job(
+            "[stock]\nblank = \"none\"\n[[operation]]\nkind = \"finish\"\n\
+             [[operation]]\nkind = \"corner-finish\"\n[operation.tool]\nid = 2\ndiameter = 2.0\n",
+        )
         .expect("job");
         assert_eq!(listed, ops);
     }

@@ -43,8 +43,8 @@ use crate::offset::OffsetShape;
 use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::stock::clearance::MaterialClearance;
-use crate::verify::{PostedClearance, PostedOptions, check_posted, verify};
 use crate::verify::{Ball, ScallopOptions, measure_scallop_map_of};
+use crate::verify::{PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
 
@@ -557,21 +557,21 @@ pub fn plan_with_surfaces(
         tool: &ToolSection,
     ) -> BallTakeOff<'a> {
         BallTakeOff {
-        ball,
-        approach_feed: job.feeds.approach,
-        clearance: job.feeds.clearance,
-        tolerance: job.strategy.tolerance,
-        feed_control: job.cutting.model().map(|model| {
-            let cutter = crate::feed::Cutter {
-                diameter: tool.diameter,
-                spindle_rpm: f64::from(tool.spindle_rpm),
-                pass_feed: job.feeds.cut,
-                rapid_feed: job.machine.rapid_feed,
-                speed_up: false,
-            };
-            (model, cutter)
-        }),
-    }
+            ball,
+            approach_feed: job.feeds.approach,
+            clearance: job.feeds.clearance,
+            tolerance: job.strategy.tolerance,
+            feed_control: job.cutting.model().map(|model| {
+                let cutter = crate::feed::Cutter {
+                    diameter: tool.diameter,
+                    spindle_rpm: f64::from(tool.spindle_rpm),
+                    pass_feed: job.feeds.cut,
+                    rapid_feed: job.machine.rapid_feed,
+                    speed_up: false,
+                };
+                (model, cutter)
+            }),
+        }
     }
     let ball_take_off = take_off_with(job, &setup.tool, &job.tool);
     // The corner finish's smaller ball, in the same cell.
@@ -788,6 +788,21 @@ pub fn plan_with_surfaces(
         planned.push(operation_planned);
         tools.push(op_setup.tool.clone());
         stock = stock.after(operation);
+    }
+
+    // One number, one tool: the program's T words and the control's offsets go by it.
+    for (k, tool) in tools.iter().enumerate() {
+        if let Some(other) = tools[..k]
+            .iter()
+            .find(|t| t.id == tool.id && t.describe() != tool.describe())
+        {
+            return Err(Error::JobFile(JobError::Operations(format!(
+                "tool number T{} names two tools, {} and {}: give them their own numbers",
+                tool.id,
+                other.describe(),
+                tool.describe()
+            ))));
+        }
     }
 
     let t = Instant::now();
@@ -1039,8 +1054,9 @@ pub fn plan_with_surfaces(
             };
             let posted = match &corner_setup {
                 None => posted_for(&setup),
-                Some(corner) => posted_for(&setup)
-                    .and_then(|finish| Ok(finish.merge(posted_for(corner)?))),
+                Some(corner) => {
+                    posted_for(&setup).and_then(|finish| Ok(finish.merge(posted_for(corner)?)))
+                }
             };
             let roughing_failure = check_posted_roughing(
                 &gcode,
@@ -1372,8 +1388,7 @@ fn tool_changes(
     let mut changes = Vec::new();
     for k in 1..operations.len() {
         let (before, now) = (&operations[k - 1], &operations[k]);
-        if now.kind.is_roughing() || before.kind.is_roughing() || tools[k].id != tools[k - 1].id
-        {
+        if now.kind.is_roughing() || before.kind.is_roughing() || tools[k].id != tools[k - 1].id {
             let tool = &tools[k];
             changes.push(ToolChange {
                 at: spans[k].moves.start,
@@ -1546,18 +1561,13 @@ pub fn linearise_program(
                 } else {
                     next - at
                 };
-                path::relink(
-                    &setup.collider,
-                    ball,
-                    &setup.link,
-                    &moves[at].pose,
-                    entry,
+                path::relink(&setup.collider, ball, &setup.link, &moves[at].pose, entry).map(
+                    |moves| post::Splice {
+                        after: at,
+                        replacing,
+                        moves,
+                    },
                 )
-                .map(|moves| post::Splice {
-                    after: at,
-                    replacing,
-                    moves,
-                })
             };
             (start + 1..stop)
                 .rev()

@@ -379,9 +379,7 @@ fn scallop_of_samples(
     }
     let narrow: Vec<bool> = samples
         .par_iter()
-        .map(|(p, n, _, _)| {
-            distance.any_within(&(p + n * narrow_radius), narrow_radius - target)
-        })
+        .map(|(p, n, _, _)| distance.any_within(&(p + n * narrow_radius), narrow_radius - target))
         .collect();
     let heights: Vec<Option<f64>> = samples
         .par_iter()
@@ -963,6 +961,69 @@ mod tests {
             (half.unreached_area_mm2 - 80.0 - 20.0 * (20.0 - last)).abs() < 0.5,
             "{half:?}"
         );
+    }
+
+    /// Two sets of passes measured together leave what neither sweeps: with one ball, exactly
+    /// what the passes joined into one path leave; with a smaller ball between a larger one's
+    /// passes, the closed-form cusp where the two balls' bottoms cross.
+    #[test]
+    fn passes_of_two_balls_leave_what_neither_sweeps() {
+        let plate = crate::mesh::fixtures::cuboid(20.0, 20.0, 1.0);
+        let options = ScallopOptions {
+            radius: 2.0,
+            target: 0.02,
+            spacing: 0.05,
+            reach: 4.0,
+            table_z: 0.0,
+            flutes_above_ball: 0.0,
+        };
+        let (big, small) = (
+            Ball {
+                radius: 2.0,
+                flutes_above_ball: 0.0,
+            },
+            Ball {
+                radius: 1.0,
+                flutes_above_ball: 0.0,
+            },
+        );
+        let (s, w) = (0.8, 1.6);
+        let first = passes((0..15).map(|k| -2.0 + k as f64 * w));
+        let second = passes((0..15).map(|k| -2.0 + s + k as f64 * w));
+        let joined = Toolpath {
+            tool_id: 1,
+            moves: first.moves.iter().chain(&second.moves).copied().collect(),
+        };
+        let (together, _) =
+            measure_scallop_map_of(&plate, &[(&first, big), (&second, big)], &options, None);
+        let (one, _) = measure_scallop_map(&plate, &joined, &options, None);
+        assert_eq!(format!("{together:?}"), format!("{one:?}"));
+        let alone = measure_scallop(&plate, &first, &options, None);
+        assert!(alone.max_mm > 2.0 * together.max_mm, "{alone:?}");
+
+        // The big ball's bottom z = R − √(R² − y²) and the small one's, s beside it, cross at
+        // the cusp (plate top at z = 0 here).
+        let bottom = |ball: &Ball, y: f64| ball.radius - (ball.radius.powi(2) - y * y).sqrt();
+        let (mut lo, mut hi) = (0.0, s);
+        for _ in 0..100 {
+            let y = 0.5 * (lo + hi);
+            if bottom(&big, y) < bottom(&small, y - s) {
+                lo = y;
+            } else {
+                hi = y;
+            }
+        }
+        let cusp = bottom(&big, lo);
+        let (mixed, _) =
+            measure_scallop_map_of(&plate, &[(&first, big), (&second, small)], &options, None);
+        assert!(
+            (mixed.max_mm - cusp).abs() < 6e-3 && mixed.max_mm <= cusp + 1e-9,
+            "{} vs {cusp}",
+            mixed.max_mm
+        );
+        // Above the cusp of two big balls s apart, below that of two small ones.
+        let same = |r: f64| r - (r * r - (s / 2.0) * (s / 2.0)).sqrt();
+        assert!(cusp > same(2.0) && cusp < same(1.0));
     }
 
     /// The patches cover the part, each what its sample found: over the plate's top the

@@ -38,6 +38,19 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     let out = plan_with_threads(2);
     let job = coarse_job();
     let r = job.tool.diameter / 2.0;
+    // The bundled job finishes the roots with a smaller ball after the finishing.
+    let corner_tool = job
+        .corner_tool
+        .clone()
+        .expect("[corner_tool] in data/impeller.toml");
+    let radius_of = |tool: u32| {
+        if tool == corner_tool.id {
+            corner_tool.diameter / 2.0
+        } else {
+            assert_eq!(tool, job.tool.id);
+            r
+        }
+    };
     let report = &out.report;
     assert!(
         report.poses.cut > 1000,
@@ -54,9 +67,11 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     assert_eq!(rows.len(), out.toolpath.moves.len());
     let part = &out.part;
     let oracle = Oracle::new(&part.positions, &part.triangles, 4.0);
+    // Clearance of each ball off the part (distance of its centre less its radius).
     let mut worst = f64::INFINITY;
     let mut farthest: f64 = 0.0;
     let mut cutting = 0;
+    let mut corner_cutting = 0;
     for row in rows
         .iter()
         .filter(|r| r.kind == "cut" || r.kind == "approach")
@@ -66,8 +81,12 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
             (row.axis.norm() - 1.0).abs() < 1e-6,
             "axis not unit: {row:?}"
         );
-        let centre = row.tip + row.axis * r;
-        let d = oracle.distance_below(&centre, r + 1.0);
+        let radius = radius_of(row.tool);
+        if row.tool == corner_tool.id {
+            corner_cutting += 1;
+        }
+        let centre = row.tip + row.axis * radius;
+        let d = oracle.distance_below(&centre, radius + 1.0) - radius;
         assert!(
             !oracle.inside(&centre),
             "ball centre inside the part at {row:?}"
@@ -76,28 +95,36 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         farthest = farthest.max(d);
     }
     assert!(cutting > 1000);
-    assert!(
-        worst >= r - 1e-6,
-        "gouge: ball centre {worst} mm from the part, radius {r}"
-    );
+    assert!(corner_cutting > 100, "{corner_cutting} corner poses");
+    assert!(worst >= -1e-6, "gouge: a ball {worst} mm into the part");
     // Every cut pose touches the part: the ball is not cutting air. It rides on the drive
     // surface (the hierarchy's finest level), which may lie up to its fit off the part.
     let fit = report.surface.hausdorff_to_part_mm;
     assert!(fit <= report.surface.tolerance_mm, "{:?}", report.surface);
     assert!(
-        farthest <= r + fit + 1e-3,
-        "a cut pose floats {} mm above the part (drive surface fit {fit} mm)",
-        farthest - r
+        farthest <= fit + 1e-3,
+        "a cut pose floats {farthest} mm above the part (drive surface fit {fit} mm)"
     );
 
     // --- Shank and holder: every sampled point of the part stays outside each body grown by
     // its margin (minus a sampling allowance), at every cut pose. ---------------------------
-    let tool = job.tool.assembly();
     let samples = surface_samples(&oracle.triangles, 1.0);
     let sample_grid = PointGrid::new(&samples, 10.0);
-    let bodies = tool.bodies();
+    let bodies_of = |tool: u32| {
+        if tool == corner_tool.id {
+            corner_tool.assembly().bodies()
+        } else {
+            job.tool.assembly().bodies()
+        }
+    };
+    let (bodies, corner_bodies) = (bodies_of(job.tool.id), bodies_of(corner_tool.id));
     let allowance = 0.6; // half the sample spacing, rounded up: a gap between samples
     for row in rows.iter().filter(|r| r.kind == "cut").step_by(3) {
+        let bodies = if row.tool == corner_tool.id {
+            &corner_bodies
+        } else {
+            &bodies
+        };
         for body in bodies
             .iter()
             .filter(|b| b.role != wavemill::tool::BodyRole::Flutes)
@@ -136,8 +163,14 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         .fold(f64::INFINITY, f64::min);
     for row in rows.iter().filter(|r| r.kind != "rapid") {
         let lateral = (1.0 - row.axis.z * row.axis.z).max(0.0).sqrt();
-        let mut lowest = row.tip.z + row.axis.z * r - r;
-        for body in &bodies {
+        let radius = radius_of(row.tool);
+        let mut lowest = row.tip.z + row.axis.z * radius - radius;
+        let bodies = if row.tool == corner_tool.id {
+            &corner_bodies
+        } else {
+            &bodies
+        };
+        for body in bodies {
             for (h, radius) in [(body.from, body.radius_from), (body.to, body.radius_to)] {
                 lowest = lowest.min(row.tip.z + row.axis.z * h - radius * lateral);
             }
@@ -149,7 +182,12 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         );
     }
 
-    passes_never_step_backwards(&rows, r);
+    let (finish_rows, corner_rows): (Vec<_>, Vec<_>) = rows
+        .iter()
+        .cloned()
+        .partition(|row| row.tool == job.tool.id);
+    passes_never_step_backwards(&finish_rows, r);
+    assert!(corner_rows.iter().all(|row| row.tool == corner_tool.id));
     posted_program_keeps_the_ball_within_the_tolerance(&out, &job, &oracle);
     a_real_control_reads_the_program_as_the_tests_do(&out.gcode);
     // The program says what finished the part (once "parallel planes" for every plan).
@@ -173,6 +211,46 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         impeller.covered.length_dropped_mm > 0.0,
         "{:?}",
         impeller.covered
+    );
+
+    // --- The corner finish: the smaller ball along the roots, after the finishing, takes
+    // what the finishing ball left there. Measured on the finishing's moves alone, more of
+    // the part is left over the scallop target than with the corner finish's too. --------
+    let corner = report.corner_finishing.as_ref().expect("a corner finish");
+    assert_eq!(corner.ball_radius_mm, corner_tool.diameter / 2.0);
+    assert!(
+        corner.cutting_length_mm > 200.0 && corner.impeller.passages == 7,
+        "{corner:?}"
+    );
+    let corner_blade = corner.impeller.blade.as_ref().expect("loops up the blade");
+    assert!(corner_blade.root_pass.is_some(), "{corner_blade:?}");
+    assert!(out.gcode.contains(&format!("T{} M6", corner_tool.id)));
+    assert_eq!(out.operations.len(), 2);
+    let finish_moves = wavemill::geom::Toolpath {
+        tool_id: job.tool.id,
+        moves: out.toolpath.moves[out.operations[0].moves.clone()].to_vec(),
+    };
+    let both = report.finish_scallop.as_ref().expect("the scallop measure");
+    let alone = wavemill::verify::measure_scallop(
+        part,
+        &finish_moves,
+        &wavemill::verify::ScallopOptions {
+            radius: r,
+            target: both.target_mm,
+            spacing: both.sample_spacing_mm,
+            reach: r,
+            table_z: report.machine.table_z_mm,
+            flutes_above_ball: job.tool.flute_length - r,
+        },
+        None,
+    );
+    assert!(
+        both.over_target_area_mm2 < 0.8 * alone.over_target_area_mm2 && both.p99_mm < alone.p99_mm,
+        "over the target with the corner finish {} mm² (p99 {} mm), without {} mm² ({} mm)",
+        both.over_target_area_mm2,
+        both.p99_mm,
+        alone.over_target_area_mm2,
+        alone.p99_mm
     );
     assert!(
         out.gcode

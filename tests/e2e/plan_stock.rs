@@ -101,6 +101,7 @@ fn a_finishing_program_run_on_a_raw_box_fails_with_its_collisions() {
     job.operations = toml::from_str::<Job>("[[operation]]\nkind = \"finish\"\n")
         .expect("operations")
         .operations;
+    job.corner_tool = None;
     let out = plan(&job);
     let failure = out.verification_failure.clone().expect("a failure");
     assert!(
@@ -151,7 +152,15 @@ fn the_bar_stock_is_roughed_and_finished_without_touching_the_rest() {
     let stock = out.report.stock.as_ref().expect("a stock run");
     assert_eq!(stock.blank, "cylinder");
     let names: Vec<&str> = stock.operations.iter().map(|o| o.name.as_str()).collect();
-    assert_eq!(names, ["rough to 0.5 mm", "rest-rough to 0.5 mm", "finish"]);
+    assert_eq!(
+        names,
+        [
+            "rough to 0.5 mm",
+            "rest-rough to 0.5 mm",
+            "finish",
+            "corner-finish"
+        ]
+    );
     for op in &stock.operations {
         assert_eq!(op.collision_count, 0, "{}", op.name);
         assert_eq!(op.rapids_through_material, 0, "{}", op.name);
@@ -172,27 +181,37 @@ fn the_bar_stock_is_roughed_and_finished_without_touching_the_rest() {
         "{:?}",
         finish.rest
     );
-    // Feed control of the ball: where it meets the rest it is slowed to the target force, and
-    // no cutting move is sped up beyond its programmed feed (only air goes faster).
-    let [ball] = out.report.ball_feed_control.as_slice() else {
-        panic!("one ball operation: {:?}", out.report.ball_feed_control);
+    // Feed control of each ball: where it meets the rest it is slowed to the target force,
+    // and no cutting move is sped up beyond its programmed feed (only air goes faster).
+    let [ball, corner] = out.report.ball_feed_control.as_slice() else {
+        panic!("two ball operations: {:?}", out.report.ball_feed_control);
     };
     assert_eq!(ball.operation, "finish");
-    let control = &ball.feed_control;
-    assert!(control.moves_slower > 0);
-    assert_eq!(control.moves_faster, control.moves_in_air);
-    assert!(control.force_before.max > control.target_force_n);
-    assert!(control.force_after.max <= control.target_force_n * (1.0 + 1e-9));
-    let finish_moves = out.operations.last().unwrap().moves.clone();
+    assert_eq!(corner.operation, "corner-finish");
+    assert!(ball.feed_control.moves_slower > 0);
+    assert!(ball.feed_control.force_before.max > ball.feed_control.target_force_n);
+    for control in [&ball.feed_control, &corner.feed_control] {
+        assert_eq!(control.moves_faster, control.moves_in_air);
+        assert!(control.force_after.max <= control.target_force_n * (1.0 + 1e-9));
+    }
     let (cut_feed, max_feed) = (job.feeds.cut, job.cutting.max_feed);
-    assert!(
-        out.toolpath.moves[finish_moves]
-            .iter()
-            .filter(|m| m.kind == wavemill::geom::MoveKind::Cut)
-            .all(|m| m.feed <= cut_feed || m.feed == max_feed)
-    );
+    for span in &out.operations[2..] {
+        assert!(
+            out.toolpath.moves[span.moves.clone()]
+                .iter()
+                .filter(|m| m.kind == wavemill::geom::MoveKind::Cut)
+                .all(|m| m.feed <= cut_feed || m.feed == max_feed)
+        );
+    }
+    // The corner finish's ball after the finishing one, by its own number.
+    let corner_tool = job.corner_tool.as_ref().expect("[corner_tool]").id;
     assert_eq!(
         common::plan_checks::tool_changes(&out.gcode),
-        ["T2 M6", "T7 M6", "T1 M6"]
+        [
+            "T2 M6".to_string(),
+            "T7 M6".into(),
+            "T1 M6".into(),
+            format!("T{corner_tool} M6")
+        ]
     );
 }

@@ -351,3 +351,79 @@ proptest! {
         }
     }
 }
+
+/// A tool change that names the new tool's control point times the inverse-time feeds after
+/// it there: the same blocks posted before and after it get the F of each tool's own point
+/// (a smaller ball's centre moves less when the axis turns).
+#[test]
+fn a_tool_change_times_inverse_time_feeds_at_the_new_control_point() {
+    let kin = kin();
+    let program = linearise(&kin, &test_path(), 0.01, 0.1).unwrap();
+    let (big, small) = (3.0, 0.5);
+    let options = GcodeOptions {
+        feed: crate::post::FeedMode::InverseTime,
+        control_point_mm: big,
+        ..GcodeOptions::default()
+    };
+    let mut writer = GcodeWriter::new(&kin, options.clone());
+    writer.begin(&header());
+    for (m, j) in &program {
+        writer.motion(m, j);
+    }
+    writer.tool_change(&ProgramHeader {
+        tool_number: 8,
+        control_point_mm: Some(small),
+        ..header()
+    });
+    for (m, j) in &program {
+        writer.motion(m, j);
+    }
+    writer.end();
+    let text = Box::new(writer).finish();
+    let (before, after) = text.split_once("T8 M6").expect("the tool change");
+    // The F word of every feed block, in order, and the one the control point gives it.
+    let feeds = |section: &str| -> Vec<f64> {
+        section
+            .lines()
+            .filter(|l| l.starts_with("G1") || (l.contains('F') && !l.starts_with('(')))
+            .filter_map(|l| {
+                l.split_whitespace()
+                    .find_map(|w| w.strip_prefix('F'))
+                    .map(|f| f.parse::<f64>().unwrap())
+            })
+            .collect()
+    };
+    let expected = |control_point: f64| -> Vec<f64> {
+        program
+            .windows(2)
+            .filter(|w| w[1].0.kind != Rapid)
+            .map(|w| {
+                let minutes = crate::post::inverse_time_minutes(
+                    (&w[0].0.pose, &w[0].1),
+                    &w[1].0,
+                    &w[1].1,
+                    control_point,
+                    options.max_rotary_speed,
+                );
+                (1.0 / minutes.max(1e-9)).min(1e6)
+            })
+            .collect()
+    };
+    let printed = |f: f64| {
+        fixed(f, crate::post::gcode::INVERSE_TIME_DECIMALS)
+            .parse::<f64>()
+            .unwrap()
+    };
+    let (wanted_before, wanted_after) = (expected(big), expected(small));
+    assert_ne!(wanted_before, wanted_after);
+    // F is modal: each printed F is one of the block's, in order.
+    for (section, wanted) in [(before, &wanted_before), (after, &wanted_after)] {
+        let mut wanted = wanted.iter().map(|&f| printed(f));
+        for f in feeds(section) {
+            assert!(
+                wanted.any(|w| w == f),
+                "F{f} is not timed at its control point"
+            );
+        }
+    }
+}

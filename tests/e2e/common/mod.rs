@@ -343,6 +343,8 @@ pub struct PostedBlock {
     pub rapid: bool,
     /// X, Y, Z (mm), A, C (degrees) after the block.
     pub axes: [f64; 5],
+    /// The tool in the spindle (the last `T` word; 0 before any).
+    pub tool: u32,
 }
 
 /// The motion blocks of a table-table A/C program once every axis has a value (the earlier
@@ -351,6 +353,7 @@ pub struct PostedBlock {
 pub fn read_ac_program(text: &str) -> Vec<PostedBlock> {
     let mut axes: [Option<f64>; 5] = [None; 5];
     let mut rapid = true;
+    let mut tool = 0;
     let mut out = Vec::new();
     for (index, raw) in text.lines().enumerate() {
         let code: String = {
@@ -396,6 +399,10 @@ pub fn read_ac_program(text: &str) -> Vec<PostedBlock> {
                     rapid = false;
                     None
                 }
+                'T' => {
+                    tool = value as u32;
+                    None
+                }
                 'X' => Some(0),
                 'Y' => Some(1),
                 'Z' => Some(2),
@@ -413,6 +420,7 @@ pub fn read_ac_program(text: &str) -> Vec<PostedBlock> {
                 line: index + 1,
                 rapid,
                 axes: [x, y, z, a, c],
+                tool,
             });
         }
     }

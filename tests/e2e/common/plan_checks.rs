@@ -36,13 +36,27 @@ pub fn passes_never_step_backwards(rows: &[ClRow], r: f64) {
 /// the tests' own forward kinematics: along every feed block the ball stays within the
 /// tolerance of the part, along every rapid it keeps the shank margin. The samples are
 /// 0.02 mm apart along feed blocks (0.2 mm along rapids); the report's certified minimum, a
-/// lower bound for the whole curve, must not exceed what the samples find.
+/// lower bound for the whole curve, must not exceed what the samples find. Each block is
+/// measured with the ball of the tool the program last called (a corner finish's smaller one
+/// after its tool change).
 pub fn posted_program_keeps_the_ball_within_the_tolerance(
     out: &job::PlanOutput,
     job: &Job,
     oracle: &Oracle,
 ) {
-    let r = job.tool.diameter / 2.0;
+    let balls: Vec<(u32, f64)> = job
+        .operations()
+        .expect("the job's operations")
+        .iter()
+        .filter(|op| !op.kind.is_roughing())
+        .map(|op| (op.tool.id, op.tool.diameter / 2.0))
+        .collect();
+    let radius_of = |tool: u32| {
+        balls
+            .iter()
+            .find(|(id, _)| *id == tool)
+            .map_or(job.tool.diameter / 2.0, |(_, r)| *r)
+    };
     let origin = -Vector3::from(out.report.machine.pivot_in_part_frame);
     // Issue 17 item 4: the first block moved X, Y, A and C before G43 set Z. Now the first
     // block with an axis word switches length compensation on and moves Z alone.
@@ -62,6 +76,7 @@ pub fn posted_program_keeps_the_ball_within_the_tolerance(
     let mut samples = 0usize;
     for w in blocks.windows(2) {
         let (from, to) = (&w[0].axes, &w[1].axes);
+        let r = radius_of(w[1].tool);
         let at = |t: f64| {
             let joints: [f64; 5] = std::array::from_fn(|i| from[i] + (to[i] - from[i]) * t);
             ac_ball_centre(&joints, r, &origin)
@@ -113,7 +128,16 @@ pub fn posted_program_keeps_the_ball_within_the_tolerance(
 /// so the back-simulation above) saw: the same kind of move to the same position in every
 /// axis. Skipped, saying so, where `rs274` is not installed.
 pub fn a_real_control_reads_the_program_as_the_tests_do(gcode: &str) {
-    let Some(motions) = rs274_motions(gcode, None) else {
+    // The control's tool table holds every tool the program calls (its default one only the
+    // first few numbers).
+    let table: String = tool_changes(gcode)
+        .iter()
+        .map(|change| {
+            let number = change.trim_start_matches('T').trim_end_matches(" M6");
+            format!("T{number} P{number} D1 Z0\n")
+        })
+        .collect();
+    let Some(motions) = rs274_motions(gcode, Some(&table)) else {
         return;
     };
     let motions: Vec<(bool, [f64; 5])> = motions
