@@ -76,6 +76,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 )
                 .into());
             }
+            // A smaller ball along an impeller's roots (`OperationTarget::Impeller` with a
+            // band, on `PlanSetup::with_ball`'s cell): `job::plan` wires it in.
+            OperationKind::CornerFinish => {
+                return Err(format!(
+                    "{}: this example finishes with one ball; job::plan runs corner finishing",
+                    operation.name
+                )
+                .into());
+            }
         };
         let p = job::plan_operation(&setup, operation, target, &stock, None, &|| ())?;
         let cuts = p

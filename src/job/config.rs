@@ -342,6 +342,9 @@ pub struct ToolSection {
     pub diameter: f64,
     /// Fluted length from the tip, mm.
     pub flute_length: f64,
+    /// A relieved neck above the flutes, `{ diameter, length }` (mm; its length from the
+    /// flutes' top): how a small ball reaches down a wall; left out: none.
+    pub neck: Option<crate::tool::Neck>,
     pub shank_diameter: f64,
     /// Length out of the holder, from the tip, mm.
     pub stickout: f64,
@@ -357,6 +360,7 @@ impl Default for ToolSection {
             id: 1,
             diameter: 4.0,
             flute_length: 10.0,
+            neck: None,
             shank_diameter: 4.0,
             stickout: 36.0,
             holder: vec![
@@ -381,7 +385,7 @@ impl ToolSection {
                 diameter: self.diameter,
                 flute_length: self.flute_length,
             },
-            neck: None,
+            neck: self.neck,
             shank_diameter: self.shank_diameter,
             stickout: self.stickout,
             holder: self.holder.clone(),
@@ -1450,7 +1454,7 @@ fn check_operations(operations: &[Operation], job_tool: &ToolSection) -> Result<
                     "corner-finish follows the finishing operation (and comes once)".into(),
                 ));
             }
-            if !(op.tool.diameter < job_tool.diameter) {
+            if op.tool.diameter >= job_tool.diameter {
                 return Err(fail(format!(
                     "its ball ({} mm) must be smaller than the finishing ball ({} mm): it \
                      reaches into the corners that one cannot",

@@ -339,7 +339,11 @@ pub struct ImpellerFinishSummary {
 }
 
 /// Plans the finishing of `part` (recognised as `impeller`): hub flow lines and blade loops
-/// for every passage, then the parallel planes over `drive` for the rest.
+/// for every passage, then the parallel planes over `drive` for the rest. A corner finish
+/// (`impeller_options.corner_band`) plans only the band round the roots, and of it only the
+/// stretches of its passes over points an operation before it has not `finished` (within
+/// the scallop target): rest finishing.
+#[allow(clippy::too_many_arguments)]
 pub fn finish_impeller(
     part: &Mesh,
     drive: &Mesh,
@@ -347,6 +351,7 @@ pub fn finish_impeller(
     ctx: &FinishingContext,
     options: &FinishingOptions,
     impeller_options: &ImpellerFinishOptions,
+    finished: Option<&(dyn Fn(&Point3) -> bool + Sync)>,
     advance: &(dyn Fn() + Sync),
 ) -> (Finishing, ImpellerFinishSummary) {
     let radius = ctx.tool.ball_radius;
@@ -396,14 +401,15 @@ pub fn finish_impeller(
                 // The stretches of the flow lines beside a blade or splitter.
                 let surface = ctx.part.surface();
                 let beside_wall = |p: &Point3| {
-                    surface
-                        .closest_where(p, band, |t| {
-                            matches!(
-                                impeller.regions[t as usize],
-                                Region::Blade(_) | Region::Splitter(_)
-                            )
-                        })
-                        .is_some()
+                    !finished.is_some_and(|f| f(p))
+                        && surface
+                            .closest_where(p, band, |t| {
+                                matches!(
+                                    impeller.regions[t as usize],
+                                    Region::Blade(_) | Region::Splitter(_)
+                                )
+                            })
+                            .is_some()
                 };
                 curves = curves
                     .iter()
@@ -584,8 +590,10 @@ pub fn finish_impeller(
                 )
             };
             // In a corner finish the loops are wanted only up the band.
-            let above_band =
-                |p: &Point3| corner_band.is_some_and(|band| passage.above_hub(p).0 > band);
+            let above_band = |p: &Point3| {
+                corner_band.is_some_and(|band| passage.above_hub(p).0 > band)
+                    || finished.is_some_and(|f| f(p))
+            };
             let band_covered: Option<&(dyn Fn(&Point3) -> bool + Sync)> =
                 corner_band.map(|_| &above_band as &(dyn Fn(&Point3) -> bool + Sync));
             let swarfed = if impeller_options.swarf && corner_band.is_none() {

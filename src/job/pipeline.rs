@@ -33,7 +33,7 @@ use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
 use crate::collide::PreparedTool;
 use crate::error::{Error, JobError, Result};
-use crate::geom::{Move, MoveKind, Toolpath, Vector3};
+use crate::geom::{Move, MoveKind, Point3, Toolpath, Vector3};
 use crate::impeller::Impeller;
 use crate::impeller::Region;
 use crate::mesh::io::{RawMesh, Units, read_mesh};
@@ -283,8 +283,11 @@ pub enum OperationTarget<'a> {
         drive: &'a Mesh,
         part: &'a Mesh,
         impeller: &'a Impeller,
-        /// A corner finish's band round the roots, mm (see [`ImpellerFinishOptions`]).
+        /// A corner finish: how far from each root (mm) its passes run.
         corner_band: Option<f64>,
+        /// A corner finish: the finishing before it, and its ball's radius (what it already
+        /// finished is left out).
+        finished: Option<(&'a Toolpath, f64)>,
     },
 }
 
@@ -354,7 +357,27 @@ pub fn plan_operation(
                     part,
                     impeller,
                     corner_band,
+                    finished,
                 } => {
+                    // A point is finished where the ball before came within the target of it.
+                    let swept = finished.map(|(toolpath, radius)| {
+                        let mut swept = path::SweptBalls::new(path::CoverOptions {
+                            ball_radius: radius,
+                            slack: operation.scallop_height,
+                            min_gap: 0.0,
+                            overlap: 0.0,
+                            around: 0.0,
+                        });
+                        swept.insert_cuts(toolpath);
+                        (swept, radius)
+                    });
+                    let is_finished = |p: &Point3| {
+                        swept.as_ref().is_some_and(|(swept, radius)| {
+                            swept.covers(p, radius + operation.scallop_height)
+                        })
+                    };
+                    let finished: Option<&(dyn Fn(&Point3) -> bool + Sync)> =
+                        swept.as_ref().map(|_| &is_finished as _);
                     let (passes, summary) = finish_impeller(
                         part,
                         drive,
@@ -371,6 +394,7 @@ pub fn plan_operation(
                             link: setup.link.clone(),
                             corner_band,
                         },
+                        finished,
                         advance,
                     );
                     (passes, Some(Box::new(summary)))
@@ -698,12 +722,16 @@ pub fn plan_with_surfaces(
                         part,
                         impeller,
                         corner_band: None,
+                        finished: None,
                     },
                     _ => OperationTarget::DriveSurface(&drive),
                 }
             }
             OperationKind::CornerFinish => {
                 observer.stage(&format!("corner finishing: {}", operation.name), 0);
+                let finish_before = planned
+                    .iter()
+                    .rfind(|p| p.operation.kind == OperationKind::Finish);
                 let band = corner_band(job, operation);
                 match impeller.as_ref() {
                     Some(Ok(impeller)) if job.impeller.finishing => OperationTarget::Impeller {
@@ -711,6 +739,9 @@ pub fn plan_with_surfaces(
                         part,
                         impeller,
                         corner_band: Some(band),
+                        finished: finish_before.map(|p: &PlannedOperation| {
+                            (&p.toolpath, p.operation.tool.diameter / 2.0)
+                        }),
                     },
                     Some(Ok(_)) => {
                         return Err(Error::JobFile(JobError::Operations(format!(
@@ -1164,6 +1195,7 @@ pub fn plan_with_surfaces(
                     drive_points: passes.drive_points,
                     cutting_length_mm,
                     unreachable: passes.unreachable.len(),
+                    unreachable_by_reason: path::unreachable_by_reason(&passes.unreachable),
                     impeller: *impeller,
                     linking,
                 });

@@ -267,7 +267,9 @@ pub struct CornerFinishSummary {
     pub band_mm: f64,
     pub drive_points: usize,
     pub cutting_length_mm: f64,
+    /// Its drive points the smaller ball could not machine, by reason.
     pub unreachable: usize,
+    pub unreachable_by_reason: BTreeMap<String, usize>,
     pub impeller: super::impeller_finish::ImpellerFinishSummary,
     pub linking: LinkReport,
 }

@@ -104,6 +104,17 @@ impl SweptBalls {
         }
     }
 
+    /// Adds the ball swept along `toolpath`'s cut moves (another operation's, already linked).
+    pub fn insert_cuts(&mut self, toolpath: &crate::geom::Toolpath) {
+        let radius = self.options.ball_radius;
+        let centre = |m: &crate::geom::Move| m.pose.tip + m.pose.axis.into_inner() * radius;
+        for w in toolpath.moves.windows(2) {
+            if w[1].kind == crate::geom::MoveKind::Cut {
+                self.insert_move(centre(&w[0]), centre(&w[1]));
+            }
+        }
+    }
+
     fn insert_move(&mut self, a: Point3, b: Point3) {
         let index = self.moves.len() as u32;
         self.moves.push([a, b]);

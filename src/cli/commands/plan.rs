@@ -179,6 +179,27 @@ pub(crate) fn summarise(r: &job::PlanReport, out: &Path) {
             format!(" ({})", reasons.join(", "))
         }
     );
+    if let Some(corner) = &r.corner_finishing {
+        let reasons: Vec<String> = corner
+            .unreachable_by_reason
+            .iter()
+            .map(|(why, n)| format!("{why} {n}"))
+            .collect();
+        say!(
+            "  corner finish    {}: {:.1} mm of cutting within {:.2} mm of the roots; {} of {} \
+             drive points unreachable{}",
+            corner.tool,
+            corner.cutting_length_mm,
+            corner.band_mm,
+            corner.unreachable,
+            corner.drive_points,
+            if reasons.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", reasons.join(", "))
+            }
+        );
+    }
     let mut outputs = "job.nc, cl.csv, cl.apt, report.json, paths.glb".to_string();
     if r.finish_scallop.is_some() {
         outputs.push_str(", scallop.glb, scallop.png");

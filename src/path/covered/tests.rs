@@ -167,3 +167,46 @@ fn passes_beside_a_wall_collapse_to_the_pencil_line_which_alone_is_kept() {
         }
     }
 }
+
+/// Another operation's toolpath counts by its cut moves alone: a point beside a cut is
+/// covered within the radius and the reach asked, one beside a rapid or an approach is not.
+#[test]
+fn a_linked_toolpath_covers_along_its_cuts_only() {
+    use crate::geom::{Move, MoveKind, Toolpath};
+    let axis = Direction::new_normalize(Vector3::z());
+    let at = |x: f64, z: f64, kind: MoveKind| Move {
+        pose: ToolPose {
+            tip: Point3::new(x, 0.0, z),
+            axis,
+        },
+        kind,
+        feed: 1000.0,
+    };
+    // Down to the plate at x = 0, cut to x = 10, up, across to x = 20 by rapid, down again.
+    let toolpath = Toolpath {
+        tool_id: 1,
+        moves: vec![
+            at(0.0, 20.0, MoveKind::Rapid),
+            at(0.0, 0.0, MoveKind::Approach),
+            at(10.0, 0.0, MoveKind::Cut),
+            at(10.0, 20.0, MoveKind::Retract),
+            at(20.0, 20.0, MoveKind::Rapid),
+            at(20.0, 0.0, MoveKind::Approach),
+        ],
+    };
+    let mut swept = SweptBalls::new(CoverOptions {
+        slack: 0.01,
+        around: 0.0,
+        ..options()
+    });
+    swept.insert_cuts(&toolpath);
+    // The ball's centres run 2 mm above the plate from x = 0 to 10.
+    let reach = RADIUS + 0.01;
+    assert!(swept.covers(&Point3::new(5.0, 0.0, 0.0), reach));
+    assert!(swept.covers(&Point3::new(5.0, 0.0, -0.009), reach));
+    assert!(!swept.covers(&Point3::new(5.0, 0.0, -0.011), reach));
+    assert!(!swept.covers(&Point3::new(5.0, 2.1, 0.0), reach));
+    // 1.5 mm under the rapid's centres, and 1 mm beside the second approach's: not cut there.
+    assert!(!swept.covers(&Point3::new(15.0, 0.0, 20.5), reach));
+    assert!(!swept.covers(&Point3::new(21.0, 0.0, 5.0), reach));
+}
