@@ -526,6 +526,12 @@ pub fn plan_with_surfaces(
     let prepared = prepare_part(raw, part_name, job)?;
     let part = &prepared.part;
     let impeller = recognise_impeller(part, part_name, job)?;
+    if let Some(e) = operations
+        .iter()
+        .find_map(|op| corner_refusal(op, part_name, job, &impeller))
+    {
+        return Err(e);
+    }
     timings.prepare = ms(t);
 
     let t = Instant::now();
@@ -743,24 +749,11 @@ pub fn plan_with_surfaces(
                             (&p.toolpath, p.operation.tool.diameter / 2.0)
                         }),
                     },
-                    Some(Ok(_)) => {
-                        return Err(Error::JobFile(JobError::Operations(format!(
-                            "operation '{}': corner finishing runs along the roots the \
-                             impeller strategies finish, and [impeller] finishing = false",
-                            operation.name
-                        ))));
-                    }
                     _ => {
-                        return Err(Error::JobFile(JobError::Operations(format!(
-                            "operation '{}': corner finishing runs along an impeller's blade \
-                             and splitter roots, and {part_name} was not recognised as an \
-                             impeller{}",
-                            operation.name,
-                            impeller
-                                .as_ref()
-                                .and_then(|r| r.as_ref().err())
-                                .map_or(String::new(), |why| format!(" ({why})"))
-                        ))));
+                        return Err(corner_refusal(operation, part_name, job, &impeller)
+                            .unwrap_or_else(|| {
+                                Error::Internal("a corner finish without an impeller".into())
+                            }));
                     }
                 }
             }
@@ -952,12 +945,28 @@ pub fn plan_with_surfaces(
         })
         .collect();
     let cl_apt = post::write_apt(&prepared.name, &apt_rows);
-    let time = post::estimate_time_posted(
-        &program,
-        setup.gcode_options.feed,
-        setup.gcode_options.control_point_mm,
-        setup.gcode_options.max_rotary_speed,
-    );
+    // Each section between tool changes timed at the control point its F words were written
+    // for (the ball's centre; a corner finish's smaller ball turns about its own), the block
+    // into a section with it.
+    let mut time = post::TimeEstimate::default();
+    let mut control_point = setup.prepared_tool.ball_radius;
+    let mut start = 0;
+    for (k, section) in linearised.sections.iter().enumerate() {
+        if let Some(c) = k
+            .checked_sub(1)
+            .and_then(|k| changes[k].header.control_point_mm)
+        {
+            control_point = c;
+        }
+        let end = start + section.len();
+        time.merge(&post::estimate_time_posted(
+            &program[start.saturating_sub(1)..end],
+            setup.gcode_options.feed,
+            control_point,
+            setup.gcode_options.max_rotary_speed,
+        ));
+        start = end;
+    }
     timings.post += ms(t);
 
     // The pose verification and the scallop measure need only the moves; the back-simulation
@@ -1679,6 +1688,32 @@ fn finishing_strategy(impeller: bool) -> &'static str {
     }
 }
 
+/// Why `operation`, a corner finish, cannot run on the part (`impeller`: what recognising it
+/// found), if it cannot: it runs along the roots the impeller strategies finish.
+fn corner_refusal(
+    operation: &Operation,
+    part_name: &str,
+    job: &Job,
+    impeller: &Option<std::result::Result<Impeller, String>>,
+) -> Option<Error> {
+    if operation.kind != OperationKind::CornerFinish {
+        return None;
+    }
+    let why = match impeller {
+        Some(Ok(_)) if job.impeller.finishing => return None,
+        Some(Ok(_)) => "the impeller strategies are off ([impeller] finishing = false)".to_string(),
+        Some(Err(why)) => format!("{part_name} was not recognised as an impeller ({why})"),
+        None => {
+            format!("{part_name} was not looked at as an impeller ([impeller] recognise = false)")
+        }
+    };
+    Some(Error::JobFile(JobError::Operations(format!(
+        "operation '{}': corner finishing runs along an impeller's blade and splitter roots, \
+         and {why}",
+        operation.name
+    ))))
+}
+
 /// How far from each root a corner finish runs: a stepover of its ball past where the
 /// finishing ball's passes touch, which is the finishing ball's radius from a square root's
 /// corner.
@@ -1737,6 +1772,19 @@ pub fn program_header(
                 first.scallop_height
             ),
         );
+    }
+    if let Some(corner) = operations
+        .iter()
+        .find(|op| op.kind == OperationKind::CornerFinish)
+    {
+        header.comments.push(format!(
+            "then corner finishing with T{} (ball D{}) within {:.3} mm of the roots, where the \
+             finishing left more than {} mm",
+            corner.tool.id,
+            corner.tool.diameter,
+            corner_band(job, corner),
+            corner.scallop_height
+        ));
     }
     header.comments.push(format!(
         "tolerance {} mm = chord {:.4} + linearisation {:.4} + rounding {:.4} + verification 2 x {:.4}",
@@ -1840,6 +1888,39 @@ mod tests {
             warnings: Vec::new(),
         };
         plan(&raw, "block", "mm", &job, &Quiet).unwrap()
+    }
+
+    /// A corner finish runs along an impeller's roots: on a part that is none it is refused,
+    /// saying why, before anything is planned; so it is with the impeller strategies off.
+    #[test]
+    fn a_corner_finish_of_a_part_that_is_no_impeller_is_refused() {
+        let mut job = Job::default();
+        job.stock.blank = None;
+        job.strategy.scallop_height = 0.5;
+        job.corner_tool = Some(super::super::config::ToolSection {
+            id: 20,
+            diameter: 2.0,
+            ..Default::default()
+        });
+        let raw = RawMesh {
+            mesh: cuboid(30.0, 30.0, 10.0),
+            warnings: Vec::new(),
+        };
+        let e = plan(&raw, "block", "mm", &job, &Quiet)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(
+            e.contains("operation 'corner-finish'")
+                && e.contains("block was not recognised as an impeller"),
+            "{e}"
+        );
+        job.impeller.recognise = false;
+        let e = plan(&raw, "block", "mm", &job, &Quiet)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(e.contains("block was not looked at as an impeller"), "{e}");
     }
 
     /// A part with subdivision connectivity drives as it is; any other is remeshed to its

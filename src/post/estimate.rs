@@ -46,6 +46,16 @@ impl TimeEstimate {
         self.rapid_s + self.approach_s + self.cut_s + self.retract_s + self.dwell_s
     }
 
+    /// Adds `other`'s times and skipped blocks (another stretch of the same program).
+    pub fn merge(&mut self, other: &TimeEstimate) {
+        self.rapid_s += other.rapid_s;
+        self.approach_s += other.approach_s;
+        self.cut_s += other.cut_s;
+        self.retract_s += other.retract_s;
+        self.dwell_s += other.dwell_s;
+        self.invalid_feed_blocks += other.invalid_feed_blocks;
+    }
+
     pub(super) fn add(&mut self, kind: MoveKind, s: f64) {
         match kind {
             MoveKind::Rapid => self.rapid_s += s,

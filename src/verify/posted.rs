@@ -445,14 +445,25 @@ impl PostedClearance {
     /// one: the least clearances with their lines, pieces added, the fastest feed, each
     /// problem once.
     pub fn merge(mut self, other: PostedClearance) -> PostedClearance {
-        let least = |a: (f64, usize), b: (f64, usize)| if b.0 < a.0 { b } else { a };
-        (self.min_feed_clearance_mm, self.min_feed_line) = least(
-            (self.min_feed_clearance_mm, self.min_feed_line),
+        // The smaller clearance, with its line.
+        fn keep_least(clearance: &mut f64, line: &mut usize, other: (f64, usize)) {
+            if other.0 < *clearance {
+                (*clearance, *line) = other;
+            }
+        }
+        let (feed, rapid) = (
             (other.min_feed_clearance_mm, other.min_feed_line),
-        );
-        (self.min_rapid_clearance_mm, self.min_rapid_line) = least(
-            (self.min_rapid_clearance_mm, self.min_rapid_line),
             (other.min_rapid_clearance_mm, other.min_rapid_line),
+        );
+        keep_least(
+            &mut self.min_feed_clearance_mm,
+            &mut self.min_feed_line,
+            feed,
+        );
+        keep_least(
+            &mut self.min_rapid_clearance_mm,
+            &mut self.min_rapid_line,
+            rapid,
         );
         self.pieces += other.pieces;
         self.fastest_part_feed = match (self.fastest_part_feed, other.fastest_part_feed) {
@@ -461,14 +472,12 @@ impl PostedClearance {
         };
         self.flutes = match (self.flutes.take(), other.flutes) {
             (Some(mut a), Some(b)) => {
-                (a.min_feed_clearance_mm, a.min_feed_line) = least(
-                    (a.min_feed_clearance_mm, a.min_feed_line),
+                let (feed, rapid) = (
                     (b.min_feed_clearance_mm, b.min_feed_line),
-                );
-                (a.min_rapid_clearance_mm, a.min_rapid_line) = least(
-                    (a.min_rapid_clearance_mm, a.min_rapid_line),
                     (b.min_rapid_clearance_mm, b.min_rapid_line),
                 );
+                keep_least(&mut a.min_feed_clearance_mm, &mut a.min_feed_line, feed);
+                keep_least(&mut a.min_rapid_clearance_mm, &mut a.min_rapid_line, rapid);
                 a.cells += b.cells;
                 Some(a)
             }

@@ -187,14 +187,16 @@ pub fn measure_scallop_map_of(
 ) -> (ScallopReport, Vec<ScallopPatch>) {
     let ScallopOptions { target, reach, .. } = *options;
     let distance = SurfaceDistance::new(part);
+    // No passes: nothing is reached, and narrow is `options.radius`'s.
     let smallest = passes
         .iter()
         .map(|(_, ball)| ball.radius)
-        .fold(f64::INFINITY, f64::min);
+        .reduce(f64::min)
+        .unwrap_or(options.radius);
     let largest = passes
         .iter()
         .map(|(_, ball)| ball.radius)
-        .fold(0.0, f64::max);
+        .fold(smallest, f64::max);
     let mut swept: Vec<Swept> = Vec::new();
     let mut radii: Vec<f64> = Vec::new();
     for (toolpath, ball) in passes {

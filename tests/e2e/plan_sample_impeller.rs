@@ -260,6 +260,33 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         "the header names the impeller strategies"
     );
 
+    // --- The estimate is the program's: in inverse time (the bundled job's G93) a feed block
+    // lasts 1/F minutes, so the feed moves' estimated time is the sum of the F words read
+    // back, through the tool change to the corner finish's smaller ball. -------------------
+    assert!(out.gcode.contains("G93"), "an inverse-time program");
+    let mut modal_feed = false;
+    let mut from_program = 0.0;
+    for line in out.gcode.lines().filter(|l| !l.starts_with('(')) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.contains(&"G0") {
+            modal_feed = false;
+        }
+        if words.contains(&"G1") {
+            modal_feed = true;
+        }
+        if let Some(f) = words.iter().find_map(|w| w.strip_prefix('F'))
+            && modal_feed
+        {
+            from_program += 60.0 / f.parse::<f64>().unwrap();
+        }
+    }
+    let by_kind = &report.estimated_time.by_kind;
+    let estimated = by_kind.cut_s + by_kind.approach_s + by_kind.retract_s;
+    assert!(
+        (estimated - from_program).abs() < 1e-6 * from_program,
+        "feed moves estimated at {estimated} s, the program's F words say {from_program} s"
+    );
+
     // --- Report consistency --------------------------------------------------------------
     assert!(report.clearance.min_cutter_clearance >= -1e-6);
     assert!(report.clearance.min_holder_clearance >= job.safety.holder_margin);
