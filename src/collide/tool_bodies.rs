@@ -674,6 +674,11 @@ impl PreparedTool {
         self.flute_dip
     }
 
+    /// The assembly the tool was prepared from.
+    pub fn assembly(&self) -> &ToolAssembly {
+        &self.assembly
+    }
+
     /// The cutting length above the ball's centre (flutes from the ball's equator up), and
     /// their radius at the top; `None` for cutters without a ball.
     pub fn flutes_above_ball(&self) -> Option<(f64, f64)> {

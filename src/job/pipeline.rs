@@ -886,6 +886,22 @@ pub fn plan_with_surfaces(
                 .and_then(|(_, op)| ball_of(op))
         })
         .collect();
+    // An unwind's rapids the ball would drive into the rest the roughing left are fed, as
+    // the take-off feeds the operations' own.
+    let unwind_rapids_fed = std::cell::Cell::new(0);
+    let feed_into_rest = |from: &Move, moves: &mut Vec<Move>, ball: &PreparedTool| {
+        if let Some(context) = roughing_context.as_ref() {
+            let how = BallTakeOff {
+                ball: ball.assembly(),
+                approach_feed: job.feeds.approach,
+                clearance: job.feeds.clearance,
+                tolerance: job.strategy.tolerance,
+                feed_control: None,
+            };
+            let fed = context.feed_rapids_into_rest(from, moves, &how);
+            unwind_rapids_fed.set(unwind_rapids_fed.get() + fed);
+        }
+    };
     let linearised = linearise_program(
         &setup,
         &toolpath,
@@ -894,7 +910,11 @@ pub fn plan_with_surfaces(
             .first()
             .map_or(setup.tool.total_length(), |t| t.total_length()),
         &unwind_sections,
+        Some(&feed_into_rest),
     )?;
+    if unwind_rapids_fed.get() > 0 {
+        *rapids_fed.get_or_insert(0) += unwind_rapids_fed.get();
+    }
     let new_index = linearised.new_index();
     let spans: Vec<OperationSpan> = spans
         .into_iter()
@@ -1461,7 +1481,7 @@ pub fn post_program_with_tool_changes(
     header: &ProgramHeader,
     first_gauge_length: f64,
 ) -> Result<(Vec<(Move, Joints)>, String)> {
-    let linearised = linearise_program(setup, toolpath, changes, first_gauge_length, &[])?;
+    let linearised = linearise_program(setup, toolpath, changes, first_gauge_length, &[], None)?;
     Ok(write_program(setup, &linearised, changes, header))
 }
 
@@ -1507,6 +1527,10 @@ impl LinearisedProgram {
     }
 }
 
+/// What [`linearise_program`] does to an unwind's moves (from the exit move, with the
+/// section's ball) before they go in: feeds the rapids that would drive into the rest.
+pub type IntoRest<'a> = dyn Fn(&Move, &mut Vec<Move>, &PreparedTool) + 'a;
+
 /// Most cut poses walked back from where a limit stopped a pass, looking for one the tool can
 /// leave along its axis (each a swept-body check).
 const UNWIND_SEARCH_POSES: usize = 400;
@@ -1527,6 +1551,7 @@ pub fn linearise_program(
     changes: &[ToolChange],
     first_gauge_length: f64,
     unwind: &[Option<&PreparedTool>],
+    into_rest: Option<&IntoRest<'_>>,
 ) -> Result<LinearisedProgram> {
     // The flutes' top too: they may touch the part (and dip the tolerance on a swarf run),
     // and 0.1° of axis is 0.014 mm at the top of 8 mm of flutes.
@@ -1603,10 +1628,16 @@ pub fn linearise_program(
                     next - at
                 };
                 path::relink(&setup.collider, ball, &setup.link, &moves[at].pose, entry).map(
-                    |moves| post::Splice {
-                        after: at,
-                        replacing,
-                        moves,
+                    |mut unwind| {
+                        // Back down through what the roughing left, it feeds.
+                        if let Some(into_rest) = into_rest {
+                            into_rest(&moves[at], &mut unwind, ball);
+                        }
+                        post::Splice {
+                            after: at,
+                            replacing,
+                            moves: unwind,
+                        }
                     },
                 )
             };

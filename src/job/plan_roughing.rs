@@ -116,6 +116,9 @@ pub struct RoughingContext {
     previous_diameter: Option<f64>,
     /// The end mill of the last roughing operation (what indexed setups cut with).
     pub(super) previous_tool: Option<ToolAssembly>,
+    /// The planning stock as the roughing left it, before the first ball operation came off
+    /// it: at least the material any ball move met.
+    before_balls: Option<Stock>,
 }
 
 impl RoughingContext {
@@ -152,6 +155,7 @@ impl RoughingContext {
             hull_boxes: None,
             previous_diameter: None,
             previous_tool: None,
+            before_balls: None,
         })
     }
 
@@ -418,6 +422,7 @@ impl RoughingContext {
         how: &BallTakeOff,
     ) -> TakenOff {
         let before = self.stock.clone();
+        self.before_balls.get_or_insert_with(|| before.clone());
         let body = crate::stock::cutter::CuttingBody::of(&how.ball.cutter);
         let skin = how.tolerance * before.spacing() * before.spacing();
         let moves: Vec<Move> = last
@@ -467,6 +472,54 @@ impl RoughingContext {
             feed_control,
         }
     }
+}
+
+impl RoughingContext {
+    /// Moves added to a ball operation after it came off the stock (an unwind's retract,
+    /// turn and re-plunge, from `from`) as the take-off would have left them: a rapid whose
+    /// ball would sweep material the roughing left becomes a feed move from `clearance`
+    /// before it. Against the stock before the first ball operation, which holds at least
+    /// what stood at any later move. Returns how many rapids were fed.
+    pub fn feed_rapids_into_rest(
+        &self,
+        from: &Move,
+        moves: &mut Vec<Move>,
+        how: &BallTakeOff,
+    ) -> usize {
+        let stock = self.before_balls.as_ref().unwrap_or(&self.stock);
+        feed_rapids_into(stock, from, moves, how)
+    }
+}
+
+/// [`RoughingContext::feed_rapids_into_rest`] against `stock`.
+fn feed_rapids_into(stock: &Stock, from: &Move, moves: &mut Vec<Move>, how: &BallTakeOff) -> usize {
+    let body = crate::stock::cutter::CuttingBody::of(&how.ball.cutter);
+    let mut fed = 0;
+    let mut previous = *from;
+    let mut out = Vec::with_capacity(moves.len() + 2);
+    for &m in moves.iter() {
+        let mut m = m;
+        if m.kind == MoveKind::Rapid {
+            let meets = body
+                .sweep(&previous.pose, &m.pose, how.tolerance)
+                .iter()
+                .any(|solid| stock.touching(solid, |_| 0.0).is_some());
+            if meets {
+                if let Some(split) =
+                    clear_until(stock, &body, &previous, &m, how.clearance, how.tolerance)
+                {
+                    out.push(split);
+                }
+                m.kind = MoveKind::Approach;
+                m.feed = how.approach_feed;
+                fed += 1;
+            }
+        }
+        out.push(m);
+        previous = m;
+    }
+    *moves = out;
+    fed
 }
 
 /// How [`RoughingContext::take_off_ball_operation`] treats a ball operation's moves.
@@ -752,6 +805,58 @@ mod tests {
             kind: MoveKind::Rapid,
             feed: 15000.0,
         }
+    }
+
+    /// Moves added after the take-off (an unwind's) feed where their rapids would meet the
+    /// material: over the block and down beside it by rapid, then across into its side fed
+    /// from 3 mm before the ball first touches it (its centre 2 mm off the side at x = 20).
+    #[test]
+    fn an_unwinds_rapid_into_the_rest_is_fed_from_the_clearance() {
+        let bounds = Aabb::from_points(&[
+            Point3::new(-20.0, -20.0, 0.0),
+            Point3::new(20.0, 20.0, 10.0),
+        ]);
+        let stock = Stock::block(&bounds, 0.5, DEFAULT_MAX_DEXELS).unwrap();
+        let ball = crate::tool::ToolAssembly {
+            id: 1,
+            name: String::new(),
+            cutter: crate::tool::Cutter::Ball {
+                diameter: 4.0,
+                flute_length: 10.0,
+            },
+            neck: None,
+            shank_diameter: 4.0,
+            stickout: 30.0,
+            holder: Vec::new(),
+        };
+        let how = BallTakeOff {
+            ball: &ball,
+            approach_feed: 600.0,
+            clearance: 3.0,
+            tolerance: 0.01,
+            feed_control: None,
+        };
+        let at = |x: f64, z: f64| {
+            let mut m = pose_at(z);
+            m.pose.tip.x = x;
+            m
+        };
+        let mut moves = vec![at(30.0, 30.0), at(30.0, 5.0), at(0.0, 5.0)];
+        let fed = feed_rapids_into(&stock, &at(0.0, 30.0), &mut moves, &how);
+        assert_eq!(fed, 1);
+        let kinds: Vec<MoveKind> = moves.iter().map(|m| m.kind).collect();
+        use MoveKind::{Approach, Rapid};
+        assert_eq!(kinds, [Rapid, Rapid, Rapid, Approach]);
+        let split = moves[2].pose.tip.x;
+        assert!((25.0..=25.25).contains(&split), "{split}");
+        assert_eq!((moves[3].feed, moves[3].pose.tip.x), (600.0, 0.0));
+        // Nothing there: nothing changes.
+        let mut above = vec![at(-30.0, 30.0)];
+        assert_eq!(
+            feed_rapids_into(&stock, &at(30.0, 30.0), &mut above, &how),
+            0
+        );
+        assert_eq!(above, vec![at(-30.0, 30.0)]);
     }
 
     /// A ball (r = 2) plunging by rapid from z = 30 to 5 onto a block whose top is z = 10 first
