@@ -6,7 +6,7 @@
 
 use wavemill::geom::MoveKind;
 use wavemill::job::{self, InProcessStock, Job, OperationKind, OperationTarget, PlanSetup, Quiet};
-use wavemill::verify::{PostedOptions, check_posted, verify};
+use wavemill::verify::{PoseChecks, PostedOptions, check_posted, verify};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let part_file = std::env::args()
@@ -105,6 +105,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &setup.collider,
         &setup.prepared_tool,
         setup.search,
+        PoseChecks::Everything,
     );
     println!(
         "least ball clearance over poses and chords: {:+.5} mm",

@@ -52,7 +52,7 @@ use crate::geom::{Move, Point3, Toolpath, Vector3};
 use crate::mesh::Mesh;
 use crate::path::{self, FinishingOptions, MaterialFilter, unreachable_by_reason};
 use crate::stock::Stock;
-use crate::verify::verify;
+use crate::verify::{PoseChecks, verify};
 
 /// The loosest chord tolerance of a layer, mm: a layer leaves `a_k` for the next one to take,
 /// so its chords need not be as tight as the finish's, only safely inside that.
@@ -252,6 +252,7 @@ pub fn channel_rough(
             &setup.collider,
             &setup.prepared_tool,
             setup.search,
+            PoseChecks::BallOnly,
         );
         let stock_left = on_part
             .min_cutter_clearance

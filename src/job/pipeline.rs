@@ -44,7 +44,7 @@ use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::stock::clearance::MaterialClearance;
 use crate::verify::{Ball, ScallopOptions, measure_scallop_map_of};
-use crate::verify::{PostedClearance, PostedOptions, check_posted, verify};
+use crate::verify::{PoseChecks, PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
 
@@ -1020,6 +1020,7 @@ pub fn plan_with_surfaces(
                 &setup.collider,
                 &setup.prepared_tool,
                 setup.search,
+                PoseChecks::LeaveFlutesToBackSimulation,
             );
             if let Some(corner) = &corner_setup {
                 verification = verification.merge(&verify(
@@ -1027,6 +1028,7 @@ pub fn plan_with_surfaces(
                     &corner.collider,
                     &corner.prepared_tool,
                     corner.search,
+                    PoseChecks::LeaveFlutesToBackSimulation,
                 ));
             }
             let verification_ms = ms(t);
@@ -2017,7 +2019,8 @@ mod tests {
             r.unreachable.by_reason
         );
         assert!(
-            r.clearance.min_cutter_clearance >= -1e-9 && r.clearance.min_table_clearance >= 2.0
+            r.clearance.min_cutter_clearance >= -1e-9
+                && r.clearance.min_table_clearance.is_some_and(|c| c >= 2.0)
         );
     }
 

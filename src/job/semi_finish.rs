@@ -26,7 +26,7 @@ use crate::geom::{MoveKind, Toolpath};
 use crate::offset::OffsetShape;
 use crate::path::{self, FinishingOptions};
 use crate::stock::clearance::MaterialClearance;
-use crate::verify::verify;
+use crate::verify::{PoseChecks, verify};
 
 /// One semi-finishing operation in `report.json`: the shape it machined to and what the checks
 /// measured (mm).
@@ -111,7 +111,13 @@ pub fn semi_finish_operation(
         setup.tool.id,
         &setup.link,
     );
-    let on_shape = verify(&toolpath, &collider, tool, setup.search);
+    let on_shape = verify(
+        &toolpath,
+        &collider,
+        tool,
+        setup.search,
+        PoseChecks::Everything,
+    );
     if let Err(e) = on_shape.passes(
         tolerance,
         setup.margins.shank,
@@ -123,7 +129,15 @@ pub fn semi_finish_operation(
             figures.allowance_mm
         ));
     }
-    let on_part = verify(&toolpath, &setup.collider, tool, setup.search);
+    // What it leaves on the part: its bodies were checked against the shape, which encloses
+    // the part.
+    let on_part = verify(
+        &toolpath,
+        &setup.collider,
+        tool,
+        setup.search,
+        PoseChecks::BallOnly,
+    );
     let stock_left = on_part
         .min_cutter_clearance
         .min(on_part.min_chord_clearance)

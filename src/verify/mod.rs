@@ -4,7 +4,9 @@
 //! the part (gouge), and the distance of flutes, shank and holder to the part (parry3d
 //! `closest_points` with a search radius; full `distance` is milliseconds per query on big
 //! meshes, CRATES.md §2). Straight moves between consecutive cut poses are checked at their
-//! midpoints too, which is where a chord cuts deepest into a convex surface.
+//! midpoints too, which is where a chord cuts deepest into a convex surface. [`PoseChecks`]
+//! says which bodies: a plan leaves the flutes to [`check_posted`], which measures them
+//! between the poses too.
 //!
 //! [`check_posted`] goes further and checks what a machine would run: it reads the posted
 //! G-code back, interpolates every block in machine axes as the control does and measures the
@@ -34,7 +36,22 @@ use crate::collide::{BodyClearance, PartCollider, PreparedTool};
 use crate::geom::Point3;
 use crate::geom::{MoveKind, ToolPose, Toolpath};
 
-/// Clearances over all checked poses, mm. Body clearances are capped at `search`.
+/// Which bodies [`verify`] measures at every pose besides the ball (which it always does).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PoseChecks {
+    /// Flutes, shank, holder and table.
+    Everything,
+    /// Shank, holder and table. For a program whose back-simulation ([`check_posted`] with
+    /// [`PostedOptions::flutes_above_ball`]) measures the sheet the flutes sweep along every
+    /// posted block: a certified bound between the poses as well as at them, so measuring
+    /// them again pose by pose adds nothing (and was half this check's time on the blower).
+    LeaveFlutesToBackSimulation,
+    /// None: the stock a path leaves on the part, its bodies checked elsewhere.
+    BallOnly,
+}
+
+/// Clearances over all checked poses, mm. Body clearances are capped at `search`; a body
+/// [`PoseChecks`] left out is `None`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Verification {
     pub checked_poses: usize,
@@ -48,11 +65,11 @@ pub struct Verification {
     /// they keep off the part; where it finds them touching or inside, for a ball-end tool,
     /// the distance from their axis (the ball's centre up, flat-ended) to the part less their
     /// radius, exact in f64.
-    pub min_flutes_clearance: f64,
-    pub min_shank_clearance: f64,
-    pub min_holder_clearance: f64,
+    pub min_flutes_clearance: Option<f64>,
+    pub min_shank_clearance: Option<f64>,
+    pub min_holder_clearance: Option<f64>,
     /// Lowest point of the tool above the table top (∞ without a table).
-    pub min_table_clearance: f64,
+    pub min_table_clearance: Option<f64>,
     /// The body clearances above were searched up to this distance.
     pub search_distance: f64,
 }
@@ -66,10 +83,10 @@ impl Verification {
             checked_midpoints: self.checked_midpoints + other.checked_midpoints,
             min_cutter_clearance: self.min_cutter_clearance.min(other.min_cutter_clearance),
             min_chord_clearance: self.min_chord_clearance.min(other.min_chord_clearance),
-            min_flutes_clearance: self.min_flutes_clearance.min(other.min_flutes_clearance),
-            min_shank_clearance: self.min_shank_clearance.min(other.min_shank_clearance),
-            min_holder_clearance: self.min_holder_clearance.min(other.min_holder_clearance),
-            min_table_clearance: self.min_table_clearance.min(other.min_table_clearance),
+            min_flutes_clearance: least(self.min_flutes_clearance, other.min_flutes_clearance),
+            min_shank_clearance: least(self.min_shank_clearance, other.min_shank_clearance),
+            min_holder_clearance: least(self.min_holder_clearance, other.min_holder_clearance),
+            min_table_clearance: least(self.min_table_clearance, other.min_table_clearance),
             search_distance: self.search_distance.min(other.search_distance),
         }
     }
@@ -96,26 +113,32 @@ impl Verification {
             });
         }
         // The flutes cut with their side like the ball: within the tolerance of the part.
-        if self.min_flutes_clearance < -tolerance - 1e-6 {
-            problems.push(Problem::Flutes {
-                depth: -self.min_flutes_clearance,
-            });
+        if let Some(flutes) = self.min_flutes_clearance
+            && flutes < -tolerance - 1e-6
+        {
+            problems.push(Problem::Flutes { depth: -flutes });
         }
-        if self.min_shank_clearance < shank_margin {
+        if let Some(shank) = self.min_shank_clearance
+            && shank < shank_margin
+        {
             problems.push(Problem::Shank {
-                clearance: self.min_shank_clearance,
+                clearance: shank,
                 margin: shank_margin,
             });
         }
-        if self.min_holder_clearance < holder_margin {
+        if let Some(holder) = self.min_holder_clearance
+            && holder < holder_margin
+        {
             problems.push(Problem::Holder {
-                clearance: self.min_holder_clearance,
+                clearance: holder,
                 margin: holder_margin,
             });
         }
-        if self.min_table_clearance < table_margin - 1e-9 {
+        if let Some(table) = self.min_table_clearance
+            && table < table_margin - 1e-9
+        {
             problems.push(Problem::Table {
-                clearance: self.min_table_clearance,
+                clearance: table,
                 margin: table_margin,
             });
         }
@@ -178,19 +201,35 @@ fn flutes_below(part: &PartCollider, from: &Point3, to: &Point3, radius: f64, up
     near - radius
 }
 
-/// Checks every cut and approach pose of `path`. Body clearances are searched up to
-/// `search` mm.
+/// The lesser of two minima, either of which may not have been measured.
+fn least(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// Every how many poses the first pass of [`verify`] measures one.
+const CEILING_SAMPLE: usize = 16;
+
+/// Checks every cut and approach pose of `path`, the bodies `checks` names. Body clearances
+/// are searched up to `search` mm.
 ///
 /// Exact clearance queries cost far more than "is it farther than d" queries, and only the
 /// minimum is reported, so each chunk of poses keeps its running minimum and asks each pose
-/// only whether it comes closer than that (branch and bound). Chunks are fixed, and the minimum
-/// of exact per-pose values does not depend on the order they were found in, so the result is
-/// the same for any number of threads.
+/// only whether it comes closer than that (branch and bound). The bound starts at what a first
+/// pass over every 16th pose found: a clearance some pose has, so at least the minimum, and
+/// far below the search distance where a body comes near anywhere (the shank beside the
+/// blower's blades: most poses are then settled by the quick test, where a chunk starting from
+/// the search distance measured them exactly until it came near). Chunks are fixed, and the
+/// minimum of exact per-pose values does not depend on the order they were found in, so the
+/// result is the same for any number of threads.
 pub fn verify(
     path: &Toolpath,
     part: &PartCollider,
     tool: &PreparedTool,
     search: f64,
+    checks: PoseChecks,
 ) -> Verification {
     let r = tool.ball_radius;
     let centre = |pose: &ToolPose| pose.tip + pose.axis.into_inner() * r;
@@ -200,37 +239,80 @@ pub fn verify(
             .map_or(f64::NEG_INFINITY, |(d, _)| d - r)
     };
     let flutes_axis = tool.flutes_above_ball();
+    let measure_flutes = checks == PoseChecks::Everything;
+    let measure_bodies = checks != PoseChecks::BallOnly;
+    // A body whose bound is not above 0 is not measured by `clearances`: that is how the
+    // bodies left out are skipped.
+    let start = BodyClearance {
+        flutes: if measure_flutes {
+            search
+        } else {
+            f64::NEG_INFINITY
+        },
+        shank: if measure_bodies {
+            search
+        } else {
+            f64::NEG_INFINITY
+        },
+        holder: if measure_bodies {
+            search
+        } else {
+            f64::NEG_INFINITY
+        },
+    };
+    // The least body clearances of the poses in `chunk` below `bound`, and, with `ball`, the
+    // least ball and table clearances.
+    let measure = |chunk: &[usize], bound: &BodyClearance, ball_too: bool| {
+        let mut ball = f64::INFINITY;
+        let mut bodies = *bound;
+        let mut table = f64::INFINITY;
+        for &i in chunk {
+            let pose = &path.moves[i].pose;
+            if ball_too {
+                ball = ball.min(ball_clearance(&centre(pose)));
+                if measure_bodies {
+                    table = table.min(part.table_clearance(tool, pose, 0.0));
+                }
+            }
+            if !measure_bodies {
+                continue;
+            }
+            let before = bodies.flutes;
+            bodies = part.clearances(tool, pose, &bodies);
+            // parry floors flutes it finds intersecting at 0 or −slack, however deep:
+            // those (flutes touching a wall, cutting a flank) are measured exactly.
+            if let Some((length, radius)) = flutes_axis
+                && measure_flutes
+                && bodies.flutes <= 0.0
+            {
+                let from = centre(pose);
+                let to = from + pose.axis.into_inner() * length;
+                bodies.flutes = flutes_below(part, &from, &to, radius, before);
+            }
+        }
+        (ball, bodies, table)
+    };
     let cutting: Vec<usize> = (0..path.moves.len())
         .filter(|&i| matches!(path.moves[i].kind, MoveKind::Cut | MoveKind::Approach))
         .collect();
+    let sample: Vec<usize> = cutting.iter().copied().step_by(CEILING_SAMPLE).collect();
+    let ceilings = if measure_bodies {
+        sample
+            .par_chunks(256)
+            .map(|chunk| measure(chunk, &start, false).1)
+            .collect::<Vec<_>>()
+            .iter()
+            .fold(start, |a, b| BodyClearance {
+                flutes: a.flutes.min(b.flutes),
+                shank: a.shank.min(b.shank),
+                holder: a.holder.min(b.holder),
+            })
+    } else {
+        start
+    };
     let per_chunk: Vec<(f64, BodyClearance, f64)> = cutting
         .par_chunks(256)
-        .map(|chunk| {
-            let mut ball = f64::INFINITY;
-            let mut bodies = BodyClearance {
-                flutes: search,
-                shank: search,
-                holder: search,
-            };
-            let mut table = f64::INFINITY;
-            for &i in chunk {
-                let pose = &path.moves[i].pose;
-                ball = ball.min(ball_clearance(&centre(pose)));
-                let before = bodies.flutes;
-                bodies = part.clearances(tool, pose, &bodies);
-                // parry floors flutes it finds intersecting at 0 or −slack, however deep:
-                // those (flutes touching a wall, cutting a flank) are measured exactly.
-                if let Some((length, radius)) = flutes_axis
-                    && bodies.flutes <= 0.0
-                {
-                    let from = centre(pose);
-                    let to = from + pose.axis.into_inner() * length;
-                    bodies.flutes = flutes_below(part, &from, &to, radius, before);
-                }
-                table = table.min(part.table_clearance(tool, pose, 0.0));
-            }
-            (ball, bodies, table)
-        })
+        .map(|chunk| measure(chunk, &ceilings, true))
         .collect();
     let midpoints: Vec<f64> = (1..path.moves.len())
         .filter(|&i| path.moves[i].kind == MoveKind::Cut)
@@ -246,15 +328,19 @@ pub fn verify(
     let min = |f: &dyn Fn(&(f64, BodyClearance, f64)) -> f64| {
         per_chunk.iter().map(f).fold(f64::INFINITY, f64::min)
     };
+    // Bounded by the ceilings, a chunk finds nothing below them where its poses keep farther.
+    let least_body = |measured: bool, ceiling: f64, f: &dyn Fn(&BodyClearance) -> f64| {
+        measured.then(|| min(&|c| f(&c.1)).min(ceiling))
+    };
     Verification {
         checked_poses: cutting.len(),
         checked_midpoints: midpoints.len(),
         min_cutter_clearance: min(&|c| c.0),
         min_chord_clearance: midpoints.iter().copied().fold(f64::INFINITY, f64::min),
-        min_flutes_clearance: min(&|c| c.1.flutes),
-        min_shank_clearance: min(&|c| c.1.shank),
-        min_holder_clearance: min(&|c| c.1.holder),
-        min_table_clearance: min(&|c| c.2),
+        min_flutes_clearance: least_body(measure_flutes, ceilings.flutes, &|b| b.flutes),
+        min_shank_clearance: least_body(measure_bodies, ceilings.shank, &|b| b.shank),
+        min_holder_clearance: least_body(measure_bodies, ceilings.holder, &|b| b.holder),
+        min_table_clearance: measure_bodies.then(|| min(&|c| c.2)),
         search_distance: search,
     }
 }
@@ -269,10 +355,10 @@ mod tests {
             checked_midpoints: 9,
             min_cutter_clearance: 0.0,
             min_chord_clearance: -0.004,
-            min_flutes_clearance: 0.1,
-            min_shank_clearance: 0.6,
-            min_holder_clearance: 2.5,
-            min_table_clearance: 3.0,
+            min_flutes_clearance: Some(0.1),
+            min_shank_clearance: Some(0.6),
+            min_holder_clearance: Some(2.5),
+            min_table_clearance: Some(3.0),
             search_distance: 7.0,
         }
     }
@@ -300,12 +386,12 @@ mod tests {
                 "straight move",
             ),
             (
-                |v| v.min_flutes_clearance = -0.01,
+                |v| v.min_flutes_clearance = Some(-0.01),
                 Problem::Flutes { depth: 0.01 },
                 "flutes",
             ),
             (
-                |v| v.min_shank_clearance = 0.49,
+                |v| v.min_shank_clearance = Some(0.49),
                 Problem::Shank {
                     clearance: 0.49,
                     margin: 0.5,
@@ -313,7 +399,7 @@ mod tests {
                 "shank",
             ),
             (
-                |v| v.min_holder_clearance = 1.9,
+                |v| v.min_holder_clearance = Some(1.9),
                 Problem::Holder {
                     clearance: 1.9,
                     margin: 2.0,
@@ -321,7 +407,7 @@ mod tests {
                 "holder",
             ),
             (
-                |v| v.min_table_clearance = 1.5,
+                |v| v.min_table_clearance = Some(1.5),
                 Problem::Table {
                     clearance: 1.5,
                     margin: 2.0,
@@ -374,7 +460,13 @@ mod tests {
         let up = [0.0, 0.0, 1.0];
 
         // The ball 0.1 mm into the top face.
-        let v = verify(&path(&[([15.0, 15.0, 39.9], up)]), &part, &tool, 7.0);
+        let v = verify(
+            &path(&[([15.0, 15.0, 39.9], up)]),
+            &part,
+            &tool,
+            7.0,
+            PoseChecks::Everything,
+        );
         assert!((v.min_cutter_clearance + 0.1).abs() < 1e-9, "{v:?}");
         assert!(matches!(
             check(&v).unwrap_err().problems[..],
@@ -391,6 +483,7 @@ mod tests {
             &part,
             &tool,
             7.0,
+            PoseChecks::Everything,
         );
         assert!(v.min_cutter_clearance.abs() < 1e-9, "{v:?}");
         assert!((v.min_chord_clearance + 3.0).abs() < 1e-9, "{v:?}");
@@ -403,8 +496,14 @@ mod tests {
         );
 
         // Beside the block, the tip 0.5 mm above the table.
-        let v = verify(&path(&[([60.0, 15.0, 0.5], up)]), &part, &tool, 7.0);
-        assert!((v.min_table_clearance - 0.5).abs() < 1e-9, "{v:?}");
+        let v = verify(
+            &path(&[([60.0, 15.0, 0.5], up)]),
+            &part,
+            &tool,
+            7.0,
+            PoseChecks::Everything,
+        );
+        assert!((v.min_table_clearance.unwrap() - 0.5).abs() < 1e-9, "{v:?}");
         assert!(matches!(
             check(&v).unwrap_err().problems[..],
             [Problem::Table { .. }]
@@ -412,10 +511,16 @@ mod tests {
 
         // Upright beside the wall, 0.2 mm off it: the ball and the flutes keep 0.2 mm, the
         // shank 0.2 mm (below its 0.5 margin), the D30 holder reaches into the block.
-        let v = verify(&path(&[([33.2, 15.0, 5.0], up)]), &part, &tool, 7.0);
+        let v = verify(
+            &path(&[([33.2, 15.0, 5.0], up)]),
+            &part,
+            &tool,
+            7.0,
+            PoseChecks::Everything,
+        );
         assert!((v.min_cutter_clearance - 0.2).abs() < 1e-9, "{v:?}");
-        assert!((v.min_shank_clearance - 0.2).abs() < 1e-3, "{v:?}");
-        assert!(v.min_holder_clearance <= 0.0, "{v:?}");
+        assert!((v.min_shank_clearance.unwrap() - 0.2).abs() < 1e-3, "{v:?}");
+        assert!(v.min_holder_clearance.unwrap() <= 0.0, "{v:?}");
         let e = check(&v).unwrap_err();
         assert!(
             matches!(
@@ -423,6 +528,111 @@ mod tests {
                 [Problem::Shank { .. }, Problem::Holder { .. }]
             ),
             "{e}"
+        );
+    }
+
+    /// The bound a chunk starts from (the first pass's minima) and its running minimum only
+    /// skip poses that cannot lower the answer: over 700 poses round the block (beside its
+    /// walls at 0.1–6 mm, tilted up to 40°, above its top), every minimum equals the least of
+    /// the poses verified one by one. The checks left out are `None`; the rest do not change.
+    #[test]
+    fn bounded_verification_equals_the_poses_measured_one_by_one() {
+        use crate::collide::{Margins, Table};
+        use crate::geom::{Direction, Move, Vector3};
+        let part = PartCollider::new(&crate::mesh::fixtures::cuboid(30.0, 30.0, 40.0))
+            .expect("block")
+            .with_table(Table {
+                top_z: 0.0,
+                margin: 2.0,
+            });
+        let tool = PreparedTool::new(
+            &crate::collide::tool_bodies::tests::tool(),
+            &Margins {
+                shank: 0.5,
+                holder: 2.0,
+            },
+        );
+        let r = tool.ball_radius;
+        let moves: Vec<Move> = (0..720)
+            .map(|i| {
+                let f = i as f64;
+                // Round the block's x = 30 wall and over its top, the gap and tilt varying.
+                let gap = 0.1 + 5.9 * (0.5 + 0.5 * (f * 0.37).sin());
+                let tilt = (40.0 * (f * 0.23).cos()).to_radians();
+                let (tip, axis) = if i % 3 == 0 {
+                    (
+                        [5.0 + f * 0.03, 5.0 + (f * 0.7) % 20.0, 40.0 + gap],
+                        Vector3::new(tilt.sin(), 0.0, tilt.cos()),
+                    )
+                } else {
+                    (
+                        [30.0 + r + gap, (f * 0.041) % 30.0, 4.0 + (f * 0.05) % 30.0],
+                        Vector3::new(tilt.sin().abs(), 0.0, tilt.cos()),
+                    )
+                };
+                Move {
+                    pose: ToolPose {
+                        tip: Point3::from(tip),
+                        axis: Direction::new_normalize(axis),
+                    },
+                    kind: MoveKind::Cut,
+                    feed: 1000.0,
+                }
+            })
+            .collect();
+        let path = Toolpath { tool_id: 1, moves };
+        let whole = verify(&path, &part, &tool, 7.0, PoseChecks::Everything);
+        let one_by_one = path
+            .moves
+            .iter()
+            .map(|m| {
+                let single = Toolpath {
+                    tool_id: 1,
+                    moves: vec![*m],
+                };
+                verify(&single, &part, &tool, 7.0, PoseChecks::Everything)
+            })
+            .reduce(|a, b| a.merge(&b))
+            .expect("poses");
+        assert_eq!(whole.checked_poses, 720);
+        assert_eq!(whole.min_cutter_clearance, one_by_one.min_cutter_clearance);
+        assert_eq!(whole.min_flutes_clearance, one_by_one.min_flutes_clearance);
+        assert_eq!(whole.min_shank_clearance, one_by_one.min_shank_clearance);
+        assert_eq!(whole.min_holder_clearance, one_by_one.min_holder_clearance);
+        assert_eq!(whole.min_table_clearance, one_by_one.min_table_clearance);
+        // Something came near: the bounds had work to do.
+        let shank = whole.min_shank_clearance.expect("measured");
+        assert!(shank > 0.0 && shank < 1.0, "{whole:?}");
+
+        let without_flutes = verify(
+            &path,
+            &part,
+            &tool,
+            7.0,
+            PoseChecks::LeaveFlutesToBackSimulation,
+        );
+        assert_eq!(without_flutes.min_flutes_clearance, None);
+        assert_eq!(
+            Verification {
+                min_flutes_clearance: whole.min_flutes_clearance,
+                ..without_flutes.clone()
+            },
+            whole
+        );
+        let ball = verify(&path, &part, &tool, 7.0, PoseChecks::BallOnly);
+        assert_eq!(
+            (
+                ball.min_cutter_clearance,
+                ball.min_chord_clearance,
+                ball.min_shank_clearance,
+                ball.min_table_clearance
+            ),
+            (
+                whole.min_cutter_clearance,
+                whole.min_chord_clearance,
+                None,
+                None
+            )
         );
     }
 }

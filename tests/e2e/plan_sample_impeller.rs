@@ -289,8 +289,13 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
 
     // --- Report consistency --------------------------------------------------------------
     assert!(report.clearance.min_cutter_clearance >= -1e-6);
-    assert!(report.clearance.min_holder_clearance >= job.safety.holder_margin);
-    assert!(report.clearance.min_shank_clearance >= job.safety.shank_margin);
+    let measured = |c: Option<f64>| c.expect("a plan measures shank and holder at every pose");
+    assert!(measured(report.clearance.min_holder_clearance) >= job.safety.holder_margin);
+    assert!(measured(report.clearance.min_shank_clearance) >= job.safety.shank_margin);
+    // The flutes are the back-simulation's, measured along every posted block.
+    assert_eq!(report.clearance.min_flutes_clearance, None);
+    let posted_flutes = report.posted.as_ref().and_then(|p| p.flutes.as_ref());
+    assert!(posted_flutes.is_some_and(|f| f.min_feed_clearance_mm >= -job.strategy.tolerance));
     assert_eq!(report.poses.total, rows.len());
     // Axis smoothing evened the passes: fewer moves over the per-mm bound, never a faster turn
     // (every smoothed axis passed the same collision tests, checked again above).

@@ -156,11 +156,25 @@ pub(crate) fn summarise(r: &job::PlanReport, out: &Path) {
         "  estimated time   {:.1} min",
         r.estimated_time.total_s / 60.0
     );
+    let figure = |clearance: Option<f64>, digits: usize| {
+        clearance.map_or_else(
+            || "not measured".to_string(),
+            |c| format!("{c:.digits$} mm"),
+        )
+    };
+    // The flutes are measured along the posted program (the poses leave them to it).
+    let flutes = r
+        .posted
+        .as_ref()
+        .and_then(|p| p.flutes.as_ref())
+        .map(|f| f.min_feed_clearance_mm)
+        .or(r.clearance.min_flutes_clearance);
     say!(
-        "  clearance        cutter {:.6} mm, shank {:.3} mm, holder {:.3} mm (searched to {} mm)",
+        "  clearance        cutter {:.6} mm, flutes {}, shank {}, holder {} (searched to {} mm)",
         r.clearance.min_cutter_clearance,
-        r.clearance.min_shank_clearance,
-        r.clearance.min_holder_clearance,
+        figure(flutes, 4),
+        figure(r.clearance.min_shank_clearance, 3),
+        figure(r.clearance.min_holder_clearance, 3),
         r.clearance.search_distance
     );
     let reasons: Vec<String> = r
