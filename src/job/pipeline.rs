@@ -994,6 +994,7 @@ pub fn plan_with_surfaces(
     // keeps both cores busy (one thread: 7.4, 4.7 and 9.6 s on the blower, two: 4.8, 2.8
     // and 5.1 s), so they run side by side.
     let budget = &setup.budget;
+    let t_checks = Instant::now();
     let (checks, back_simulation) = rayon::join(
         || {
             let t = Instant::now();
@@ -1137,6 +1138,7 @@ pub fn plan_with_surfaces(
             (rapid_margin, posted, roughing_failure, back_simulation_ms)
         },
     );
+    timings.checks = ms(t_checks);
     let (verification, verification_ms, finish_scallop, scallop_ms) = checks;
     let (finish_scallop, scallop_map) = match finish_scallop {
         Some((report, found, target)) => (Some(report), Some((found, target))),

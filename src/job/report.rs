@@ -235,6 +235,9 @@ pub struct StageTimings {
     pub scallop: f64,
     pub post: f64,
     pub back_simulation: f64,
+    /// Wall time of those independent checks together (pose checks and scallop measure beside
+    /// the back-simulation): the rest of `total` is the planning, posting and writing.
+    pub checks: f64,
     /// The operations run on the stock (0 without a `[stock]` blank).
     pub stock: f64,
     pub preview: f64,
