@@ -458,15 +458,12 @@ mod tests {
         };
         let check = |v: &Verification| v.passes(0.005, 0.5, 2.0, 2.0);
         let up = [0.0, 0.0, 1.0];
+        let verify_poses = |poses: &[([f64; 3], [f64; 3])]| {
+            verify(&path(poses), &part, &tool, 7.0, PoseChecks::Everything)
+        };
 
         // The ball 0.1 mm into the top face.
-        let v = verify(
-            &path(&[([15.0, 15.0, 39.9], up)]),
-            &part,
-            &tool,
-            7.0,
-            PoseChecks::Everything,
-        );
+        let v = verify_poses(&[([15.0, 15.0, 39.9], up)]);
         assert!((v.min_cutter_clearance + 0.1).abs() < 1e-9, "{v:?}");
         assert!(matches!(
             check(&v).unwrap_err().problems[..],
@@ -475,16 +472,10 @@ mod tests {
 
         // Two poses touching the top and the side face; the chord between the ball centres
         // runs through the edge at its midpoint: clearance −r there.
-        let v = verify(
-            &path(&[
-                ([27.0, 15.0, 40.0], up),
-                ([30.0, 15.0, 37.0], [1.0, 0.0, 0.0]),
-            ]),
-            &part,
-            &tool,
-            7.0,
-            PoseChecks::Everything,
-        );
+        let v = verify_poses(&[
+            ([27.0, 15.0, 40.0], up),
+            ([30.0, 15.0, 37.0], [1.0, 0.0, 0.0]),
+        ]);
         assert!(v.min_cutter_clearance.abs() < 1e-9, "{v:?}");
         assert!((v.min_chord_clearance + 3.0).abs() < 1e-9, "{v:?}");
         assert!(
@@ -496,13 +487,7 @@ mod tests {
         );
 
         // Beside the block, the tip 0.5 mm above the table.
-        let v = verify(
-            &path(&[([60.0, 15.0, 0.5], up)]),
-            &part,
-            &tool,
-            7.0,
-            PoseChecks::Everything,
-        );
+        let v = verify_poses(&[([60.0, 15.0, 0.5], up)]);
         assert!((v.min_table_clearance.unwrap() - 0.5).abs() < 1e-9, "{v:?}");
         assert!(matches!(
             check(&v).unwrap_err().problems[..],
@@ -511,13 +496,7 @@ mod tests {
 
         // Upright beside the wall, 0.2 mm off it: the ball and the flutes keep 0.2 mm, the
         // shank 0.2 mm (below its 0.5 margin), the D30 holder reaches into the block.
-        let v = verify(
-            &path(&[([33.2, 15.0, 5.0], up)]),
-            &part,
-            &tool,
-            7.0,
-            PoseChecks::Everything,
-        );
+        let v = verify_poses(&[([33.2, 15.0, 5.0], up)]);
         assert!((v.min_cutter_clearance - 0.2).abs() < 1e-9, "{v:?}");
         assert!((v.min_shank_clearance.unwrap() - 0.2).abs() < 1e-3, "{v:?}");
         assert!(v.min_holder_clearance.unwrap() <= 0.0, "{v:?}");
