@@ -807,16 +807,21 @@ mod tests {
         }
     }
 
+    /// A 40 × 40 × 10 block of stock, top at z = 10, its sides at x, y = ±20.
+    fn block_stock() -> Stock {
+        let bounds = Aabb::from_points(&[
+            Point3::new(-20.0, -20.0, 0.0),
+            Point3::new(20.0, 20.0, 10.0),
+        ]);
+        Stock::block(&bounds, 0.5, DEFAULT_MAX_DEXELS).unwrap()
+    }
+
     /// Moves added after the take-off (an unwind's) feed where their rapids would meet the
     /// material: over the block and down beside it by rapid, then across into its side fed
     /// from 3 mm before the ball first touches it (its centre 2 mm off the side at x = 20).
     #[test]
     fn an_unwinds_rapid_into_the_rest_is_fed_from_the_clearance() {
-        let bounds = Aabb::from_points(&[
-            Point3::new(-20.0, -20.0, 0.0),
-            Point3::new(20.0, 20.0, 10.0),
-        ]);
-        let stock = Stock::block(&bounds, 0.5, DEFAULT_MAX_DEXELS).unwrap();
+        let stock = block_stock();
         let ball = crate::tool::ToolAssembly {
             id: 1,
             name: String::new(),
@@ -864,11 +869,7 @@ mod tests {
     /// before that, at 13 (within the bisection's 25/128 mm), and its sweep is clear.
     #[test]
     fn a_rapid_into_material_keeps_its_rapid_part_up_to_the_clearance() {
-        let bounds = Aabb::from_points(&[
-            Point3::new(-20.0, -20.0, 0.0),
-            Point3::new(20.0, 20.0, 10.0),
-        ]);
-        let stock = Stock::block(&bounds, 0.5, DEFAULT_MAX_DEXELS).unwrap();
+        let stock = block_stock();
         let body = crate::stock::cutter::CuttingBody::of(&crate::tool::Cutter::Ball {
             diameter: 4.0,
             flute_length: 10.0,
