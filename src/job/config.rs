@@ -87,6 +87,11 @@ pub struct ImpellerSection {
     /// Passes along each blade's tip (its land, facing away from the hub), kept where the
     /// loops leave it; off when the tips are turned to the shroud's contour afterwards.
     pub tip: bool,
+    /// Rest passes: the first passage as planned is measured against its balls, and a pass is
+    /// added along each place left over the scallop target (where the part departs from the
+    /// surface the strategies space their passes by), copied with the passage. Off: faster,
+    /// and the report's scallop shows what they would have mended.
+    pub rest: bool,
 }
 
 /// How the tool axes are set around a blade.
@@ -119,6 +124,7 @@ impl Default for ImpellerSection {
             blade_lean_deg: 20.0,
             swarf: true,
             tip: true,
+            rest: true,
         }
     }
 }

@@ -19,6 +19,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::config::{BladeAxes, HubAxes};
+use super::impeller_rest::{RestSummary, RestTarget, rest_passes};
 use crate::access::{
     DirectionSet, RayScene, SurfacePoint, VisibilityOptions, region_axis, visibility_hierarchical,
 };
@@ -146,6 +147,8 @@ pub struct ImpellerFinishOptions {
     pub swarf: bool,
     /// Passes along the blade's tip where the loops leave its land.
     pub tip: bool,
+    /// Rest passes where the first passage's passes leave the scallop over the target.
+    pub rest: bool,
     /// The tool axis at which the machine's rotary axes are singular (part frame).
     pub pole: Vector3,
     /// How the segments will be linked: a swarf run counts as cut only where the tool can
@@ -336,6 +339,8 @@ pub struct ImpellerFinishSummary {
     pub covered: Covered,
     /// Drive points of the planes over the regions the impeller strategies finish.
     pub plane_points_left_to_impeller: usize,
+    /// Passes along the places the first passage's passes left over the scallop target.
+    pub rest: Option<RestSummary>,
 }
 
 /// Plans the finishing of `part` (recognised as `impeller`): hub flow lines and blade loops
@@ -376,6 +381,7 @@ pub fn finish_impeller(
         copies: TurnedCopy::default(),
         covered: Covered::default(),
         plane_points_left_to_impeller: 0,
+        rest: None,
     };
     let mut handled = vec![false; part.triangles.len()];
     let mut summary_visibility = None;
@@ -753,6 +759,54 @@ pub fn finish_impeller(
             keep_needed(&mut hub, hub_axes != HubAxes::Walls);
             for (passes, tip) in summary.splitter_passes.iter_mut().zip(splitter_tips) {
                 passes.tip = tip;
+            }
+            // Where the passes as planned leave more than the target between them.
+            if impeller_options.rest && corner_band.is_none() {
+                let blade_angle = impeller.pieces[passage.first_blade].angle_deg.to_radians();
+                let in_first_passage = |t: usize| {
+                    let [a, b, c] = part.corners(t);
+                    let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+                    let (_, angle, _) = passage.frame.cylindrical(&centroid);
+                    (angle - blade_angle).rem_euclid(std::f64::consts::TAU) < passage.pitch
+                };
+                let target_of = |t: usize| match impeller.regions[t] {
+                    Region::Blade(b) if b as usize == passage.first_blade => Some(1),
+                    Region::Splitter(p) => splitter_pieces
+                        .iter()
+                        .position(|&s| s == p as usize)
+                        .map(|k| 2 + k),
+                    _ if passage.flow[t] && in_first_passage(t) => Some(0),
+                    _ => None,
+                };
+                let may_reverse = blade_axes != BladeAxes::Lean;
+                let mut targets = vec![
+                    RestTarget {
+                        ctx: &hub_ctx,
+                        finishing: &mut hub,
+                        may_reverse: hub_axes != HubAxes::Walls,
+                    },
+                    RestTarget {
+                        ctx: &blade_ctx,
+                        finishing: &mut blade,
+                        may_reverse,
+                    },
+                ];
+                for splitter in &mut splitters {
+                    targets.push(RestTarget {
+                        ctx: &splitter.ctx,
+                        finishing: &mut splitter.loops,
+                        may_reverse,
+                    });
+                }
+                summary.rest = Some(rest_passes(
+                    part,
+                    &passage,
+                    &mut targets,
+                    &target_of,
+                    swarf.as_ref(),
+                    ctx.tool.flutes_above_ball().map_or(0.0, |(l, _)| l),
+                    options,
+                ));
             }
             summary.first_passage_ms = round_ms(t);
 

@@ -17,6 +17,7 @@ mod config;
 mod contour;
 mod contour_picture;
 mod impeller_finish;
+mod impeller_rest;
 mod indexed_rough;
 mod lens;
 mod levels;

@@ -390,6 +390,7 @@ pub fn plan_operation(
                             blade_lean_deg: setup.impeller.blade_lean_deg,
                             swarf: setup.impeller.swarf,
                             tip: setup.impeller.tip,
+                            rest: setup.impeller.rest,
                             pole: setup.pole(),
                             link: setup.link.clone(),
                             corner_band,

@@ -233,6 +233,59 @@ pub fn turned_copy(
     (copy, stats)
 }
 
+/// Puts the run of `chain` into the order `segments` run in where it lengthens the travel
+/// between them least (before the first, between two, or after the last; the run reversed
+/// too when `may_reverse`): passes added to a planned order without reordering the rest.
+pub fn insert_cheapest(
+    segments: &mut Vec<CutSegment>,
+    mut chain: Vec<CutSegment>,
+    may_reverse: bool,
+) {
+    let start = |s: &CutSegment| s.poses.first().map(|p| p.tip);
+    let end = |s: &CutSegment| s.poses.last().map(|p| p.tip);
+    let (Some(first), Some(last)) = (chain.first().and_then(start), chain.last().and_then(end))
+    else {
+        return;
+    };
+    let gap = |a: Option<Point3>, b: Option<Point3>| match (a, b) {
+        (Some(a), Some(b)) => (b - a).norm(),
+        _ => 0.0,
+    };
+    // (added travel, position, reversed); ties to the earliest, forward first.
+    let mut best: Option<(f64, usize, bool)> = None;
+    for at in 0..=segments.len() {
+        let before = at.checked_sub(1).and_then(|k| end(&segments[k]));
+        let after = segments.get(at).and_then(start);
+        let kept = gap(before, after);
+        for reverse in [false, true] {
+            if reverse && !may_reverse {
+                continue;
+            }
+            let (from, to) = if reverse {
+                (last, first)
+            } else {
+                (first, last)
+            };
+            let added = gap(before, Some(from)) + gap(Some(to), after) - kept;
+            if best.is_none_or(|b| added < b.0) {
+                best = Some((added, at, reverse));
+            }
+        }
+    }
+    let Some((_, at, reverse)) = best else { return };
+    if reverse {
+        chain.reverse();
+        for segment in &mut chain {
+            segment.poses.reverse();
+            segment.pass_directions.reverse();
+            for d in &mut segment.pass_directions {
+                *d = -*d;
+            }
+        }
+    }
+    segments.splice(at..at, chain);
+}
+
 /// `segments` reordered so that each starts near where the one before ended (greedy nearest
 /// neighbour from the first, ties to the lower index), each run backwards when `may_reverse`
 /// and its end is the nearer. Fewer and shorter links; the passes themselves are unchanged
@@ -281,4 +334,75 @@ pub fn nearest_order(segments: Vec<CutSegment>, may_reverse: bool) -> Vec<CutSeg
         out.push(s);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Vector3;
+
+    fn segment(from: Point3, to: Point3) -> CutSegment {
+        let axis = Direction::new_normalize(Vector3::z());
+        CutSegment {
+            poses: vec![ToolPose { tip: from, axis }, ToolPose { tip: to, axis }],
+            pass_directions: vec![(to - from).normalize(); 2],
+            leads: false,
+        }
+    }
+
+    fn travel(segments: &[CutSegment]) -> f64 {
+        segments
+            .windows(2)
+            .map(|w| (w[1].poses[0].tip - w[0].poses[w[0].poses.len() - 1].tip).norm())
+            .sum()
+    }
+
+    /// A run of two passes, against every position and both ways round: the least travel,
+    /// and the others' order kept.
+    #[test]
+    fn cheapest_insertion_is_the_least_travel_of_every_place_and_way() {
+        // A fixed scatter of passes (a linear congruential sequence, not `rand`).
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as f64 / (1u64 << 31) as f64 * 20.0
+        };
+        for _ in 0..20 {
+            let mut point = || Point3::new(next(), next(), 0.0);
+            let planned: Vec<CutSegment> = (0..6).map(|_| segment(point(), point())).collect();
+            let new = vec![segment(point(), point()), segment(point(), point())];
+            for may_reverse in [false, true] {
+                let mut best = f64::INFINITY;
+                for at in 0..=planned.len() {
+                    for reverse in [false, true] {
+                        if reverse && !may_reverse {
+                            continue;
+                        }
+                        let mut s = new.clone();
+                        if reverse {
+                            s.reverse();
+                            for x in &mut s {
+                                x.poses.reverse();
+                            }
+                        }
+                        let mut order = planned.clone();
+                        order.splice(at..at, s);
+                        best = best.min(travel(&order));
+                    }
+                }
+                let mut order = planned.clone();
+                insert_cheapest(&mut order, new.clone(), may_reverse);
+                assert!((travel(&order) - best).abs() < 1e-9);
+                let added = |s: &CutSegment| {
+                    new.iter()
+                        .any(|n| n.poses.iter().any(|p| p.tip == s.poses[0].tip))
+                };
+                let others: Vec<&CutSegment> = order.iter().filter(|s| !added(s)).collect();
+                assert_eq!(others.len(), planned.len());
+                assert!(others.iter().zip(&planned).all(|(a, b)| a.poses == b.poses));
+            }
+        }
+    }
 }

@@ -17,11 +17,13 @@ mod contact;
 mod covered;
 mod curves;
 mod link;
+mod rest;
 
 pub use contact::{place_ball, place_ball_from};
 pub use covered::{CONTACT_BAND, CoverOptions, Covered, SweptBalls};
-pub use curves::{TurnedCopy, curve_passes, nearest_order, turned_copy};
+pub use curves::{TurnedCopy, curve_passes, insert_cheapest, nearest_order, turned_copy};
 pub use link::{LinkOptions, LinkReport, can_leave, link, relink, safe_midpoint};
+pub use rest::{Gap, RestOptions, SweptTool, clusters, gaps, rest_curve, ridges};
 
 use rayon::prelude::*;
 

@@ -1,0 +1,206 @@
+//! Rest passes over an impeller's first passage (issue 21 item 4: scallop within the target
+//! everywhere the ball reaches). The flow lines, the loops and the passes along a blade's tip
+//! and root are spaced by models of the surface (the hub's surface of revolution, height above
+//! it, a land between two crests); where the part is not the model — a tip rounding over, a
+//! land that narrows at the leading edge, the blade's top falling to the rim — neighbouring
+//! balls leave more than the target between them. After the first passage is planned, its
+//! surface is measured against the balls as placed ([`crate::path::gaps`], the neighbouring
+//! passages' balls by the symmetry), and a pass is planned along the ridge of each place left
+//! over the target, with the axes of the strategy whose surface it is on, put into that
+//! strategy's order where it adds the least travel and copied to the other passages with it.
+//! A second round measures again with them.
+
+use serde::Serialize;
+
+use crate::geom::Point3;
+use crate::impeller::HubPassage;
+use crate::mesh::{Mesh, SectionCurve};
+use crate::path::{
+    self, Finishing, FinishingContext, FinishingOptions, RestOptions, SweptTool, clusters, gaps,
+    rest_curve, ridges,
+};
+
+/// Rounds of measuring and mending.
+const ROUNDS: usize = 2;
+
+/// Distance between the samples of the passage, mm: several per stepover.
+const SAMPLE_SPACING: f64 = 0.1;
+
+/// Gaps up to this deep are the passes' to close, mm; a sample farther from every ball is out
+/// of their reach (the tool cannot get there, or another strategy finishes it).
+const REACH: f64 = 0.2;
+
+/// Places on one ridge this far apart are run as one pass, mm: cutting the stretch between
+/// (at 2000 mm/min, 0.1 s) costs less than linking to a pass of its own.
+const JOIN_ALONG: f64 = 4.0;
+
+/// Neighbouring passages measured on either side: a swept blade wraps more than a pitch.
+const NEIGHBOURS: i32 = 2;
+
+/// What the rest passes of the first passage found and planned.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct RestSummary {
+    /// Area of the passage measured (its blade, splitters and hub), mm².
+    pub measured_mm2: f64,
+    pub rounds: Vec<RestRound>,
+    /// What the planner's measure still finds over the target after the last round.
+    pub left_over_target_mm2: f64,
+    pub left_max_mm: f64,
+}
+
+/// One round of measuring and mending.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct RestRound {
+    /// Area over the target where the ball fits, mm², and the deepest gap, mm.
+    pub over_target_mm2: f64,
+    pub max_mm: f64,
+    /// Places (clusters of samples over the target), and the passes planned along them.
+    pub places: usize,
+    pub passes: usize,
+    /// Length of the passes' ball centres' paths, mm.
+    pub length_mm: f64,
+}
+
+/// A strategy the rest passes may join: its context (the axes it plans with) and its passes.
+pub(super) struct RestTarget<'a> {
+    pub ctx: &'a FinishingContext<'a>,
+    pub finishing: &'a mut Finishing,
+    pub may_reverse: bool,
+}
+
+/// Plans the rest passes of the first passage into `targets`. `target_of` says which
+/// target's surface a triangle of `part` is (`None`: not the first passage's, or not the
+/// impeller strategies'); `swarf` are runs whose flutes cut (`flutes_above_ball` mm of them).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn rest_passes(
+    part: &Mesh,
+    passage: &HubPassage,
+    targets: &mut [RestTarget],
+    target_of: &(dyn Fn(usize) -> Option<usize> + Sync),
+    swarf: Option<&Finishing>,
+    flutes_above_ball: f64,
+    options: &FinishingOptions,
+) -> RestSummary {
+    let Some(ctx) = targets.first().map(|t| t.ctx) else {
+        return RestSummary::default();
+    };
+    let radius = ctx.tool.ball_radius;
+    let stepover = path::stepover_for_scallop(radius, options.scallop_height);
+    let rest_options = RestOptions {
+        ball_radius: radius,
+        scallop_height: options.scallop_height,
+        sample_spacing: SAMPLE_SPACING,
+        reach: REACH,
+        overlap: 0.5 * stepover,
+        step: 0.25,
+    };
+    let surface = ctx.part.surface();
+    let mut swept = SweptTool::new(radius, REACH);
+    for target in targets.iter() {
+        for segment in &target.finishing.segments {
+            swept.insert(segment, 0.0, options.scallop_height);
+        }
+    }
+    if let Some(swarf) = swarf {
+        for segment in &swarf.segments {
+            swept.insert(segment, flutes_above_ball, options.scallop_height);
+        }
+    }
+    // A sample of passage 0 among the passes of passage k is the sample turned back by k
+    // pitches among passage 0's.
+    let views: Vec<nalgebra::Isometry3<f64>> = (-NEIGHBOURS..=NEIGHBOURS)
+        .map(|k| {
+            let turn = nalgebra::UnitQuaternion::from_rotation_matrix(
+                &passage.frame.turn(k as f64 * passage.pitch),
+            );
+            nalgebra::Isometry3::rotation_wrt_point(turn, passage.frame.centre)
+        })
+        .collect();
+    let sampled: Vec<bool> = (0..part.triangles.len())
+        .map(|t| target_of(t).is_some())
+        .collect();
+    let mut summary = RestSummary {
+        measured_mm2: (0..part.triangles.len())
+            .filter(|&t| sampled[t])
+            .map(|t| {
+                let [a, b, c] = part.corners(t);
+                0.5 * (b - a).cross(&(c - a)).norm()
+            })
+            .sum(),
+        ..RestSummary::default()
+    };
+    for round in 0..=ROUNDS {
+        let found = gaps(part, surface, &sampled, &swept, &views, &rest_options);
+        let over_target_mm2 = found.iter().map(|g| g.area).sum();
+        let max_mm = found.iter().map(|g| g.height).fold(0.0, f64::max);
+        if round == ROUNDS || found.is_empty() {
+            summary.left_over_target_mm2 = over_target_mm2;
+            summary.left_max_mm = max_mm;
+            break;
+        }
+        let places = ridges(
+            &found,
+            &clusters(&found, 1.5 * SAMPLE_SPACING),
+            JOIN_ALONG,
+            0.5 * stepover,
+        );
+        // Each place's curve, to the target most of its samples are on.
+        let mut curves: Vec<Vec<SectionCurve>> = vec![Vec::new(); targets.len()];
+        for members in &places {
+            let mut votes = vec![0usize; targets.len()];
+            for &i in members {
+                if let Some(k) = target_of(found[i].triangle as usize) {
+                    votes[k] += 1;
+                }
+            }
+            let Some(k) = (0..votes.len()).max_by_key(|&k| (votes[k], std::cmp::Reverse(k))) else {
+                continue;
+            };
+            if let Some(curve) = rest_curve(&found, members, part, surface, &rest_options) {
+                curves[k].push(curve);
+            }
+        }
+        let mut this_round = RestRound {
+            over_target_mm2,
+            max_mm,
+            places: places.len(),
+            ..RestRound::default()
+        };
+        for (target, curves) in targets.iter_mut().zip(&curves) {
+            // With the strategy's own axes: round a blade one axis, so the links to the
+            // passes beside stay still in the rotary axes (the axes of the nearest pass
+            // beside instead, tried: the hub's or a swarf run's near a root, 5 minutes more
+            // on the blower).
+            let mut planned = Vec::new();
+            for result in path::curve_passes(curves, target.ctx, options, &|| {}) {
+                planned.extend(result.segments);
+            }
+            for segment in &planned {
+                this_round.passes += 1;
+                this_round.length_mm += centre_path_length(segment, radius);
+                swept.insert(segment, 0.0, options.scallop_height);
+            }
+            // Each into the strategy's order where it adds the least travel.
+            for segment in planned {
+                path::insert_cheapest(
+                    &mut target.finishing.segments,
+                    vec![segment],
+                    target.may_reverse,
+                );
+            }
+        }
+        summary.rounds.push(this_round);
+    }
+    summary
+}
+
+/// Length of the path `segment`'s ball centres run, mm.
+fn centre_path_length(segment: &path::CutSegment, radius: f64) -> f64 {
+    let centre = |k: usize| -> Point3 {
+        let pose = &segment.poses[k];
+        pose.tip + pose.axis.into_inner() * radius
+    };
+    (1..segment.poses.len())
+        .map(|k| (centre(k) - centre(k - 1)).norm())
+        .sum()
+}

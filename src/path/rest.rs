@@ -1,0 +1,643 @@
+//! Rest passes where the planned passes leave the scallop over the target: seed 000/001's
+//! coverage rule (alg. 5.1, every point within δ of a pass, partial passes only where needed)
+//! checked on the balls as placed rather than on the drive surface.
+//!
+//! A strategy spaces its passes by a model of the surface (the hub's surface of revolution,
+//! level sets round a blade, a tip's land as a strip between two crests); where the part
+//! departs from the model (a tip rounding over, the land twisting off its crests, the cone
+//! at a rim) neighbouring balls leave more than the target between them. Those places are
+//! found by measuring, not by a better model:
+//!
+//! * **Gaps.** The surface is sampled evenly; at each sample the scallop is estimated as the
+//!   distance to the nearest swept body less its radius (the balls swept along the passes'
+//!   centres, and the flutes' side where a pass cuts with it): on a surface between two
+//!   passes s apart this is √(r² + s²/4) − r ≈ s²/8r, the scallop itself. Samples where
+//!   the ball does not fit (concave more tightly) are no pass's to mend.
+//! * **Places.** Samples over the target next to each other; places on one ridge a few
+//!   millimetres apart are joined (one pass along both costs less than a link to each).
+//! * **Rest curves.** Each place's ridge: the run of the passes beside it (the swept
+//!   bodies' mean direction there, in the surface's tangent plane), the place's middle
+//!   across it bin by bin, run on past both ends by `overlap`, projected onto the part. A
+//!   ball along it halves the spacing where the neighbours were too far apart. (A ball
+//!   crossing a ridge closes it only for a stepover's width: tried on places joined across
+//!   neighbouring ridges, three rounds left a third of the area.)
+//!
+//! The estimate is the planner's own: the report's scallop is measured afterwards on the
+//! posted program by [`crate::verify`], with rays along the normals, by code this does not
+//! share.
+
+use std::collections::HashMap;
+
+use nalgebra::Isometry3;
+use rayon::prelude::*;
+
+use crate::geom::{Point3, Vector3, closest_point_on_segment};
+use crate::mesh::{DrivePoint, Mesh, SectionCurve, SurfaceDistance};
+
+use super::CutSegment;
+
+/// How gaps are found and rest curves drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RestOptions {
+    pub ball_radius: f64,
+    /// Target scallop height, mm.
+    pub scallop_height: f64,
+    /// Distance between samples, mm.
+    pub sample_spacing: f64,
+    /// Largest gap measured, mm: a sample farther from every swept body is not reached
+    /// (another strategy's, or out of the tool's reach), not a gap between passes.
+    pub reach: f64,
+    /// How far a rest curve runs on past its cluster's ends, mm.
+    pub overlap: f64,
+    /// Distance between a rest curve's points, mm.
+    pub step: f64,
+}
+
+/// A sample of the part left over the target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gap {
+    pub point: Point3,
+    /// The part's outward normal there.
+    pub normal: Vector3,
+    /// The scallop estimated there, mm.
+    pub height: f64,
+    pub triangle: u32,
+    /// The part's area the sample stands for, mm².
+    pub area: f64,
+    /// The direction the nearest swept body runs in there (either way).
+    pub along: Vector3,
+}
+
+/// The bodies the passes sweep: capsules round the ball centres' moves, and stacks of them up
+/// the axis where the flutes cut, hashed by the cells their reach overlaps.
+pub struct SweptTool {
+    radius: f64,
+    reach: f64,
+    cell: f64,
+    capsules: Vec<[Point3; 2]>,
+    cells: HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl SweptTool {
+    /// Empty, for a ball of `radius`; gaps up to `reach` are measured.
+    pub fn new(radius: f64, reach: f64) -> Self {
+        Self {
+            radius,
+            reach,
+            cell: (radius + reach).max(1e-3),
+            capsules: Vec::new(),
+            cells: HashMap::new(),
+        }
+    }
+
+    fn key(&self, p: &Point3) -> [i64; 3] {
+        [0, 1, 2].map(|k| (p[k] / self.cell).floor() as i64)
+    }
+
+    /// Adds the ball swept along `segment`'s poses and, with `flutes_above_ball` > 0 (a
+    /// swarf run: the flutes' side cuts), the flutes up to that far above the ball's centre,
+    /// as capsules `scallop` apart in height terms (balls √(2r·h) apart leave h/4 between
+    /// them).
+    pub fn insert(&mut self, segment: &CutSegment, flutes_above_ball: f64, scallop: f64) {
+        let step = (2.0 * self.radius * scallop).sqrt().max(1e-3);
+        let levels = if flutes_above_ball > 0.0 {
+            (flutes_above_ball / step).ceil() as usize
+        } else {
+            0
+        };
+        let radius = self.radius;
+        let centre = |k: usize, level: usize| {
+            let pose = &segment.poses[k];
+            let up = if levels == 0 {
+                0.0
+            } else {
+                flutes_above_ball * level as f64 / levels as f64
+            };
+            pose.tip + pose.axis.into_inner() * (radius + up)
+        };
+        for level in 0..=levels {
+            match segment.poses.len() {
+                0 => {}
+                1 => self.insert_capsule(centre(0, level), centre(0, level)),
+                n => {
+                    for k in 1..n {
+                        self.insert_capsule(centre(k - 1, level), centre(k, level));
+                    }
+                }
+            }
+        }
+    }
+
+    fn insert_capsule(&mut self, a: Point3, b: Point3) {
+        let index = self.capsules.len() as u32;
+        self.capsules.push([a, b]);
+        let grow = self.radius + self.reach;
+        let lo = self.key(&a.inf(&b).map(|v| v - grow));
+        let hi = self.key(&a.sup(&b).map(|v| v + grow));
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    self.cells.entry([x, y, z]).or_default().push(index);
+                }
+            }
+        }
+    }
+
+    /// The distance from `p` to the nearest swept body (0 inside one) and the direction that
+    /// body runs in, when one is within the reach.
+    pub fn gap(&self, p: &Point3) -> Option<(f64, Vector3)> {
+        let mut best: Option<(f64, u32)> = None;
+        for &i in self.cells.get(&self.key(p))? {
+            let [a, b] = self.capsules[i as usize];
+            let d = (closest_point_on_segment(p, &a, &b) - p).norm() - self.radius;
+            if d <= self.reach && best.is_none_or(|(e, j)| d < e || (d == e && i < j)) {
+                best = Some((d, i));
+            }
+        }
+        best.map(|(d, i)| {
+            let [a, b] = self.capsules[i as usize];
+            (
+                d.max(0.0),
+                (b - a).try_normalize(1e-12).unwrap_or_else(Vector3::zeros),
+            )
+        })
+    }
+}
+
+/// The samples of `part`'s triangles that `sampled` marks where the passes in `swept` leave
+/// more than the target and the ball fits. `views` place a sample among the passes (the
+/// identity, and for a pattern of copies the inverse of each copy's placement): its gap is
+/// the least over them.
+pub fn gaps(
+    part: &Mesh,
+    surface: &SurfaceDistance,
+    sampled: &[bool],
+    swept: &SweptTool,
+    views: &[Isometry3<f64>],
+    options: &RestOptions,
+) -> Vec<Gap> {
+    let quantum = 0.5 * options.sample_spacing * options.sample_spacing;
+    let radius = options.ball_radius;
+    let target = options.scallop_height;
+    (0..part.triangles.len())
+        .filter(|&t| sampled.get(t).copied().unwrap_or(false))
+        .collect::<Vec<_>>()
+        .par_iter()
+        .flat_map_iter(|&t| {
+            let [a, b, c] = part.corners(t);
+            let area = 0.5 * (b - a).cross(&(c - a)).norm();
+            let normal = part.face_normal(t);
+            // A barycentric grid of sub-triangles about a quantum each; their centres.
+            let k = (area / quantum).sqrt().ceil().max(1.0) as usize;
+            let share = area / (k * (k + 1) / 2) as f64;
+            let mut points = Vec::with_capacity(k * (k + 1) / 2);
+            for i in 0..k {
+                for j in 0..k - i {
+                    let u = (i as f64 + 1.0 / 3.0) / k as f64;
+                    let v = (j as f64 + 1.0 / 3.0) / k as f64;
+                    points.push(a + (b - a) * u + (c - a) * v);
+                }
+            }
+            points.into_iter().filter_map(move |point| {
+                let (height, along) = views
+                    .iter()
+                    .filter_map(|view| {
+                        let (h, d) = swept.gap(&view.transform_point(&point))?;
+                        Some((h, view.inverse_transform_vector(&d)))
+                    })
+                    .min_by(|x, y| x.0.total_cmp(&y.0))?;
+                if height <= target {
+                    return None;
+                }
+                // Concave more tightly than the ball: no placement of it leaves less.
+                if surface.any_within(&(point + normal * radius), radius - target) {
+                    return None;
+                }
+                Some(Gap {
+                    point,
+                    normal,
+                    height,
+                    triangle: t as u32,
+                    area: share,
+                    along,
+                })
+            })
+        })
+        .collect()
+}
+
+/// The gaps in clusters: joined when within `join` of each other, each cluster's members in
+/// the order of `gaps`, clusters in the order of their first member.
+pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
+    let key = |p: &Point3| [0, 1, 2].map(|k| (p[k] / join).floor() as i64);
+    let mut cells: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, g) in gaps.iter().enumerate() {
+        cells.entry(key(&g.point)).or_default().push(i);
+    }
+    let mut parent: Vec<usize> = (0..gaps.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for (i, g) in gaps.iter().enumerate() {
+        let [x, y, z] = key(&g.point);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(near) = cells.get(&[x + dx, y + dy, z + dz]) else {
+                        continue;
+                    };
+                    for &j in near {
+                        if j < i && (gaps[j].point - g.point).norm() <= join {
+                            let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                            // The smaller index roots: the clusters' order is the gaps'.
+                            parent[a.max(b)] = a.min(b);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut index: HashMap<usize, usize> = HashMap::new();
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for i in 0..gaps.len() {
+        let r = root(&mut parent, i);
+        let slot = *index.entry(r).or_insert_with(|| {
+            out.push(Vec::new());
+            out.len() - 1
+        });
+        out[slot].push(i);
+    }
+    out
+}
+
+/// Places on one ridge joined: two places whose middles are within `join_along` of each
+/// other, whose passes run the same way (within 25°) and which lie within `join_across` of
+/// each other's line across it and off it: one pass along both costs less than a link to
+/// each. Places in the order of their first member, members in order.
+pub fn ridges(
+    gaps: &[Gap],
+    places: &[Vec<usize>],
+    join_along: f64,
+    join_across: f64,
+) -> Vec<Vec<usize>> {
+    let frames: Vec<Option<(Point3, Vector3, Vector3)>> = places
+        .iter()
+        .map(|members| place_frame(gaps, members))
+        .collect();
+    let mut parent: Vec<usize> = (0..places.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let same_way = 25f64.to_radians().cos();
+    for i in 0..places.len() {
+        let Some((mi, ni, di)) = frames[i] else {
+            continue;
+        };
+        for (j, frame) in frames.iter().enumerate().take(i) {
+            let Some((mj, _, dj)) = *frame else {
+                continue;
+            };
+            let d = mj - mi;
+            if d.norm() > join_along || di.dot(&dj).abs() < same_way {
+                continue;
+            }
+            let across = ni.cross(&di);
+            if d.dot(&across).abs() <= join_across && d.dot(&ni).abs() <= join_across {
+                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    let mut index: HashMap<usize, usize> = HashMap::new();
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for (i, members) in places.iter().enumerate() {
+        let r = root(&mut parent, i);
+        let slot = *index.entry(r).or_insert_with(|| {
+            out.push(Vec::new());
+            out.len() - 1
+        });
+        out[slot].extend_from_slice(members);
+    }
+    for members in &mut out {
+        members.sort_unstable();
+    }
+    out
+}
+
+/// A place's middle, mean normal and the direction its passes run in (in the tangent plane,
+/// the samples' swept bodies' directions taken the same way round as the first's).
+fn place_frame(gaps: &[Gap], members: &[usize]) -> Option<(Point3, Vector3, Vector3)> {
+    let first = gaps[*members.first()?].along;
+    let middle = Point3::from(
+        members
+            .iter()
+            .map(|&i| gaps[i].point.coords)
+            .sum::<Vector3>()
+            / members.len() as f64,
+    );
+    let normal = members
+        .iter()
+        .map(|&i| gaps[i].normal)
+        .sum::<Vector3>()
+        .try_normalize(1e-9)?;
+    let along = members
+        .iter()
+        .map(|&i| {
+            let d = gaps[i].along;
+            if d.dot(&first) < 0.0 { -d } else { d }
+        })
+        .sum::<Vector3>();
+    let along = (along - normal * along.dot(&normal)).try_normalize(1e-9)?;
+    Some((middle, normal, along))
+}
+
+/// The rest curve along the ridge of a cluster of `gaps` (indices `members`): see the module
+/// docs. `None` when the cluster gives no direction to run in or nothing projects onto the
+/// part.
+pub fn rest_curve(
+    gaps: &[Gap],
+    members: &[usize],
+    part: &Mesh,
+    surface: &SurfaceDistance,
+    options: &RestOptions,
+) -> Option<SectionCurve> {
+    let (middle, normal, along) = place_frame(gaps, members)?;
+    let across = normal.cross(&along);
+    let placed: Vec<(f64, f64, f64)> = members
+        .iter()
+        .map(|&i| {
+            let d = gaps[i].point - middle;
+            (d.dot(&along), d.dot(&across), gaps[i].height)
+        })
+        .collect();
+    let (lo, hi) = placed.iter().fold(
+        (f64::INFINITY, f64::NEG_INFINITY),
+        |(lo, hi), &(s, _, _)| (lo.min(s), hi.max(s)),
+    );
+    let (start, end) = (lo - options.overlap, hi + options.overlap);
+    let steps = ((end - start) / options.step.max(1e-3)).ceil().max(1.0) as usize;
+    // Across, bin by bin: the samples' middle weighted by how far over the target they are
+    // (the ridge), the nearest bin's where a bin (past the ends) has none.
+    let bin = options.step.max(0.5 * options.sample_spacing);
+    let offsets: Vec<Option<f64>> = (0..=steps)
+        .map(|k| {
+            let s = start + (end - start) * k as f64 / steps as f64;
+            let (sum, weight) = placed.iter().filter(|(t, _, _)| (t - s).abs() <= bin).fold(
+                (0.0, 0.0),
+                |(sum, weight), &(_, l, h)| {
+                    let w = h - options.scallop_height;
+                    (sum + w * l, weight + w)
+                },
+            );
+            (weight > 0.0).then(|| sum / weight)
+        })
+        .collect();
+    let known: Vec<(usize, f64)> = offsets
+        .iter()
+        .enumerate()
+        .filter_map(|(k, o)| o.map(|o| (k, o)))
+        .collect();
+    if known.is_empty() {
+        return None;
+    }
+    let points: Vec<DrivePoint> = (0..=steps)
+        .filter_map(|k| {
+            let offset = offsets[k].unwrap_or_else(|| {
+                known
+                    .iter()
+                    .min_by_key(|(j, _)| j.abs_diff(k))
+                    .map_or(0.0, |&(_, o)| o)
+            });
+            let s = start + (end - start) * k as f64 / steps as f64;
+            let guess = middle + along * s + across * offset;
+            let on = surface.closest(&guess, options.ball_radius)?;
+            Some(DrivePoint {
+                point: on.point,
+                normal: part.face_normal(on.triangle as usize),
+            })
+        })
+        .collect();
+    (points.len() >= 2).then_some(SectionCurve {
+        points,
+        closed: false,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{Direction, ToolPose};
+    use crate::mesh::fixtures::cuboid;
+    use nalgebra::Translation3;
+
+    const RADIUS: f64 = 2.0;
+    const TARGET: f64 = 0.01;
+
+    fn options() -> RestOptions {
+        RestOptions {
+            ball_radius: RADIUS,
+            scallop_height: TARGET,
+            sample_spacing: 0.1,
+            reach: 0.2,
+            overlap: 0.4,
+            step: 0.25,
+        }
+    }
+
+    /// A pass of a vertical ball touching the plate's top (z = 5) along x at `y`.
+    fn pass_along_x(y: f64) -> CutSegment {
+        let axis = Direction::new_normalize(Vector3::z());
+        let poses: Vec<ToolPose> = (0..=60)
+            .map(|i| ToolPose {
+                tip: Point3::new(-5.0 + 0.5 * i as f64, y, 5.0),
+                axis,
+            })
+            .collect();
+        CutSegment {
+            pass_directions: vec![Vector3::x(); poses.len()],
+            poses,
+            leads: false,
+        }
+    }
+
+    /// A 20 × 20 plate, its top sampled, and passes along x over the top 0.3 mm apart (a
+    /// scallop of 0.0056 mm) for y in `[0, end]`, except `wide` apart between `at` and
+    /// `at + wide`.
+    fn plate_with_a_wide_gap(at: f64, wide: f64, end: f64) -> (Mesh, Vec<bool>, SweptTool) {
+        let part = cuboid(20.0, 20.0, 5.0);
+        let top: Vec<bool> = (0..part.triangles.len())
+            .map(|t| part.face_normal(t).z > 0.9)
+            .collect();
+        let mut swept = SweptTool::new(RADIUS, options().reach);
+        let mut y = 0.0;
+        while y <= end + 1e-9 {
+            swept.insert(&pass_along_x(y), 0.0, TARGET);
+            y += if (y - at).abs() < 1e-9 { wide } else { 0.3 };
+        }
+        (part, top, swept)
+    }
+
+    #[test]
+    fn the_gap_between_passes_too_far_apart_is_the_closed_form_scallop_and_only_there() {
+        let (part, top, swept) = plate_with_a_wide_gap(8.1, 0.6, 20.0);
+        let surface = SurfaceDistance::new(&part);
+        let found = gaps(
+            &part,
+            &surface,
+            &top,
+            &swept,
+            &[Isometry3::identity()],
+            &options(),
+        );
+        assert!(!found.is_empty());
+        for g in &found {
+            assert!(g.point.y > 8.1 && g.point.y < 8.7, "{:?}", g.point);
+            assert!(g.along.x.abs() > 0.999);
+        }
+        // Between balls s apart, at y from the middle the nearest centre is s/2 − |y| across
+        // and r up: the gap is √(r² + (s/2 − |y|)²) − r, at most √(r² + s²/4) − r mid-way.
+        for g in &found {
+            let across = 0.3 - (g.point.y - 8.4).abs();
+            let expected = (RADIUS * RADIUS + across * across).sqrt() - RADIUS;
+            assert!(
+                (g.height - expected).abs() < 1e-9,
+                "{} against {expected}",
+                g.height
+            );
+            assert!(expected > TARGET);
+        }
+        // Every sample of the band over the target is found: the band |y − 8.4| < 0.0997 is
+        // two sample rows wide on each side of the middle, the whole plate long.
+        let band = 0.3 - ((RADIUS + TARGET).powi(2) - RADIUS * RADIUS).sqrt();
+        let rows = found
+            .iter()
+            .map(|g| (g.point.y * 1e6).round() as i64)
+            .collect::<std::collections::BTreeSet<_>>();
+        assert!(rows.len() as f64 >= (2.0 * band / 0.1).floor(), "{rows:?}");
+    }
+
+    #[test]
+    fn a_rest_curve_runs_along_the_ridge_and_closes_the_gap() {
+        let (part, top, mut swept) = plate_with_a_wide_gap(8.1, 0.6, 20.0);
+        let surface = SurfaceDistance::new(&part);
+        let views = [Isometry3::identity()];
+        let found = gaps(&part, &surface, &top, &swept, &views, &options());
+        let groups = clusters(&found, 1.5 * options().sample_spacing);
+        assert_eq!(groups.len(), 1);
+        let curve = rest_curve(&found, &groups[0], &part, &surface, &options()).expect("a curve");
+        for p in &curve.points {
+            assert!((p.point.y - 8.4).abs() < 0.02, "{:?}", p.point);
+            assert!((p.point.z - 5.0).abs() < 1e-9 && p.normal.z > 0.999);
+        }
+        let xs: Vec<f64> = curve.points.iter().map(|p| p.point.x).collect();
+        let (lo, hi) = (
+            xs.iter().copied().fold(f64::INFINITY, f64::min),
+            xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        );
+        assert!(lo < 0.1 && hi > 19.9, "{lo}..{hi}");
+        // A ball along it: nothing over the target is left.
+        let axis = Direction::new_normalize(Vector3::z());
+        let rest = CutSegment {
+            poses: curve
+                .points
+                .iter()
+                .map(|p| ToolPose { tip: p.point, axis })
+                .collect(),
+            pass_directions: vec![Vector3::x(); curve.points.len()],
+            leads: false,
+        };
+        swept.insert(&rest, 0.0, TARGET);
+        assert!(gaps(&part, &surface, &top, &swept, &views, &options()).is_empty());
+    }
+
+    #[test]
+    fn views_measure_a_sample_against_the_copies_of_the_passes() {
+        // Passes over y ≤ 10 only; the view shifting y by −10 stands for their copy 10 mm on.
+        let (part, top, swept) = plate_with_a_wide_gap(8.1, 0.6, 10.0);
+        let surface = SurfaceDistance::new(&part);
+        let views = [
+            Isometry3::identity(),
+            Isometry3::from_parts(Translation3::new(0.0, -10.0, 0.0), Default::default()),
+        ];
+        let found = gaps(&part, &surface, &top, &swept, &views, &options());
+        let groups = clusters(&found, 1.5 * options().sample_spacing);
+        assert_eq!(groups.len(), 2);
+        let middle_y =
+            |g: &Vec<usize>| g.iter().map(|&i| found[i].point.y).sum::<f64>() / g.len() as f64;
+        let mut ys: Vec<f64> = groups.iter().map(middle_y).collect();
+        ys.sort_by(f64::total_cmp);
+        assert!(
+            (ys[0] - 8.4).abs() < 0.05 && (ys[1] - 18.4).abs() < 0.05,
+            "{ys:?}"
+        );
+    }
+
+    #[test]
+    fn the_flutes_sweep_where_asked() {
+        // A vertical tool whose flutes run along the plate's side x = 20 at y = 10.
+        let axis = Direction::new_normalize(Vector3::z());
+        let poses: Vec<ToolPose> = (0..=10)
+            .map(|i| ToolPose {
+                tip: Point3::new(20.0 + RADIUS, 5.0 + i as f64, -1.0),
+                axis,
+            })
+            .collect();
+        let segment = CutSegment {
+            pass_directions: vec![Vector3::y(); poses.len()],
+            poses,
+            leads: false,
+        };
+        let at_side = Point3::new(20.0, 10.0, 4.0);
+        let mut balls = SweptTool::new(RADIUS, 0.2);
+        balls.insert(&segment, 0.0, TARGET);
+        assert!(balls.gap(&at_side).is_none());
+        let mut flutes = SweptTool::new(RADIUS, 0.2);
+        flutes.insert(&segment, 8.0, TARGET);
+        let (gap, _) = flutes.gap(&at_side).expect("the flutes come near");
+        assert!(gap < 1e-9, "{gap}");
+    }
+
+    #[test]
+    fn places_on_one_ridge_join_and_neighbouring_ridges_do_not() {
+        // Specks along x (the passes' way) on a plate's top: two on the ridge y = 0, 3 mm
+        // apart, one on the next ridge at y = 0.4 beside the first, one on y = 0 far on.
+        let speck = |x: f64, y: f64| Gap {
+            point: Point3::new(x, y, 5.0),
+            normal: Vector3::z(),
+            height: 0.012,
+            triangle: 0,
+            area: 0.005,
+            along: if x > 5.0 { -Vector3::x() } else { Vector3::x() },
+        };
+        let found = vec![
+            speck(0.0, 0.0),
+            speck(3.0, 0.02),
+            speck(0.0, 0.4),
+            speck(9.0, 0.0),
+        ];
+        let places: Vec<Vec<usize>> = (0..found.len()).map(|i| vec![i]).collect();
+        let joined = ridges(&found, &places, 4.0, 0.2);
+        assert_eq!(joined, vec![vec![0, 1], vec![2], vec![3]]);
+        // With the passes along y, the ridges run along y: the specks 0.4 apart in y join,
+        // those apart in x do not.
+        let across: Vec<Gap> = found
+            .iter()
+            .map(|g| Gap {
+                along: Vector3::y(),
+                ..*g
+            })
+            .collect();
+        assert_eq!(
+            ridges(&across, &places, 4.0, 0.2),
+            vec![vec![0, 2], vec![1], vec![3]]
+        );
+    }
+}
