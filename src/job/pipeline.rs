@@ -43,7 +43,7 @@ use crate::offset::OffsetShape;
 use crate::path::{self, Finishing, FinishingOptions, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::stock::clearance::MaterialClearance;
-use crate::verify::{Ball, ScallopOptions, measure_scallop_map_of};
+use crate::verify::{Ball, ScallopOptions, ToolReach, measure_scallop_map_of};
 use crate::verify::{PoseChecks, PostedClearance, PostedOptions, check_posted, verify};
 
 pub use super::observer::{Observer, Quiet};
@@ -226,6 +226,10 @@ fn significant(v: f64) -> String {
 /// a 4 mm ball at 0.01 mm but not a multiple of it, so the points fall at every phase between
 /// neighbouring passes.
 const SCALLOP_SAMPLE_SPACING: f64 = 0.5;
+
+/// Tool axes tried at a sample over the target before it is called blocked (no axis reaches):
+/// a Fibonacci sphere, neighbours about 7° apart.
+const REACH_DIRECTIONS: usize = 800;
 
 fn ms(since: Instant) -> f64 {
     (since.elapsed().as_secs_f64() * 1e3 * 10.0).round() / 10.0
@@ -1068,6 +1072,19 @@ pub fn plan_with_surfaces(
                         .chain(corner)
                         .map(|p| (&p.toolpath, ball_of(p)))
                         .collect();
+                    // Where no axis of the finishing tool reaches; with a corner tool as
+                    // well (another ball, shank and holder) nothing is told apart.
+                    let reachable = |axis: &Vector3| setup.reachable(axis);
+                    let reach = corner.is_none().then(|| {
+                        ToolReach::new(
+                            setup.prepared_tool.assembly().bodies(),
+                            job.safety.shank_margin,
+                            job.safety.holder_margin,
+                            Some((prepared.table_z, job.safety.table_margin)),
+                            &reachable,
+                            REACH_DIRECTIONS,
+                        )
+                    });
                     let (report, found) = measure_scallop_map_of(
                         part,
                         &passes,
@@ -1080,6 +1097,7 @@ pub fn plan_with_surfaces(
                             flutes_above_ball: (p.operation.tool.flute_length - radius).max(0.0),
                         },
                         labels.as_deref(),
+                        reach.as_ref(),
                     );
                     (report, found, target)
                 });

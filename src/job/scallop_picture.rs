@@ -2,8 +2,8 @@
 //! ([`crate::verify::measure_scallop_map`]), so a user sees at once where the passes leave
 //! more than the scallop target and why: green within the target, yellow over it (up to five
 //! times), red beyond, blue where the part is concave more tightly than the ball (no ball can
-//! leave the target there), dark grey where no pass comes near, light grey the face on the
-//! table. A triangle of the part large enough for several samples is split as it was sampled,
+//! leave the target there), purple where no tool axis reaches (over the target), dark grey
+//! where no pass comes near, light grey the face on the table. A triangle of the part large enough for several samples is split as it was sampled,
 //! so a coarse mesh's long triangles show where along them the passes fall short.
 
 use crate::error::{Error, Result};
@@ -17,6 +17,7 @@ const OVER: [f32; 4] = [0.95, 0.8, 0.15, 1.0];
 const FAR_OVER: [f32; 4] = [0.85, 0.15, 0.1, 1.0];
 const NARROW: [f32; 4] = [0.25, 0.45, 0.9, 1.0];
 const NOT_REACHED: [f32; 4] = [0.3, 0.3, 0.33, 1.0];
+const BLOCKED: [f32; 4] = [0.55, 0.25, 0.7, 1.0];
 const TABLE: [f32; 4] = [0.82, 0.82, 0.82, 1.0];
 
 /// Over the target by more than this factor is red.
@@ -31,6 +32,7 @@ pub fn scallop_colour(found: SampleScallop, target: f64) -> [f32; 4] {
         SampleScallop::Over(_) => OVER,
         SampleScallop::Narrow => NARROW,
         SampleScallop::NotReached => NOT_REACHED,
+        SampleScallop::Blocked(_) => BLOCKED,
     }
 }
 
@@ -42,6 +44,7 @@ pub fn scallop_legend(target: f64) -> Vec<String> {
         format!("yellow: over the target, up to {far} mm"),
         format!("red: over {far} mm"),
         "blue: concave more tightly than the ball (no ball leaves the target there)".into(),
+        "purple: over the target where no tool axis the machine allows reaches".into(),
         "dark grey: no pass comes near".into(),
         "light grey: the face on the table".into(),
     ]
@@ -68,6 +71,7 @@ pub fn scallop_pictures(patches: &[ScallopPatch], target: f64) -> Result<Vec<(St
         ("far over target", FAR_OVER),
         ("narrow", NARROW),
         ("not reached", NOT_REACHED),
+        ("blocked", BLOCKED),
         ("table", TABLE),
     ] {
         let of_colour = patches
@@ -91,6 +95,7 @@ pub fn scallop_pictures(patches: &[ScallopPatch], target: f64) -> Result<Vec<(St
             (OVER, format!("{target}-{far}mm")),
             (FAR_OVER, format!(">{far}mm")),
             (NARROW, "narrow".into()),
+            (BLOCKED, "blocked".into()),
             (NOT_REACHED, "unreached".into()),
         ],
     );
@@ -140,11 +145,12 @@ mod tests {
             SampleScallop::Narrow,
             SampleScallop::NotReached,
             SampleScallop::Table,
+            SampleScallop::Blocked(0.5),
         ];
         let colours: Vec<[f32; 4]> = kinds.iter().map(|f| scallop_colour(*f, 0.01)).collect();
         assert_eq!(
             colours,
-            [WITHIN, OVER, FAR_OVER, NARROW, NOT_REACHED, TABLE]
+            [WITHIN, OVER, FAR_OVER, NARROW, NOT_REACHED, TABLE, BLOCKED]
         );
         let patches: Vec<ScallopPatch> = (0..part.triangles.len())
             .map(|t| ScallopPatch {

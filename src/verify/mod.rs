@@ -15,6 +15,7 @@
 
 mod posted;
 mod program;
+mod reach;
 mod scallop;
 mod segment_distance;
 
@@ -23,6 +24,7 @@ pub use posted::{
     check_posted, program_toolpath,
 };
 pub use program::{MotionBlock, ProgramError, read_conversational, read_program};
+pub use reach::ToolReach;
 pub use scallop::{
     AreaSplit, Ball, SampleScallop, ScallopOptions, ScallopPatch, ScallopReport, measure_scallop,
     measure_scallop_map, measure_scallop_map_of, ray_capsule_entry,

@@ -21,6 +21,11 @@
 //! elsewhere by more than the target (an exact distance query on the part); the report keeps
 //! the scallop of the open samples apart, so that over-target area there means passes too
 //! far apart or a region no strategy covered.
+//!
+//! Given the tool and the machine ([`ToolReach`]), an open sample over the target is
+//! *blocked* when no tool axis of a direction set reaches it (the shank and its margin do not
+//! fit down a bore, the table's margin keeps the ball off a wall's foot): the report keeps it
+//! apart too, so the open figures are what the passes are answerable for.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -28,6 +33,8 @@ use serde::Serialize;
 use crate::geom::{MoveKind, Point3, Toolpath, Vector3, closest_point_on_segment};
 use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
+
+use super::reach::ToolReach;
 
 /// What the measure found.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -55,6 +62,9 @@ pub struct ScallopReport {
     pub open_max_mm: f64,
     pub open_p99_mm: f64,
     pub open_over_target_mm2: f64,
+    /// Area over the target where the ball fits but no tool axis the machine allows reaches
+    /// (measured only when the tool is given), mm: left out of the open figures.
+    pub blocked_area_mm2: f64,
     pub target_mm: f64,
     /// The same split by the labels given per triangle (the impeller's regions).
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
@@ -72,6 +82,8 @@ pub struct AreaSplit {
     /// part over the target, mm².
     pub narrow_mm2: f64,
     pub open_over_target_mm2: f64,
+    /// Over the target where the ball fits and no tool axis reaches, mm².
+    pub blocked_mm2: f64,
 }
 
 /// How the scallop is measured.
@@ -104,6 +116,9 @@ pub enum SampleScallop {
     Narrow,
     /// No swept ball comes near.
     NotReached,
+    /// Over the target where the ball fits, but no axis of the tool reaches (the largest such
+    /// height, mm).
+    Blocked(f64),
     /// Where the ball fits, over the target (the largest such height, mm): what the passes
     /// are answerable for.
     Over(f64),
@@ -117,7 +132,8 @@ impl SampleScallop {
             SampleScallop::Within(h) => (1, h),
             SampleScallop::Narrow => (2, 0.0),
             SampleScallop::NotReached => (3, 0.0),
-            SampleScallop::Over(h) => (4, h),
+            SampleScallop::Blocked(h) => (4, h),
+            SampleScallop::Over(h) => (5, h),
         }
     }
 
@@ -164,7 +180,7 @@ pub fn measure_scallop_map(
         radius: options.radius,
         flutes_above_ball: options.flutes_above_ball,
     };
-    measure_scallop_map_of(part, &[(toolpath, ball)], options, labels)
+    measure_scallop_map_of(part, &[(toolpath, ball)], options, labels, None)
 }
 
 /// A ball-end mill as the scallop measure sweeps it.
@@ -178,12 +194,14 @@ pub struct Ball {
 /// [`measure_scallop_map`] of several toolpaths, each cut by its own ball (a finish, then a
 /// corner finish with a smaller one): what is left is what none of them sweeps. A sample is
 /// narrow where the smallest ball does not fit; `options.radius` and
-/// `options.flutes_above_ball` are not used (each path's ball is).
+/// `options.flutes_above_ball` are not used (each path's ball is). With `tool_reach`, open samples
+/// over the target that no tool axis reaches are told apart (blocked).
 pub fn measure_scallop_map_of(
     part: &Mesh,
     passes: &[(&Toolpath, Ball)],
     options: &ScallopOptions,
     labels: Option<&[&str]>,
+    tool_reach: Option<&ToolReach>,
 ) -> (ScallopReport, Vec<ScallopPatch>) {
     let ScallopOptions { target, reach, .. } = *options;
     let distance = SurfaceDistance::new(part);
@@ -211,7 +229,7 @@ pub fn measure_scallop_map_of(
         .map(|(s, r)| s.bounding_sphere(*r))
         .collect();
     scallop_of_samples(
-        part, &distance, &swept, &radii, &grid, &spheres, smallest, options, labels,
+        part, &distance, &swept, &radii, &grid, &spheres, smallest, options, labels, tool_reach,
     )
 }
 
@@ -316,6 +334,7 @@ fn scallop_of_samples(
     narrow_radius: f64,
     options: &ScallopOptions,
     labels: Option<&[&str]>,
+    tool_reach: Option<&ToolReach>,
 ) -> (ScallopReport, Vec<ScallopPatch>) {
     let ScallopOptions {
         target,
@@ -412,10 +431,23 @@ fn scallop_of_samples(
             best
         })
         .collect();
+    // Of the open samples over the target, those no axis of the tool reaches.
+    let blocked: Vec<bool> = samples
+        .par_iter()
+        .zip(&heights)
+        .zip(&narrow)
+        .map(|(((p, n, _, _), h), narrow)| {
+            tool_reach.is_some_and(|tool| {
+                !narrow
+                    && h.is_some_and(|h| h > target)
+                    && tool.blocked(distance, p, n, narrow_radius, target)
+            })
+        })
+        .collect();
     let mut reached = Vec::new();
     let mut open = Vec::new();
     let (mut reached_area, mut unreached_area, mut table_area, mut over) = (0.0, 0.0, 0.0, 0.0);
-    let (mut narrow_area, mut open_over) = (0.0, 0.0);
+    let (mut narrow_area, mut open_over, mut blocked_area) = (0.0, 0.0, 0.0);
     let mut sum = 0.0;
     let mut facing_down = 0.0;
     let mut by_label: std::collections::BTreeMap<String, AreaSplit> = Default::default();
@@ -423,18 +455,22 @@ fn scallop_of_samples(
     let found: Vec<SampleScallop> = heights
         .iter()
         .zip(&narrow)
-        .map(|(h, narrow)| match h {
+        .zip(&blocked)
+        .map(|((h, narrow), blocked)| match h {
             Some(h) if h.is_nan() => SampleScallop::Table,
             // Narrow and reached: within where it is, else the ball does not fit.
             Some(h) if *narrow && *h > target => SampleScallop::Narrow,
             Some(h) if *narrow => SampleScallop::Within(*h),
+            Some(h) if *blocked => SampleScallop::Blocked(*h),
             Some(h) if *h > target => SampleScallop::Over(*h),
             Some(h) => SampleScallop::Within(*h),
             None => SampleScallop::NotReached,
         })
         .collect();
     let patches = scallop_patches(part, &grids, &members, &stands_for, &found);
-    for (((_, normal, area, t), h), narrow) in samples.iter().zip(&heights).zip(&narrow) {
+    for ((((_, normal, area, t), h), narrow), blocked) in
+        samples.iter().zip(&heights).zip(&narrow).zip(&blocked)
+    {
         if h.is_some_and(f64::is_nan) {
             table_area += area;
             continue;
@@ -455,13 +491,16 @@ fn scallop_of_samples(
                 if *h > target {
                     over += area;
                     split.over_target_mm2 += area;
-                    if !narrow {
+                    if *blocked {
+                        blocked_area += area;
+                        split.blocked_mm2 += area;
+                    } else if !narrow {
                         open_over += area;
                         split.open_over_target_mm2 += area;
                     }
                 }
                 reached.push(*h);
-                if !narrow {
+                if !narrow && !blocked {
                     open.push(*h);
                 }
             }
@@ -501,6 +540,7 @@ fn scallop_of_samples(
         open_max_mm: open.last().copied().unwrap_or(0.0),
         open_p99_mm: p99(&open),
         open_over_target_mm2: open_over,
+        blocked_area_mm2: blocked_area,
         target_mm: target,
         by_region: by_label,
     };
@@ -913,6 +953,67 @@ mod tests {
         Toolpath { tool_id: 1, moves }
     }
 
+    /// Given the tool, what no axis reaches is told apart from the open area and nothing
+    /// else: a machine that holds the tool only pointing down (no ball's lower half toward
+    /// the plate's top) blocks all of the top over the target; one that holds it every way
+    /// blocks nothing and leaves the figures as measured without the tool.
+    #[test]
+    fn open_samples_no_axis_reaches_are_blocked_and_left_out_of_the_open_figures() {
+        let plate = crate::mesh::fixtures::cuboid(20.0, 20.0, 1.0);
+        let path = passes((0..30).map(|k| -2.0 + k as f64 * 0.8));
+        let options = ScallopOptions {
+            radius: 2.0,
+            target: 0.02,
+            spacing: 0.1,
+            reach: 4.0,
+            table_z: -10.0,
+            flutes_above_ball: 0.0,
+        };
+        let ball = Ball {
+            radius: 2.0,
+            flutes_above_ball: 0.0,
+        };
+        let body = |role, from, to| crate::tool::Body {
+            role,
+            from,
+            to,
+            radius_from: 2.0,
+            radius_to: 2.0,
+        };
+        let bodies = vec![
+            body(crate::tool::BodyRole::Flutes, 2.0, 10.0),
+            body(crate::tool::BodyRole::Shank, 10.0, 30.0),
+        ];
+        let (plain, _) = measure_scallop_map_of(&plate, &[(&path, ball)], &options, None, None);
+        assert!(plain.open_over_target_mm2 > 10.0 && plain.blocked_area_mm2 == 0.0);
+
+        let every_way = |_: &Vector3| true;
+        let free = ToolReach::new(bodies.clone(), 0.5, 2.0, None, &every_way, 200);
+        let (freely, _) =
+            measure_scallop_map_of(&plate, &[(&path, ball)], &options, None, Some(&free));
+        assert_eq!(freely, plain);
+
+        let down = |axis: &Vector3| axis.z < 0.0;
+        let upside_down = ToolReach::new(bodies, 0.5, 2.0, None, &down, 200);
+        let (blocked, patches) =
+            measure_scallop_map_of(&plate, &[(&path, ball)], &options, None, Some(&upside_down));
+        assert!((blocked.blocked_area_mm2 - plain.open_over_target_mm2).abs() < 1e-9);
+        assert_eq!(blocked.open_over_target_mm2, 0.0);
+        assert!(blocked.open_max_mm <= options.target);
+        assert_eq!(blocked.over_target_area_mm2, plain.over_target_area_mm2);
+        assert_eq!(blocked.max_mm, plain.max_mm);
+        assert!(
+            patches
+                .iter()
+                .any(|p| matches!(p.found, SampleScallop::Blocked(_)))
+        );
+        assert!(
+            !patches
+                .iter()
+                .any(|p| matches!(p.found, SampleScallop::Over(_)))
+        );
+    }
+
     /// Straight passes a stepover w apart over a flat plate leave the closed-form cusp
     /// h = r − √(r² − (w/2)²) between them; the sides stand below the balls' reach, the
     /// bottom on the table.
@@ -996,8 +1097,13 @@ mod tests {
             tool_id: 1,
             moves: first.moves.iter().chain(&second.moves).copied().collect(),
         };
-        let (together, _) =
-            measure_scallop_map_of(&plate, &[(&first, big), (&second, big)], &options, None);
+        let (together, _) = measure_scallop_map_of(
+            &plate,
+            &[(&first, big), (&second, big)],
+            &options,
+            None,
+            None,
+        );
         let (one, _) = measure_scallop_map(&plate, &joined, &options, None);
         assert_eq!(format!("{together:?}"), format!("{one:?}"));
         let alone = measure_scallop(&plate, &first, &options, None);
@@ -1016,8 +1122,13 @@ mod tests {
             }
         }
         let cusp = bottom(&big, lo);
-        let (mixed, _) =
-            measure_scallop_map_of(&plate, &[(&first, big), (&second, small)], &options, None);
+        let (mixed, _) = measure_scallop_map_of(
+            &plate,
+            &[(&first, big), (&second, small)],
+            &options,
+            None,
+            None,
+        );
         assert!(
             (mixed.max_mm - cusp).abs() < 6e-3 && mixed.max_mm <= cusp + 1e-9,
             "{} vs {cusp}",
@@ -1066,6 +1177,7 @@ mod tests {
                     assert_eq!(h > 0.02, matches!(patch.found, SampleScallop::Over(_)));
                 }
                 SampleScallop::Narrow => panic!("nothing is narrow on a plate"),
+                SampleScallop::Blocked(_) => panic!("no tool was given to block anything"),
             }
         }
         assert_eq!(worst, report.max_mm);
