@@ -5,6 +5,7 @@
 //! mesh is not an impeller; [`impeller_glb`] pictures what it found.
 
 pub mod blade;
+pub mod bore;
 pub mod edges;
 pub mod frame;
 pub mod passage;

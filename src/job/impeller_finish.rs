@@ -26,6 +26,7 @@ use crate::access::{
 use crate::geom::{Direction, ToolPose};
 use crate::geom::{Point3, Vector3};
 use crate::impeller::blade::needed_stretches;
+use crate::impeller::bore::bore_loops;
 use crate::impeller::{
     HubPassage, Impeller, NotSwarf, PassageOptions, Region, Ruling, SwarfOptions, SwarfPlan,
     blade_loop_at, blade_loops, blade_section_at, blade_tip_passes, swarf_runs,
@@ -341,6 +342,22 @@ pub struct ImpellerFinishSummary {
     pub plane_points_left_to_impeller: usize,
     /// Passes along the places the first passage's passes left over the scallop target.
     pub rest: Option<RestSummary>,
+    /// Loops round the bore, when the hub has one.
+    pub bore: Option<BoreSummary>,
+}
+
+/// What the loops round the bore planned.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoreSummary {
+    /// Area of the bore's wall, mm², its height along the axis and the step between loops, mm.
+    pub wall_area_mm2: f64,
+    pub height_mm: f64,
+    pub level_step_mm: f64,
+    /// Curves at the levels, the segments planned along them, and their drive points no
+    /// tool axis reached.
+    pub loops: usize,
+    pub segments: usize,
+    pub unreachable_points: usize,
 }
 
 /// Plans the finishing of `part` (recognised as `impeller`): hub flow lines and blade loops
@@ -382,6 +399,7 @@ pub fn finish_impeller(
         covered: Covered::default(),
         plane_points_left_to_impeller: 0,
         rest: None,
+        bore: None,
     };
     let mut handled = vec![false; part.triangles.len()];
     let mut summary_visibility = None;
@@ -905,6 +923,43 @@ pub fn finish_impeller(
                 swarf: swarf_summary,
                 not_swarfed,
             });
+
+            // The bore: loops round its wall with the tool along the axis, leaning off the
+            // machine's pole toward the middle of the bore (away from the wall it cuts).
+            if corner_band.is_none() {
+                let bore = bore_loops(part, impeller, &passage.frame, stepover);
+                if !bore.curves.is_empty() {
+                    let frame = &passage.frame;
+                    let bore_field = |_: &Point3, normal: &Vector3, _: &Vector3| {
+                        let inward = (normal - frame.axis * normal.dot(&frame.axis))
+                            .try_normalize(1e-9)
+                            .unwrap_or(*normal);
+                        away_from_pole(&frame.axis, &pole, &inward, MIN_TILT_FROM_POLE_DEG)
+                    };
+                    let bore_ctx = FinishingContext {
+                        axis_field: Some(&bore_field),
+                        ..*ctx
+                    };
+                    let mut passes = Finishing::default();
+                    for result in path::curve_passes(&bore.curves, &bore_ctx, options, advance) {
+                        passes.merge(result);
+                    }
+                    passes.segments =
+                        path::nearest_order(std::mem::take(&mut passes.segments), true);
+                    summary.bore = Some(BoreSummary {
+                        wall_area_mm2: bore.area_mm2,
+                        height_mm: bore.height_mm,
+                        level_step_mm: bore.level_step,
+                        loops: bore.curves.len(),
+                        segments: passes.segments.len(),
+                        unreachable_points: passes.unreachable.len(),
+                    });
+                    finishing.merge(passes);
+                    for (h, on_wall) in handled.iter_mut().zip(&bore.wall) {
+                        *h |= *on_wall;
+                    }
+                }
+            }
         }
         Err(reason) => summary.not_planned = Some(reason),
     }

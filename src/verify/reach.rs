@@ -4,13 +4,15 @@
 //! the passes'.
 //!
 //! A ball touching the part at p with outward normal n is centred at c = p + r·n, its lower
-//! half toward p: the axis a has a·n ≥ 0. For each of a fixed set of directions (a Fibonacci
-//! sphere) that the machine allows and that holds the ball so, the tool's bodies above the
-//! ball are tested at points up the axis: a point of a body within the body's radius and its
-//! margin of the part (the flutes: within their radius less the scallop target, a cut beyond
-//! it) or any body below the table's margin rules the axis out. Each such test is certain (the
-//! body holds a ball of that radius round the point); between the points and between the
-//! directions nothing is claimed, so *blocked* means: no direction of the set reaches.
+//! half toward p: the axis a has a·n ≥ 0. For the normal itself, the vertical (a deep slot's
+//! floor or a bore's wall may leave no room to tilt off them) and each of a fixed set of
+//! directions (a Fibonacci sphere) that the machine allows and that holds the ball so, the
+//! tool's bodies above the ball are tested at points up the axis: a point of a body within
+//! the body's radius and its margin of the part (the flutes: within their radius less the
+//! scallop target, a cut beyond it) or any body below the table's margin rules the axis out.
+//! Each such test is certain (the body holds a ball of that radius round the point); between
+//! the points and between the directions nothing is claimed, so *blocked* means: none of
+//! these directions reaches.
 //! Nothing of how the moves were planned is used; the machine's limits are the caller's.
 
 use crate::geom::{Point3, Vector3};
@@ -72,11 +74,16 @@ impl<'a> ToolReach<'a> {
             return true;
         }
         let mut hint = None;
-        !self.directions.iter().any(|axis| {
-            axis.dot(n) >= 0.0
-                && (self.reachable)(axis)
-                && self.clear(distance, &centre, axis, radius, target, &mut hint)
-        })
+        // The normal and the vertical first (a floor's and a bore's own axes, which a
+        // deep slot or bore leaves no room to tilt off), then the set.
+        [*n, Vector3::z()]
+            .iter()
+            .chain(&self.directions)
+            .all(|axis| {
+                axis.dot(n) < 0.0
+                    || !(self.reachable)(axis)
+                    || !self.clear(distance, &centre, axis, radius, target, &mut hint)
+            })
     }
 
     /// Whether no test rules out the tool along `axis` with its ball centred at `centre`.

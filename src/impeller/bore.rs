@@ -1,0 +1,175 @@
+//! Loops round an impeller's bore: the hub's inner wall, facing the rotation axis. The
+//! parallel planes cannot finish it (their axes lean at most so far from the surface's normal,
+//! and in a bore any such lean runs the tool into the far wall); a tool standing along the
+//! axis, its ball's side against the wall, can. The wall is a surface of revolution about the
+//! axis: its curves of constant height are circles round it (broken where a keyway cuts the
+//! wall), a stepover apart along the wall where it stands square to the hub (height steps of
+//! the stepover times the wall's steepness there, its low percentile, as round a blade).
+
+use crate::geom::{Point3, Vector3};
+use crate::mesh::{Mesh, SectionCurve, level_section};
+
+use super::frame::AxisFrame;
+use super::recognise::{Impeller, Region};
+
+/// A bore triangle faces the axis: its normal's component toward the axis at least this.
+const FACING_AXIS: f64 = 0.8;
+
+/// ... and stands within this of the hub's smallest radius, mm.
+const NEAR_INNER_RADIUS: f64 = 2.0;
+
+/// The loops round the bore, from the top down, and which triangles of the part are its wall.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BoreLoops {
+    pub curves: Vec<SectionCurve>,
+    /// Per triangle of the part: on the bore's wall.
+    pub wall: Vec<bool>,
+    /// Area of the wall, mm², and its height along the axis, mm.
+    pub area_mm2: f64,
+    pub height_mm: f64,
+    pub level_step: f64,
+}
+
+/// The loops round `impeller`'s bore in `mesh`, levels at most `stepover` apart along the
+/// wall; empty when the hub has no wall facing the axis.
+pub fn bore_loops(mesh: &Mesh, impeller: &Impeller, frame: &AxisFrame, stepover: f64) -> BoreLoops {
+    let inner = impeller.hub_radius_mm[0];
+    let wall: Vec<bool> = (0..mesh.triangles.len())
+        .map(|t| {
+            if impeller.regions[t] != Region::Hub {
+                return false;
+            }
+            let [a, b, c] = mesh.corners(t);
+            let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+            let (radius, angle, _) = frame.cylindrical(&centroid);
+            let inward = -frame.radial(angle);
+            radius <= inner + NEAR_INNER_RADIUS && mesh.face_normal(t).dot(&inward) >= FACING_AXIS
+        })
+        .collect();
+    let bore = Mesh::compacted(
+        &mesh.positions,
+        mesh.triangles
+            .iter()
+            .zip(&wall)
+            .filter(|(_, w)| **w)
+            .map(|(t, _)| *t),
+    );
+    if bore.triangles.is_empty() {
+        return BoreLoops::default();
+    }
+    let normals: Vec<Vector3> = (0..bore.triangles.len())
+        .map(|t| bore.face_normal(t))
+        .collect();
+    let height: Vec<f64> = bore
+        .positions
+        .iter()
+        .map(|p| frame.cylindrical(p).2)
+        .collect();
+    let (low, high) = height
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), h| {
+            (lo.min(*h), hi.max(*h))
+        });
+    // The height changes along the wall by the sine of its steepness: 1 on a cylinder.
+    let mut steepness: Vec<(f64, f64)> = normals
+        .iter()
+        .enumerate()
+        .map(|(t, n)| {
+            let along_axis = n.dot(&frame.axis);
+            ((1.0 - along_axis * along_axis).max(0.0).sqrt(), {
+                let [a, b, c] = bore.corners(t);
+                0.5 * (b - a).cross(&(c - a)).norm()
+            })
+        })
+        .collect();
+    steepness.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = steepness.iter().map(|s| s.1).sum();
+    let mut seen = 0.0;
+    let mut least = 1.0;
+    for (s, area) in &steepness {
+        seen += area;
+        if seen >= 0.1 * total {
+            least = *s;
+            break;
+        }
+    }
+    let level_step = (stepover * least).max(1e-3);
+    // Levels from half a step below the top to half a step above the bottom, evenly.
+    let span = high - low;
+    let levels = (span / level_step).ceil().max(1.0) as usize;
+    let step = span / levels as f64;
+    let mut curves = Vec::new();
+    for k in 0..levels {
+        let level = high - (k as f64 + 0.5) * step;
+        let shifted: Vec<f64> = height.iter().map(|h| h - level).collect();
+        curves.extend(level_section(&bore, &normals, &shifted));
+    }
+    BoreLoops {
+        curves,
+        area_mm2: bore.surface_area(),
+        wall,
+        height_mm: span,
+        level_step: step,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::impeller::{RecogniseOptions, recognise};
+
+    /// The sample's bore (radius 8, the hub 12 mm tall there): every loop runs round the wall
+    /// at its level, on the circle of the bore's radius, the levels no more than a stepover
+    /// apart and covering the wall from top to bottom within half a step; the wall's triangles
+    /// face the axis.
+    #[test]
+    fn the_sample_bore_gets_circles_a_stepover_apart_from_top_to_bottom() {
+        let mesh = crate::sample::impeller(&Default::default()).expect("sample impeller");
+        let impeller = recognise(&mesh, &RecogniseOptions::default()).expect("an impeller");
+        let frame = AxisFrame::new(impeller.centre.into(), &Vector3::from(impeller.axis));
+        let stepover = 0.4;
+        let bore = bore_loops(&mesh, &impeller, &frame, stepover);
+        assert!(!bore.curves.is_empty());
+        assert!(bore.level_step <= stepover + 1e-12 && bore.level_step > 0.3);
+        let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (t, on) in bore.wall.iter().enumerate() {
+            if !on {
+                continue;
+            }
+            let [a, b, c] = mesh.corners(t);
+            for p in [a, b, c] {
+                let (radius, _, height) = frame.cylindrical(&p);
+                assert!((radius - 8.0).abs() < 0.05, "{radius}");
+                (low, high) = (low.min(height), high.max(height));
+            }
+        }
+        let mut levels: Vec<f64> = Vec::new();
+        for curve in &bore.curves {
+            let (_, _, level) = frame.cylindrical(&curve.points[0].point);
+            for p in &curve.points {
+                let (radius, _, height) = frame.cylindrical(&p.point);
+                assert!((radius - 8.0).abs() < 0.05 && (height - level).abs() < 1e-6);
+                assert!(p.normal.dot(&frame.axis).abs() < 0.2);
+            }
+            levels.push(level);
+        }
+        levels.sort_by(f64::total_cmp);
+        levels.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+        assert!(levels.windows(2).all(|w| w[1] - w[0] <= stepover + 1e-9));
+        assert!(levels[0] - low <= 0.5 * bore.level_step + 1e-9);
+        assert!(high - levels[levels.len() - 1] <= 0.5 * bore.level_step + 1e-9);
+        // A full circle each: the sample's bore has no keyway.
+        let round = 2.0 * std::f64::consts::PI * 8.0;
+        for curve in &bore.curves {
+            let length: f64 = curve
+                .points
+                .windows(2)
+                .map(|w| (w[1].point - w[0].point).norm())
+                .sum();
+            assert!(
+                curve.closed && (length - round).abs() < 0.05 * round,
+                "{length}"
+            );
+        }
+    }
+}
