@@ -68,9 +68,34 @@ pub fn positive_zero(x: f64) -> f64 {
     if x == 0.0 { 0.0 } else { x }
 }
 
+/// The value below which `share` of the total weight of `(value, weight)` pairs lies (the
+/// first value whose running weight, smallest values first, reaches it); `None` when there
+/// are none.
+pub fn weighted_quantile(mut values: Vec<(f64, f64)>, share: f64) -> Option<f64> {
+    values.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = values.iter().map(|v| v.1).sum();
+    let mut seen = 0.0;
+    for (value, weight) in &values {
+        seen += weight;
+        if seen >= share * total {
+            return Some(*value);
+        }
+    }
+    values.last().map(|v| v.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn weighted_quantile_walks_the_weight_smallest_first() {
+        let values = vec![(3.0, 1.0), (1.0, 1.0), (2.0, 8.0)];
+        assert_eq!(weighted_quantile(values.clone(), 0.1), Some(1.0));
+        assert_eq!(weighted_quantile(values.clone(), 0.5), Some(2.0));
+        assert_eq!(weighted_quantile(values.clone(), 0.95), Some(3.0));
+        assert_eq!(weighted_quantile(Vec::new(), 0.5), None);
+    }
 
     #[test]
     fn frame_is_orthonormal_and_right_handed() {

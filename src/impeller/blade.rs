@@ -15,7 +15,9 @@
 
 use std::collections::HashMap;
 
-use crate::geom::{Point3, Vector3, arc_lengths, closest_point_on_segment, run_on, runs_of_set};
+use crate::geom::{
+    Point3, Vector3, arc_lengths, closest_point_on_segment, run_on, runs_of_set, weighted_quantile,
+};
 use crate::mesh::{Mesh, SectionCurve, level_section};
 
 use super::passage::HubPassage;
@@ -52,7 +54,7 @@ pub fn blade_loops(
     let (blade, height, normals) = blade_heights(mesh, impeller, passage, piece);
 
     // The surface gradient of the height on each triangle, weighted by area.
-    let mut gradients: Vec<(f64, f64)> = blade
+    let gradients: Vec<(f64, f64)> = blade
         .triangles
         .iter()
         .map(|tri| {
@@ -69,17 +71,7 @@ pub fn blade_loops(
         })
         .filter(|(g, _)| *g >= 0.3)
         .collect();
-    gradients.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = gradients.iter().map(|g| g.1).sum();
-    let mut seen = 0.0;
-    let mut steepness = 1.0;
-    for (g, area) in &gradients {
-        seen += area;
-        if seen >= 0.1 * total {
-            steepness = *g;
-            break;
-        }
-    }
+    let steepness = weighted_quantile(gradients, 0.1).unwrap_or(1.0);
     let level_step = (stepover * steepness.min(1.0)).max(1e-3);
     let top = height.iter().copied().fold(0.0, f64::max);
     let section = |level: f64| {

@@ -6,7 +6,7 @@
 //! wall), a stepover apart along the wall where it stands square to the hub (height steps of
 //! the stepover times the wall's steepness there, its low percentile, as round a blade).
 
-use crate::geom::{Point3, Vector3};
+use crate::geom::{Point3, Vector3, weighted_quantile};
 use crate::mesh::{Mesh, SectionCurve, level_section};
 
 use super::frame::AxisFrame;
@@ -71,7 +71,7 @@ pub fn bore_loops(mesh: &Mesh, impeller: &Impeller, frame: &AxisFrame, stepover:
             (lo.min(*h), hi.max(*h))
         });
     // The height changes along the wall by the sine of its steepness: 1 on a cylinder.
-    let mut steepness: Vec<(f64, f64)> = normals
+    let steepness: Vec<(f64, f64)> = normals
         .iter()
         .enumerate()
         .map(|(t, n)| {
@@ -82,17 +82,7 @@ pub fn bore_loops(mesh: &Mesh, impeller: &Impeller, frame: &AxisFrame, stepover:
             })
         })
         .collect();
-    steepness.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = steepness.iter().map(|s| s.1).sum();
-    let mut seen = 0.0;
-    let mut least = 1.0;
-    for (s, area) in &steepness {
-        seen += area;
-        if seen >= 0.1 * total {
-            least = *s;
-            break;
-        }
-    }
+    let least = weighted_quantile(steepness, 0.1).unwrap_or(1.0);
     let level_step = (stepover * least).max(1e-3);
     // Levels from half a step below the top to half a step above the bottom, evenly.
     let span = high - low;

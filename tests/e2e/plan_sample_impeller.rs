@@ -358,9 +358,10 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
         "{painted} vs {whole}"
     );
     assert!(out.scallop_pictures[1].1.starts_with(b"\x89PNG"));
+    // Within, over, far over, narrow, blocked, not reached, the table.
     assert_eq!(
         report.finish_scallop_colours.as_ref().map(Vec::len),
-        Some(6)
+        Some(7)
     );
 
     // --- Determinism across thread counts ------------------------------------------------
