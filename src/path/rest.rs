@@ -234,14 +234,7 @@ pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
     for (i, g) in gaps.iter().enumerate() {
         cells.entry(key(&g.point)).or_default().push(i);
     }
-    let mut parent: Vec<usize> = (0..gaps.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
+    let mut groups = Groups::new(gaps.len());
     for (i, g) in gaps.iter().enumerate() {
         let [x, y, z] = key(&g.point);
         for dx in -1..=1 {
@@ -252,26 +245,14 @@ pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
                     };
                     for &j in near {
                         if j < i && (gaps[j].point - g.point).norm() <= join {
-                            let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                            // The smaller index roots: the clusters' order is the gaps'.
-                            parent[a.max(b)] = a.min(b);
+                            groups.join(i, j);
                         }
                     }
                 }
             }
         }
     }
-    let mut index: HashMap<usize, usize> = HashMap::new();
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    for i in 0..gaps.len() {
-        let r = root(&mut parent, i);
-        let slot = *index.entry(r).or_insert_with(|| {
-            out.push(Vec::new());
-            out.len() - 1
-        });
-        out[slot].push(i);
-    }
-    out
+    groups.members()
 }
 
 /// Places on one ridge joined: two places whose middles are within `join_along` of each
@@ -288,14 +269,7 @@ pub fn ridges(
         .iter()
         .map(|members| place_frame(gaps, members))
         .collect();
-    let mut parent: Vec<usize> = (0..places.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
+    let mut groups = Groups::new(places.len());
     let same_way = 25f64.to_radians().cos();
     for i in 0..places.len() {
         let Some((mi, ni, di)) = frames[i] else {
@@ -311,25 +285,64 @@ pub fn ridges(
             }
             let across = ni.cross(&di);
             if d.dot(&across).abs() <= join_across && d.dot(&ni).abs() <= join_across {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
+                groups.join(i, j);
             }
         }
     }
-    let mut index: HashMap<usize, usize> = HashMap::new();
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    for (i, members) in places.iter().enumerate() {
-        let r = root(&mut parent, i);
-        let slot = *index.entry(r).or_insert_with(|| {
-            out.push(Vec::new());
-            out.len() - 1
-        });
-        out[slot].extend_from_slice(members);
+    groups
+        .members()
+        .into_iter()
+        .map(|joined| {
+            let mut members: Vec<usize> = joined
+                .iter()
+                .flat_map(|&k| places[k].iter().copied())
+                .collect();
+            members.sort_unstable();
+            members
+        })
+        .collect()
+}
+
+/// Items joined into groups (union–find), each group rooted at its smallest item.
+struct Groups {
+    parent: Vec<usize>,
+}
+
+impl Groups {
+    fn new(count: usize) -> Self {
+        Self {
+            parent: (0..count).collect(),
+        }
     }
-    for members in &mut out {
-        members.sort_unstable();
+
+    fn root(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
     }
-    out
+
+    fn join(&mut self, a: usize, b: usize) {
+        let (a, b) = (self.root(a), self.root(b));
+        // The smaller item roots: the groups come in the order of their first items.
+        self.parent[a.max(b)] = a.min(b);
+    }
+
+    /// The groups, each's items in order, in the order of their first items.
+    fn members(mut self) -> Vec<Vec<usize>> {
+        let mut slot_of_root: HashMap<usize, usize> = HashMap::new();
+        let mut out: Vec<Vec<usize>> = Vec::new();
+        for i in 0..self.parent.len() {
+            let root = self.root(i);
+            let slot = *slot_of_root.entry(root).or_insert_with(|| {
+                out.push(Vec::new());
+                out.len() - 1
+            });
+            out[slot].push(i);
+        }
+        out
+    }
 }
 
 /// A place's middle, mean normal and the direction its passes run in (in the tangent plane,
