@@ -89,8 +89,9 @@ pub struct ImpellerSection {
     pub tip: bool,
     /// Rest passes: the first passage as planned is measured against its balls, and a pass is
     /// added along each place left over the scallop target (where the part departs from the
-    /// surface the strategies space their passes by), copied with the passage. Off: faster,
-    /// and the report's scallop shows what they would have mended.
+    /// surface the strategies space their passes by), copied with the passage; then the same
+    /// over what the parallel planes finish (a wall they cross at a slant, the ends of their
+    /// pieces). Off: faster, and the report's scallop shows what they would have mended.
     pub rest: bool,
 }
 

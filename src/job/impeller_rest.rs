@@ -24,11 +24,7 @@ use crate::path::{
 const ROUNDS: usize = 2;
 
 /// Distance between the samples of the passage, mm: several per stepover.
-const SAMPLE_SPACING: f64 = 0.1;
-
-/// Gaps up to this deep are the passes' to close, mm; a sample farther from every ball is out
-/// of their reach (the tool cannot get there, or another strategy finishes it).
-const REACH: f64 = 0.2;
+pub(super) const PASSAGE_SAMPLE_SPACING: f64 = 0.1;
 
 /// Places on one ridge this far apart are run as one pass, mm: cutting the stretch between
 /// (at 2000 mm/min, 0.1 s) costs less than linking to a pass of its own.
@@ -36,6 +32,24 @@ const JOIN_ALONG: f64 = 4.0;
 
 /// Neighbouring passages measured on either side: a swept blade wraps more than a pitch.
 const NEIGHBOURS: i32 = 2;
+
+/// Gaps up to this deep are the passage's passes' to close, mm; a sample farther from every
+/// ball is out of their reach (the tool cannot get there, or another strategy finishes it).
+pub(super) const PASSAGE_REACH: f64 = 0.2;
+
+/// The samples of passage 0 among the passes of the passages up to [`NEIGHBOURS`] on either
+/// side: a sample of passage 0 among the passes of passage k is the sample turned back by k
+/// pitches among passage 0's.
+pub(super) fn passage_views(passage: &HubPassage) -> Vec<nalgebra::Isometry3<f64>> {
+    (-NEIGHBOURS..=NEIGHBOURS)
+        .map(|k| {
+            let turn = nalgebra::UnitQuaternion::from_rotation_matrix(
+                &passage.frame.turn(k as f64 * passage.pitch),
+            );
+            nalgebra::Isometry3::rotation_wrt_point(turn, passage.frame.centre)
+        })
+        .collect()
+}
 
 /// What the rest passes of the first passage found and planned.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -68,17 +82,31 @@ pub(super) struct RestTarget<'a> {
     pub may_reverse: bool,
 }
 
-/// Plans the rest passes of the first passage into `targets`. `target_of` says which
-/// target's surface a triangle of `part` is (`None`: not the first passage's, or not the
-/// impeller strategies'); `swarf` are runs whose flutes cut (`flutes_above_ball` mm of them).
-#[allow(clippy::too_many_arguments)]
+/// Where rest passes look and what else cuts there.
+pub(super) struct RestScope<'a> {
+    /// Which target's surface a triangle of the part is (`None`: not measured).
+    pub target_of: &'a (dyn Fn(usize) -> Option<usize> + Sync),
+    /// Where a sample stands among the passes: the identity, and for passes that will be
+    /// copied, the sample turned back by each copy's turn.
+    pub views: &'a [nalgebra::Isometry3<f64>],
+    /// Other passes that cut there, each with how far above the ball its flutes cut (0: the
+    /// ball alone).
+    pub others: &'a [(&'a Finishing, f64)],
+    /// Deepest gap measured, mm (farther from every ball: not reached).
+    pub reach: f64,
+    /// Distance between the samples, mm.
+    pub sample_spacing: f64,
+    /// Run a place no wider than a stepover along its own length when it runs across its
+    /// passes (see [`crate::path::RestOptions::thin`]).
+    pub run_thin_places_along: bool,
+}
+
+/// Plans rest passes into `targets` where the passes leave more than the target over the
+/// surface `scope` measures.
 pub(super) fn rest_passes(
     part: &Mesh,
-    passage: &HubPassage,
     targets: &mut [RestTarget],
-    target_of: &(dyn Fn(usize) -> Option<usize> + Sync),
-    swarf: Option<&Finishing>,
-    flutes_above_ball: f64,
+    scope: &RestScope,
     options: &FinishingOptions,
 ) -> RestSummary {
     let Some(ctx) = targets.first().map(|t| t.ctx) else {
@@ -89,33 +117,25 @@ pub(super) fn rest_passes(
     let rest_options = RestOptions {
         ball_radius: radius,
         scallop_height: options.scallop_height,
-        sample_spacing: SAMPLE_SPACING,
-        reach: REACH,
+        sample_spacing: scope.sample_spacing,
+        reach: scope.reach,
         overlap: 0.5 * stepover,
         step: 0.25,
+        thin: scope.run_thin_places_along.then_some(stepover),
     };
+    let target_of = scope.target_of;
     let surface = ctx.part.surface();
-    let mut swept = SweptTool::new(radius, REACH);
+    let mut swept = SweptTool::new(radius, scope.reach);
     for target in targets.iter() {
         for segment in &target.finishing.segments {
             swept.insert(segment, 0.0, options.scallop_height);
         }
     }
-    if let Some(swarf) = swarf {
-        for segment in &swarf.segments {
-            swept.insert(segment, flutes_above_ball, options.scallop_height);
+    for (other, flutes_above_ball) in scope.others {
+        for segment in &other.segments {
+            swept.insert(segment, *flutes_above_ball, options.scallop_height);
         }
     }
-    // A sample of passage 0 among the passes of passage k is the sample turned back by k
-    // pitches among passage 0's.
-    let views: Vec<nalgebra::Isometry3<f64>> = (-NEIGHBOURS..=NEIGHBOURS)
-        .map(|k| {
-            let turn = nalgebra::UnitQuaternion::from_rotation_matrix(
-                &passage.frame.turn(k as f64 * passage.pitch),
-            );
-            nalgebra::Isometry3::rotation_wrt_point(turn, passage.frame.centre)
-        })
-        .collect();
     let sampled: Vec<bool> = (0..part.triangles.len())
         .map(|t| target_of(t).is_some())
         .collect();
@@ -130,7 +150,7 @@ pub(super) fn rest_passes(
         ..RestSummary::default()
     };
     for round in 0..=ROUNDS {
-        let found = gaps(part, surface, &sampled, &swept, &views, &rest_options);
+        let found = gaps(part, surface, &sampled, &swept, scope.views, &rest_options);
         let over_target_mm2 = found.iter().map(|g| g.area).sum();
         let max_mm = found.iter().map(|g| g.height).fold(0.0, f64::max);
         if round == ROUNDS || found.is_empty() {
@@ -140,9 +160,10 @@ pub(super) fn rest_passes(
         }
         let places = ridges(
             &found,
-            &clusters(&found, 1.5 * SAMPLE_SPACING),
+            &clusters(&found, 1.5 * scope.sample_spacing),
             JOIN_ALONG,
             0.5 * stepover,
+            rest_options.thin,
         );
         // Each place's curve, to the target most of its samples are on.
         let mut curves: Vec<Vec<SectionCurve>> = vec![Vec::new(); targets.len()];

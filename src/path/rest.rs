@@ -20,7 +20,12 @@
 //!   across it bin by bin, run on past both ends by `overlap`, projected onto the part. A
 //!   ball along it halves the spacing where the neighbours were too far apart. (A ball
 //!   crossing a ridge closes it only for a stepover's width: tried on places joined across
-//!   neighbouring ridges, three rounds left a third of the area.)
+//!   neighbouring ridges, three rounds left a third of the area.) A place no wider than a
+//!   stepover that runs across its passes — a band along an edge where they stop, a low
+//!   wall they cross at a slant, each stretch between two passes a place of its own — is
+//!   run along its own length instead, the stretches joined: one ball closes the band.
+//!   Samples on two faces of an edge are two places (a face no tool reaches beside one it
+//!   does).
 //!
 //! The estimate is the planner's own: the report's scallop is measured afterwards on the
 //! posted program by [`crate::verify`], with rays along the normals, by code this does not
@@ -51,6 +56,12 @@ pub struct RestOptions {
     pub overlap: f64,
     /// Distance between a rest curve's points, mm.
     pub step: f64,
+    /// A place at most this wide across its length and longer than twice that is run along
+    /// its length, whichever way the passes beside it run (a band along an edge the passes
+    /// stop at, or a wall the passes cross at a slant): one ball along its middle closes it,
+    /// where rest curves along the passes would take one per gap between them. The stepover;
+    /// `None`: every place runs along its passes.
+    pub thin: Option<f64>,
 }
 
 /// A sample of the part left over the target.
@@ -143,13 +154,21 @@ impl SweptTool {
         }
     }
 
-    /// The distance from `p` to the nearest swept body (0 inside one) and the direction that
-    /// body runs in, when one is within the reach.
-    pub fn gap(&self, p: &Point3) -> Option<(f64, Vector3)> {
+    /// The distance from `p` (on the part, outward `normal`) to the nearest swept body in
+    /// front of it (0 inside one) and the direction that body runs in, when one is within
+    /// the reach. In front: the body's axis at least half the radius above `p`'s tangent
+    /// plane (a ball touching the face stands a radius above it). Others are a neighbouring
+    /// face's across a convex edge, or the far side's of a thin wall (a disc 1 mm thick: the
+    /// hub's balls 1 mm above its underside), and leave no scallop on this face.
+    pub fn gap(&self, p: &Point3, normal: &Vector3) -> Option<(f64, Vector3)> {
         let mut best: Option<(f64, u32)> = None;
         for &i in self.cells.get(&self.key(p))? {
             let [a, b] = self.capsules[i as usize];
-            let d = (closest_point_on_segment(p, &a, &b) - p).norm() - self.radius;
+            let nearest = closest_point_on_segment(p, &a, &b) - p;
+            if nearest.dot(normal) < 0.5 * self.radius {
+                continue;
+            }
+            let d = nearest.norm() - self.radius;
             if d <= self.reach && best.is_none_or(|(e, j)| d < e || (d == e && i < j)) {
                 best = Some((d, i));
             }
@@ -202,7 +221,10 @@ pub fn gaps(
                 let (height, along) = views
                     .iter()
                     .filter_map(|view| {
-                        let (h, d) = swept.gap(&view.transform_point(&point))?;
+                        let (h, d) = swept.gap(
+                            &view.transform_point(&point),
+                            &view.transform_vector(&normal),
+                        )?;
                         Some((h, view.inverse_transform_vector(&d)))
                     })
                     .min_by(|x, y| x.0.total_cmp(&y.0))?;
@@ -226,9 +248,16 @@ pub fn gaps(
         .collect()
 }
 
-/// The gaps in clusters: joined when within `join` of each other, each cluster's members in
-/// the order of `gaps`, clusters in the order of their first member.
+/// Neighbouring samples whose normals differ by more than this are on two faces of an edge:
+/// a rest curve keeps to one face, and a place on a face no tool reaches (an underside
+/// beside the edge) stays apart from the one on the face beside it that a tool does.
+const SAME_FACE_DEG: f64 = 35.0;
+
+/// The gaps in clusters: joined when within `join` of each other and on one face (normals
+/// within [`SAME_FACE_DEG`]), each cluster's members in the order of `gaps`, clusters in the
+/// order of their first member.
 pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
+    let same_face = SAME_FACE_DEG.to_radians().cos();
     let key = |p: &Point3| [0, 1, 2].map(|k| (p[k] / join).floor() as i64);
     let mut cells: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
     for (i, g) in gaps.iter().enumerate() {
@@ -244,7 +273,10 @@ pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
                         continue;
                     };
                     for &j in near {
-                        if j < i && (gaps[j].point - g.point).norm() <= join {
+                        if j < i
+                            && (gaps[j].point - g.point).norm() <= join
+                            && gaps[j].normal.dot(&g.normal) >= same_face
+                        {
                             groups.join(i, j);
                         }
                     }
@@ -256,21 +288,24 @@ pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
 }
 
 /// Places on one ridge joined: two places whose middles are within `join_along` of each
-/// other, whose passes run the same way (within 25°) and which lie within `join_across` of
+/// other, whose passes run the same way (within [`SAME_WAY_DEG`]) and which lie within `join_across` of
 /// each other's line across it and off it: one pass along both costs less than a link to
-/// each. Places in the order of their first member, members in order.
+/// each. Given `thin`, a place at most that wide runs its own length's way instead of its
+/// passes' (see [`RestOptions::thin`]), and joins the places along that. Places in the order of their
+/// first member, members in order.
 pub fn ridges(
     gaps: &[Gap],
     places: &[Vec<usize>],
     join_along: f64,
     join_across: f64,
+    thin: Option<f64>,
 ) -> Vec<Vec<usize>> {
     let frames: Vec<Option<(Point3, Vector3, Vector3)>> = places
         .iter()
-        .map(|members| place_frame(gaps, members))
+        .map(|members| place_frame(gaps, members, thin))
         .collect();
     let mut groups = Groups::new(places.len());
-    let same_way = 25f64.to_radians().cos();
+    let same_way = SAME_WAY_DEG.to_radians().cos();
     for i in 0..places.len() {
         let Some((mi, ni, di)) = frames[i] else {
             continue;
@@ -302,6 +337,9 @@ pub fn ridges(
         })
         .collect()
 }
+
+/// Places whose ways differ by less than this run the same way, degrees.
+const SAME_WAY_DEG: f64 = 25.0;
 
 /// Items joined into groups (union–find), each group rooted at its smallest item.
 struct Groups {
@@ -345,9 +383,15 @@ impl Groups {
     }
 }
 
-/// A place's middle, mean normal and the direction its passes run in (in the tangent plane,
-/// the samples' swept bodies' directions taken the same way round as the first's).
-fn place_frame(gaps: &[Gap], members: &[usize]) -> Option<(Point3, Vector3, Vector3)> {
+/// A place's middle, mean normal and the direction a rest curve runs along it (in the
+/// tangent plane): its passes' (the samples' swept bodies' directions taken the same way
+/// round as the first's), or, given `thin`, its own length's where it is at most that wide,
+/// longer than twice that, and runs more than [`SAME_WAY_DEG`] off its passes.
+fn place_frame(
+    gaps: &[Gap],
+    members: &[usize],
+    thin: Option<f64>,
+) -> Option<(Point3, Vector3, Vector3)> {
     let first = gaps[*members.first()?].along;
     let middle = Point3::from(
         members
@@ -369,7 +413,37 @@ fn place_frame(gaps: &[Gap], members: &[usize]) -> Option<(Point3, Vector3, Vect
         })
         .sum::<Vector3>();
     let along = (along - normal * along.dot(&normal)).try_normalize(1e-9)?;
-    Some((middle, normal, along))
+    // The samples' principal direction in the tangent plane, as an angle from `along`.
+    let across = normal.cross(&along);
+    let (mut aa, mut ab, mut bb) = (0.0, 0.0, 0.0);
+    for &i in members {
+        let d = gaps[i].point - middle;
+        let (a, b) = (d.dot(&along), d.dot(&across));
+        aa += a * a;
+        ab += a * b;
+        bb += b * b;
+    }
+    let angle = 0.5 * (2.0 * ab).atan2(aa - bb);
+    let Some(thin) = thin.filter(|_| angle.abs() > SAME_WAY_DEG.to_radians()) else {
+        return Some((middle, normal, along));
+    };
+    let length = along * angle.cos() + across * angle.sin();
+    let width = normal.cross(&length);
+    let extent = |direction: &Vector3| {
+        let (lo, hi) = members
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
+                let t = (gaps[i].point - middle).dot(direction);
+                (lo.min(t), hi.max(t))
+            });
+        hi - lo
+    };
+    let wide = extent(&width);
+    if wide <= thin && extent(&length) >= 2.0 * wide {
+        Some((middle, normal, length))
+    } else {
+        Some((middle, normal, along))
+    }
 }
 
 /// The rest curve along the ridge of a cluster of `gaps` (indices `members`): see the module
@@ -382,13 +456,15 @@ pub fn rest_curve(
     surface: &SurfaceDistance,
     options: &RestOptions,
 ) -> Option<SectionCurve> {
-    let (middle, normal, along) = place_frame(gaps, members)?;
-    let across = normal.cross(&along);
-    let placed: Vec<(f64, f64, f64)> = members
+    let (middle, _, along) = place_frame(gaps, members, options.thin)?;
+    // Each sample: how far along, its offsets across and off the tangent plane (a place
+    // along a curved edge bows off its chord), and its weight, how far over the target.
+    let placed: Vec<(f64, Vector3, f64)> = members
         .iter()
         .map(|&i| {
             let d = gaps[i].point - middle;
-            (d.dot(&along), d.dot(&across), gaps[i].height)
+            let s = d.dot(&along);
+            (s, d - along * s, gaps[i].height - options.scallop_height)
         })
         .collect();
     let (lo, hi) = placed.iter().fold(
@@ -397,40 +473,40 @@ pub fn rest_curve(
     );
     let (start, end) = (lo - options.overlap, hi + options.overlap);
     let steps = ((end - start) / options.step.max(1e-3)).ceil().max(1.0) as usize;
-    // Across, bin by bin: the samples' middle weighted by how far over the target they are
-    // (the ridge), the nearest bin's where a bin (past the ends) has none.
+    let at = |k: usize| start + (end - start) * k as f64 / steps as f64;
+    // Bin by bin, the samples' middle weighted by how far over the target they are (the
+    // ridge); between bins with samples, straight across; past them, the end bins'.
     let bin = options.step.max(0.5 * options.sample_spacing);
-    let offsets: Vec<Option<f64>> = (0..=steps)
-        .map(|k| {
-            let s = start + (end - start) * k as f64 / steps as f64;
-            let (sum, weight) = placed.iter().filter(|(t, _, _)| (t - s).abs() <= bin).fold(
-                (0.0, 0.0),
-                |(sum, weight), &(_, l, h)| {
-                    let w = h - options.scallop_height;
-                    (sum + w * l, weight + w)
-                },
-            );
-            (weight > 0.0).then(|| sum / weight)
+    let known: Vec<(usize, Vector3)> = (0..=steps)
+        .filter_map(|k| {
+            let s = at(k);
+            let (sum, weight) = placed
+                .iter()
+                .filter(|(t, _, _)| (t - s).abs() <= bin)
+                .fold((Vector3::zeros(), 0.0), |(sum, weight), &(_, off, w)| {
+                    (sum + off * w, weight + w)
+                });
+            (weight > 0.0).then(|| (k, sum / weight))
         })
         .collect();
-    let known: Vec<(usize, f64)> = offsets
-        .iter()
-        .enumerate()
-        .filter_map(|(k, o)| o.map(|o| (k, o)))
-        .collect();
-    if known.is_empty() {
-        return None;
-    }
+    let (first, last) = (known.first()?, known.last()?);
+    let mut next = 0;
     let points: Vec<DrivePoint> = (0..=steps)
         .filter_map(|k| {
-            let offset = offsets[k].unwrap_or_else(|| {
-                known
-                    .iter()
-                    .min_by_key(|(j, _)| j.abs_diff(k))
-                    .map_or(0.0, |&(_, o)| o)
-            });
-            let s = start + (end - start) * k as f64 / steps as f64;
-            let guess = middle + along * s + across * offset;
+            while next < known.len() && known[next].0 < k {
+                next += 1;
+            }
+            let offset = if k <= first.0 {
+                first.1
+            } else if k >= last.0 {
+                last.1
+            } else if known[next].0 == k {
+                known[next].1
+            } else {
+                let ((k0, o0), (k1, o1)) = (known[next - 1], known[next]);
+                o0 + (o1 - o0) * ((k - k0) as f64 / (k1 - k0) as f64)
+            };
+            let guess = middle + along * at(k) + offset;
             let on = surface.closest(&guess, options.ball_radius)?;
             Some(DrivePoint {
                 point: on.point,
@@ -462,6 +538,7 @@ mod tests {
             reach: 0.2,
             overlap: 0.4,
             step: 0.25,
+            thin: Some(0.4),
         }
     }
 
@@ -611,10 +688,12 @@ mod tests {
         let at_side = Point3::new(20.0, 10.0, 4.0);
         let mut balls = SweptTool::new(RADIUS, 0.2);
         balls.insert(&segment, 0.0, TARGET);
-        assert!(balls.gap(&at_side).is_none());
+        assert!(balls.gap(&at_side, &Vector3::x()).is_none());
         let mut flutes = SweptTool::new(RADIUS, 0.2);
         flutes.insert(&segment, 8.0, TARGET);
-        let (gap, _) = flutes.gap(&at_side).expect("the flutes come near");
+        let (gap, _) = flutes
+            .gap(&at_side, &Vector3::x())
+            .expect("the flutes come near");
         assert!(gap < 1e-9, "{gap}");
     }
 
@@ -637,7 +716,7 @@ mod tests {
             speck(9.0, 0.0),
         ];
         let places: Vec<Vec<usize>> = (0..found.len()).map(|i| vec![i]).collect();
-        let joined = ridges(&found, &places, 4.0, 0.2);
+        let joined = ridges(&found, &places, 4.0, 0.2, None);
         assert_eq!(joined, vec![vec![0, 1], vec![2], vec![3]]);
         // With the passes along y, the ridges run along y: the specks 0.4 apart in y join,
         // those apart in x do not.
@@ -649,8 +728,233 @@ mod tests {
             })
             .collect();
         assert_eq!(
-            ridges(&across, &places, 4.0, 0.2),
+            ridges(&across, &places, 4.0, 0.2, None),
             vec![vec![0, 2], vec![1], vec![3]]
+        );
+    }
+
+    /// A pass of balls with centres at `centres` (the axis along +z; only the ball counts).
+    fn pass_through(centres: &[Point3], along: Vector3) -> CutSegment {
+        let axis = Direction::new_normalize(Vector3::z());
+        CutSegment {
+            poses: centres
+                .iter()
+                .map(|c| ToolPose {
+                    tip: c - Vector3::z() * RADIUS,
+                    axis,
+                })
+                .collect(),
+            pass_directions: vec![along; centres.len()],
+            leads: false,
+        }
+    }
+
+    #[test]
+    fn the_balls_over_a_thin_plate_leave_no_gap_on_its_underside() {
+        // A plate 1 mm thick, its top passed 0.3 mm apart; measured out to 2 mm, the underside
+        // is 1 mm from the balls (through the plate), and none of them is in front of it.
+        let part = cuboid(20.0, 20.0, 1.0);
+        let mut swept = SweptTool::new(RADIUS, 2.0);
+        for k in 0..=66 {
+            let y = 0.3 * k as f64 - 4.0;
+            let centres: Vec<Point3> = (0..=50)
+                .map(|i| Point3::new(-5.0 + 0.6 * i as f64, y, 1.0 + RADIUS))
+                .collect();
+            swept.insert(&pass_through(&centres, Vector3::x()), 0.0, TARGET);
+        }
+        let surface = SurfaceDistance::new(&part);
+        let underside: Vec<bool> = (0..part.triangles.len())
+            .map(|t| part.face_normal(t).z < -0.9)
+            .collect();
+        let wide = RestOptions {
+            reach: 2.0,
+            ..options()
+        };
+        let views = [Isometry3::identity()];
+        assert!(gaps(&part, &surface, &underside, &swept, &views, &wide).is_empty());
+        // The same balls' distance from the underside, facing or not, is 1 mm.
+        let p = Point3::new(10.0, 10.0, 0.0);
+        assert!(swept.gap(&p, &-Vector3::z()).is_none());
+        let (through, _) = swept.gap(&p, &Vector3::z()).expect("within reach");
+        assert!((through - 1.0).abs() < 0.01, "{through}");
+    }
+
+    /// A slab 0.3 mm thick whose side x = 20 (a low wall) the passes cross downwards at
+    /// y = 0, 2, …, 20, 2 mm apart: between each two a place 2 mm long and 0.3 high.
+    fn low_wall_crossed_by_passes() -> (Mesh, Vec<bool>, SweptTool, RestOptions) {
+        // The wall in strips 0.2 mm wide (sampled evenly), the top and bottom fans to them.
+        let h = 0.3;
+        let mut positions = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.0, 20.0, 0.0),
+            Point3::new(0.0, 20.0, h),
+            Point3::new(0.0, 0.0, h),
+        ];
+        for k in 0..=100 {
+            positions.push(Point3::new(20.0, 0.2 * k as f64, 0.0));
+            positions.push(Point3::new(20.0, 0.2 * k as f64, h));
+        }
+        let (bottom, top) = (|k: u32| 4 + 2 * k, |k: u32| 5 + 2 * k);
+        let mut triangles = vec![
+            [0, 3, 2],
+            [0, 2, 1],
+            [0, bottom(0), top(0)],
+            [0, top(0), 3],
+            [1, top(100), bottom(100)],
+            [1, 2, top(100)],
+            [3, top(100), 2],
+            [0, 1, bottom(100)],
+        ];
+        for k in 0..100 {
+            triangles.push([bottom(k), bottom(k + 1), top(k + 1)]);
+            triangles.push([bottom(k), top(k + 1), top(k)]);
+            triangles.push([3, top(k), top(k + 1)]);
+            triangles.push([0, bottom(k + 1), bottom(k)]);
+        }
+        let part = Mesh {
+            positions,
+            triangles,
+        };
+        let wall: Vec<bool> = (0..part.triangles.len())
+            .map(|t| part.face_normal(t).x > 0.9)
+            .collect();
+        let options = RestOptions {
+            reach: 0.5,
+            ..options()
+        };
+        let mut swept = SweptTool::new(RADIUS, options.reach);
+        for k in 0..=10 {
+            let y = 2.0 * k as f64;
+            let down: Vec<Point3> = (0..=6)
+                .map(|i| Point3::new(20.0 + RADIUS, y, 0.3 - 0.05 * i as f64))
+                .collect();
+            swept.insert(&pass_through(&down, -Vector3::z()), 0.0, TARGET);
+        }
+        (part, wall, swept, options)
+    }
+
+    #[test]
+    fn a_low_wall_the_passes_cross_is_run_along_its_length_in_one_pass() {
+        let (part, wall, mut swept, options) = low_wall_crossed_by_passes();
+        let surface = SurfaceDistance::new(&part);
+        let views = [Isometry3::identity()];
+        let found = gaps(&part, &surface, &wall, &swept, &views, &options);
+        let places = clusters(&found, 1.5 * options.sample_spacing);
+        assert_eq!(places.len(), 10, "one between each two passes");
+        // Along their passes (down the wall) the places stay ten; along their length they
+        // join into one, and its curve runs the wall's length at mid-height.
+        assert_eq!(ridges(&found, &places, 4.0, 0.2, None).len(), 10);
+        let joined = ridges(&found, &places, 4.0, 0.2, options.thin);
+        assert_eq!(joined.len(), 1);
+        let curve = rest_curve(&found, &joined[0], &part, &surface, &options).expect("a curve");
+        // (Run on past the wall's ends, it rounds the corners onto the slab's ends.)
+        for p in curve
+            .points
+            .iter()
+            .filter(|p| p.point.y > 0.0 && p.point.y < 20.0)
+        {
+            assert!(
+                (p.point.x - 20.0).abs() < 1e-9 && p.normal.x > 0.999,
+                "{p:?}"
+            );
+            assert!((p.point.z - 0.15).abs() < 0.05, "{p:?}");
+        }
+        let ys: Vec<f64> = curve.points.iter().map(|p| p.point.y).collect();
+        let (lo, hi) = (ys[0].min(ys[ys.len() - 1]), ys[0].max(ys[ys.len() - 1]));
+        assert!(lo < 0.5 && hi > 19.5, "{ys:?}");
+        // A ball along it closes the wall.
+        let centres: Vec<Point3> = curve
+            .points
+            .iter()
+            .map(|p| p.point + p.normal * RADIUS)
+            .collect();
+        swept.insert(&pass_through(&centres, Vector3::y()), 0.0, TARGET);
+        assert!(gaps(&part, &surface, &wall, &swept, &views, &options).is_empty());
+    }
+
+    #[test]
+    fn samples_on_two_faces_of_an_edge_are_two_places() {
+        let sample = |point: Point3, normal: Vector3| Gap {
+            point,
+            normal,
+            height: 0.05,
+            triangle: 0,
+            area: 0.01,
+            along: Vector3::y(),
+        };
+        // Along the edge x = 20, z = 5 of a box: on its top and on its side, 0.1 mm apart.
+        let mut found = Vec::new();
+        for k in 0..10 {
+            let y = 0.1 * k as f64;
+            found.push(sample(Point3::new(19.95, y, 5.0), Vector3::z()));
+            found.push(sample(Point3::new(20.0, y, 4.95), Vector3::x()));
+        }
+        let places = clusters(&found, 0.15);
+        assert_eq!(places.len(), 2);
+        for place in &places {
+            let first = found[place[0]].normal;
+            assert!(place.iter().all(|&i| found[i].normal == first));
+        }
+    }
+
+    #[test]
+    fn a_rest_curve_along_a_band_round_a_curved_wall_keeps_to_the_wall() {
+        // A disc 0.3 mm thick, radius 10 (a 360-gon), and a band round a quarter of its rim,
+        // crossed by passes running down it (their direction: −z).
+        let (radius, height, sides) = (10.0, 0.3, 360u32);
+        let mut positions = vec![Point3::origin(), Point3::new(0.0, 0.0, height)];
+        for k in 0..sides {
+            let a = std::f64::consts::TAU * k as f64 / sides as f64;
+            let (x, y) = (radius * a.cos(), radius * a.sin());
+            positions.push(Point3::new(x, y, 0.0));
+            positions.push(Point3::new(x, y, height));
+        }
+        let mut triangles = Vec::new();
+        for k in 0..sides {
+            let (b0, t0) = (2 + 2 * k, 3 + 2 * k);
+            let (b1, t1) = (2 + 2 * ((k + 1) % sides), 3 + 2 * ((k + 1) % sides));
+            triangles.extend([[b0, b1, t1], [b0, t1, t0], [0, b1, b0], [1, t0, t1]]);
+        }
+        let part = Mesh {
+            positions,
+            triangles,
+        };
+        let surface = SurfaceDistance::new(&part);
+        let mut found = Vec::new();
+        for k in 0..=900 {
+            let a = (k as f64 * 0.1).to_radians() - std::f64::consts::FRAC_PI_4;
+            let radial = Vector3::new(a.cos(), a.sin(), 0.0);
+            for z in [0.05, 0.15, 0.25] {
+                // On the polygon's side (inside the circle by at most its sagitta).
+                let on = surface.closest(&(Point3::from(radial * radius) + Vector3::z() * z), 1.0);
+                let on = on.expect("on the wall").point;
+                found.push(Gap {
+                    point: on,
+                    normal: radial,
+                    height: 0.05,
+                    triangle: 0,
+                    area: 0.01,
+                    along: -Vector3::z(),
+                });
+            }
+        }
+        let members: Vec<usize> = (0..found.len()).collect();
+        let curve = rest_curve(&found, &members, &part, &surface, &options()).expect("a curve");
+        // Its chord's middle is 10 (1 − cos 45°) = 2.9 mm inside the wall; the curve is on it.
+        for p in &curve.points {
+            let r = p.point.x.hypot(p.point.y);
+            assert!((r - radius).abs() < 0.01, "{p:?} at radius {r}");
+            assert!((p.point.z - 0.15).abs() < 0.01, "{p:?}");
+            assert!(p.normal.z.abs() < 1e-9, "{p:?}");
+        }
+        let angle = |p: &DrivePoint| p.point.y.atan2(p.point.x).to_degrees();
+        let (first, last) = (
+            angle(&curve.points[0]),
+            angle(&curve.points[curve.points.len() - 1]),
+        );
+        assert!(
+            first.min(last) < -44.0 && first.max(last) > 44.0,
+            "{first}..{last}"
         );
     }
 }
