@@ -27,10 +27,24 @@ pub fn place_ball_from(
     lift: f64,
     radius: f64,
 ) -> Option<Point3> {
-    let mut centre = drive.point + drive.normal * lift;
+    let start = drive.point + drive.normal * lift;
+    let (d, first) = surface.signed_distance(&start)?;
+    if d >= radius {
+        return Some(start);
+    }
+    let mut centre = start;
     for _ in 0..64 {
         let (d, closest) = surface.signed_distance(&centre)?;
         if d >= radius {
+            // Pushed off the face beside the drive point's, the ball may have come off its
+            // own: then into the corner instead, touching both.
+            let lifted_off = (centre - start).dot(&drive.normal);
+            if lifted_off > LIFT_OFF_LIMIT
+                && let Some(cornered) =
+                    slide_into_corner(surface, drive, &start, &first.point, radius)
+            {
+                return Some(cornered);
+            }
             return Some(centre);
         }
         let away = if d > 1e-12 {
@@ -46,6 +60,61 @@ pub fn place_ball_from(
         }
     }
     None
+}
+
+/// A push that lifts the ball this far off the drive point's face (mm) tries the corner
+/// instead: between faces turning by less than 1.8° the lift is less, and leaves no scallop
+/// any target measures.
+const LIFT_OFF_LIMIT: f64 = 1e-3;
+
+/// Bisection steps of the slide into a corner: the ball's radius over 2⁴⁰, far below any
+/// tolerance.
+const SLIDE_STEPS: usize = 40;
+
+/// The ball in a concave corner, touching the drive point's face and the one beside it: from
+/// `start` (the drive face's offset, where the face at `obstacle` comes nearer than the
+/// radius), slid along the drive face, away from the obstacle, to where it first clears the
+/// part; `None` when the push has no component along the face or the slide a crease allows
+/// does not clear. Pushing straight off the obstacle lifts the ball off its own face wherever
+/// the faces meet at less than a right angle: on a bore facetted as a 42-gon (8.6° between
+/// facets) by 0.023 mm at each edge, ridges over the scallop target down every edge.
+fn slide_into_corner(
+    surface: &SurfaceDistance,
+    drive: &DrivePoint,
+    start: &Point3,
+    obstacle: &Point3,
+    radius: f64,
+) -> Option<Point3> {
+    let away = (start - obstacle).try_normalize(1e-12)?;
+    let along_face = (away - drive.normal * away.dot(&drive.normal)).try_normalize(1e-6)?;
+    // Between two planes turning by θ the ball touching both stands r·tan(θ/2) along the
+    // drive face from the crease, the farthest a drive point on that face can be from it;
+    // more, and the obstacle is no such face (a drive point inside a convex stretch, a
+    // fillet tighter than the ball): the push's place then.
+    let turn = away.dot(&drive.normal).clamp(-1.0, 1.0).acos();
+    let farthest = radius * (0.5 * turn).tan() + PLACEMENT_SLACK;
+    if !(farthest.is_finite() && farthest <= radius) {
+        return None;
+    }
+    let clear = |t: f64| {
+        let centre = start + along_face * t;
+        surface
+            .signed_distance(&centre)
+            .is_some_and(|(d, _)| d >= radius)
+    };
+    if !clear(farthest) {
+        return None;
+    }
+    let (mut inside, mut outside) = (0.0, farthest);
+    for _ in 0..SLIDE_STEPS {
+        let middle = 0.5 * (inside + outside);
+        if clear(middle) {
+            outside = middle;
+        } else {
+            inside = middle;
+        }
+    }
+    Some(start + along_face * outside)
 }
 
 #[cfg(test)]
@@ -104,6 +173,67 @@ mod tests {
             (c.x - 17.0).abs() < 1e-6 && (c.z - 3.0).abs() < 1e-6,
             "{c:?}"
         );
+    }
+
+    #[test]
+    fn a_shallow_inside_corner_holds_the_ball_against_both_faces() {
+        // A floor z = 0 for x ≤ 10 and a face rising 10° from x = 10 on: inside, a drive
+        // point on the floor 0.1 mm before the crease.
+        let rise = 10f64.to_radians();
+        let (far_x, far_z) = (10.0 + 20.0 * rise.cos(), 20.0 * rise.sin());
+        let positions = vec![
+            Point3::new(-10.0, 0.0, 0.0),
+            Point3::new(10.0, 0.0, 0.0),
+            Point3::new(far_x, 0.0, far_z),
+            Point3::new(-10.0, 10.0, 0.0),
+            Point3::new(10.0, 10.0, 0.0),
+            Point3::new(far_x, 10.0, far_z),
+            Point3::new(-10.0, 0.0, -5.0),
+            Point3::new(far_x, 0.0, -5.0),
+            Point3::new(-10.0, 10.0, -5.0),
+            Point3::new(far_x, 10.0, -5.0),
+        ];
+        let triangles = vec![
+            // the floor and the rising face (up), the bottom (down)
+            [0, 1, 4],
+            [0, 4, 3],
+            [1, 2, 5],
+            [1, 5, 4],
+            [6, 8, 9],
+            [6, 9, 7],
+            // the ends x = −10 and x = far, the sides y = 0 and y = 10
+            [0, 3, 8],
+            [0, 8, 6],
+            [2, 7, 9],
+            [2, 9, 5],
+            [0, 6, 7],
+            [0, 7, 2],
+            [0, 2, 1],
+            [3, 4, 5],
+            [3, 5, 9],
+            [3, 9, 8],
+        ];
+        let m = Mesh {
+            positions,
+            triangles,
+        };
+        let s = SurfaceDistance::new(&m);
+        let r = 3.0;
+        let d = DrivePoint {
+            point: Point3::new(9.9, 5.0, 0.0),
+            normal: Vector3::z(),
+        };
+        let c = place_ball(&s, &d, r).unwrap();
+        // The corner's ball: on the floor's offset (z = r) and r from the rising face, whose
+        // plane through (10, 0) has the normal (−sin, cos): the centre at x = 10 − r tan(5°).
+        let expected_x = 10.0 - r * (0.5 * rise).tan();
+        assert!((c.z - r).abs() < 1e-6, "{c:?}");
+        assert!(
+            (c.x - expected_x).abs() < 1e-6,
+            "{c:?} against {expected_x}"
+        );
+        let (dist, _) = s.signed_distance(&c).unwrap();
+        assert!((r..r + 1e-6).contains(&dist), "{dist}");
     }
 
     #[test]
