@@ -88,18 +88,20 @@ fn slide_into_corner(
     let away = (start - obstacle).try_normalize(1e-12)?;
     let along_face = (away - drive.normal * away.dot(&drive.normal)).try_normalize(1e-6)?;
     // Between two planes turning by θ the ball touching both stands r·tan(θ/2) along the
-    // drive face from the crease, the farthest a drive point on that face can be from it;
-    // more, and the obstacle is no such face (a drive point inside a convex stretch, a
-    // fillet tighter than the ball): the push's place then.
+    // drive face from the crease, the farthest a drive point on that face can be from it
+    // (twice that searched, a margin for facets not quite planar); more, and the obstacle is
+    // no such face (a fillet tighter than the ball): the push's place then.
     let turn = away.dot(&drive.normal).clamp(-1.0, 1.0).acos();
-    let farthest = radius * (0.5 * turn).tan() + PLACEMENT_SLACK;
+    let farthest = 2.0 * radius * (0.5 * turn).tan() + 1e-6;
     if !(farthest.is_finite() && farthest <= radius) {
         return None;
     }
+    // Slid along the face, the ball stays a radius off it up to the last bit: placed the
+    // slack off it, as the push places it off the obstacle.
+    let lifted = start + drive.normal * PLACEMENT_SLACK;
     let clear = |t: f64| {
-        let centre = start + along_face * t;
         surface
-            .signed_distance(&centre)
+            .signed_distance(&(lifted + along_face * t))
             .is_some_and(|(d, _)| d >= radius)
     };
     if !clear(farthest) {
@@ -114,7 +116,7 @@ fn slide_into_corner(
             inside = middle;
         }
     }
-    Some(start + along_face * outside)
+    Some(lifted + along_face * outside)
 }
 
 #[cfg(test)]
