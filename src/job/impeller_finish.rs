@@ -35,7 +35,7 @@ use crate::impeller::{
     blade_loop_at, blade_loops, blade_section_at, blade_tip_passes, swarf_runs,
 };
 use crate::mesh::Mesh;
-use crate::orient::{away_from_pole, preferred_axis};
+use crate::orient::{AxisTurn, away_from_pole, preferred_axis};
 use crate::path::{
     self, CoverOptions, Covered, CutSegment, Finishing, FinishingContext, FinishingOptions,
     LinkOptions, SweptBalls, TurnedCopy,
@@ -151,13 +151,17 @@ pub struct ImpellerFinishOptions {
     pub swarf: bool,
     /// Passes along the blade's tip where the loops leave its land.
     pub tip: bool,
-    /// Rest passes where the first passage's passes leave the scallop over the target.
+    /// Rest passes where the first passage's passes, then the planes, leave the scallop over
+    /// the target.
     pub rest: bool,
     /// The tool axis at which the machine's rotary axes are singular (part frame).
     pub pole: Vector3,
     /// How the segments will be linked: a swarf run counts as cut only where the tool can
     /// leave its ends to the safe plane.
     pub link: LinkOptions,
+    /// The machine's fastest rotary motion, degrees per minute: a link that turns the
+    /// rotaries lasts at least the turn over this.
+    pub max_rotary_speed: f64,
     /// Corner finishing with a smaller ball: only the band this far (mm) from each blade's and
     /// splitter's root, on the hub beside it and up its sides (the loops, the flow lines
     /// beside it and the root pass), no swarf, tip passes or planes. `None`: the whole part.
@@ -410,6 +414,22 @@ pub fn finish_impeller(
     };
     let mut handled = vec![false; part.triangles.len()];
     let mut summary_visibility = None;
+    // A rest pass goes where it adds the least to the links, their travel and the turn of the
+    // rotaries (as the machine turns them: near C's pole a small change of the tool's axis is
+    // a large turn of C), a degree of which lasts as long as a link's approach feed covers
+    // this many millimetres.
+    let turn = options
+        .axis_smoothing
+        .as_ref()
+        .map_or(AxisTurn::Angle, |s| s.turn);
+    let mm_per_degree = impeller_options.link.approach_feed / impeller_options.max_rotary_speed;
+    let link_cost = |a: &ToolPose, b: &ToolPose| {
+        (b.tip - a.tip).norm()
+            + mm_per_degree
+                * turn
+                    .between(&a.axis.into_inner(), &b.axis.into_inner())
+                    .to_degrees()
+    };
     match HubPassage::new(part, impeller, &passage_options) {
         Ok(passage) => {
             let t = Instant::now();
@@ -828,6 +848,7 @@ pub fn finish_impeller(
                     swarf.iter().map(|s| (s, flutes_above_ball)).collect();
                 let scope = RestScope {
                     target_of: &target_of,
+                    link_cost: &link_cost,
                     views: &passage_views(&passage),
                     others: &others,
                     reach: PASSAGE_REACH,
@@ -999,6 +1020,7 @@ pub fn finish_impeller(
         let others = [(&finishing, 0.0)];
         let scope = RestScope {
             target_of: &target_of,
+            link_cost: &link_cost,
             views: &[nalgebra::Isometry3::identity()],
             others: &others,
             reach: PLANES_REST_REACH,

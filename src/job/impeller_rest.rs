@@ -12,7 +12,7 @@
 
 use serde::Serialize;
 
-use crate::geom::Point3;
+use crate::geom::{Point3, ToolPose};
 use crate::impeller::HubPassage;
 use crate::mesh::{Mesh, SectionCurve};
 use crate::path::{
@@ -86,6 +86,9 @@ pub(super) struct RestTarget<'a> {
 pub(super) struct RestScope<'a> {
     /// Which target's surface a triangle of the part is (`None`: not measured).
     pub target_of: &'a (dyn Fn(usize) -> Option<usize> + Sync),
+    /// What linking from the one pose to the other costs, in millimetres of link: where a
+    /// rest pass goes into its strategy's order.
+    pub link_cost: &'a dyn Fn(&ToolPose, &ToolPose) -> f64,
     /// Where a sample stands among the passes: the identity, and for passes that will be
     /// copied, the sample turned back by each copy's turn.
     pub views: &'a [nalgebra::Isometry3<f64>],
@@ -207,6 +210,7 @@ pub(super) fn rest_passes(
                     &mut target.finishing.segments,
                     vec![segment],
                     target.may_reverse,
+                    scope.link_cost,
                 );
             }
         }

@@ -397,6 +397,7 @@ pub fn plan_operation(
                             rest: setup.impeller.rest,
                             pole: setup.pole(),
                             link: setup.link.clone(),
+                            max_rotary_speed: setup.gcode_options.max_rotary_speed,
                             corner_band,
                         },
                         finished,

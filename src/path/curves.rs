@@ -233,22 +233,24 @@ pub fn turned_copy(
     (copy, stats)
 }
 
-/// Puts the run of `chain` into the order `segments` run in where it lengthens the travel
-/// between them least (before the first, between two, or after the last; the run reversed
-/// too when `may_reverse`): passes added to a planned order without reordering the rest.
+/// Puts the run of `chain` into the order `segments` run in where it adds least to the links
+/// between them, each costing `link_cost` from the last pose of one segment to the first of
+/// the next (before the first, between two, or after the last; the run reversed too when
+/// `may_reverse`): passes added to a planned order without reordering the rest.
 pub fn insert_cheapest(
     segments: &mut Vec<CutSegment>,
     mut chain: Vec<CutSegment>,
     may_reverse: bool,
+    link_cost: &dyn Fn(&ToolPose, &ToolPose) -> f64,
 ) {
-    let start = |s: &CutSegment| s.poses.first().map(|p| p.tip);
-    let end = |s: &CutSegment| s.poses.last().map(|p| p.tip);
+    let start = |s: &CutSegment| s.poses.first().copied();
+    let end = |s: &CutSegment| s.poses.last().copied();
     let (Some(first), Some(last)) = (chain.first().and_then(start), chain.last().and_then(end))
     else {
         return;
     };
-    let gap = |a: Option<Point3>, b: Option<Point3>| match (a, b) {
-        (Some(a), Some(b)) => (b - a).norm(),
+    let gap = |a: Option<ToolPose>, b: Option<ToolPose>| match (a, b) {
+        (Some(a), Some(b)) => link_cost(&a, &b),
         _ => 0.0,
     };
     // (added travel, position, reversed); ties to the earliest, forward first.
@@ -393,7 +395,9 @@ mod tests {
                     }
                 }
                 let mut order = planned.clone();
-                insert_cheapest(&mut order, new.clone(), may_reverse);
+                insert_cheapest(&mut order, new.clone(), may_reverse, &|a, b| {
+                    (b.tip - a.tip).norm()
+                });
                 assert!((travel(&order) - best).abs() < 1e-9);
                 let added = |s: &CutSegment| {
                     new.iter()
@@ -404,5 +408,51 @@ mod tests {
                 assert!(others.iter().zip(&planned).all(|(a, b)| a.poses == b.poses));
             }
         }
+    }
+
+    /// With a link's cost counting the turn of the axis, a pass tilted like the segments at
+    /// the far end goes there rather than between the near ones, which stand upright.
+    #[test]
+    fn cheapest_insertion_weighs_the_turn_of_the_axis() {
+        let tilted = Direction::new_normalize(Vector3::new(1.0, 0.0, 1.0));
+        let tilt = |mut s: CutSegment| {
+            for p in &mut s.poses {
+                p.axis = tilted;
+            }
+            s
+        };
+        let planned = vec![
+            segment(Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0)),
+            segment(Point3::new(2.0, 0.0, 0.0), Point3::new(3.0, 0.0, 0.0)),
+            tilt(segment(
+                Point3::new(10.0, 0.0, 0.0),
+                Point3::new(11.0, 0.0, 0.0),
+            )),
+            tilt(segment(
+                Point3::new(12.0, 0.0, 0.0),
+                Point3::new(13.0, 0.0, 0.0),
+            )),
+        ];
+        let new = tilt(segment(
+            Point3::new(1.5, 1.0, 0.0),
+            Point3::new(1.6, 1.0, 0.0),
+        ));
+        let travel_only = |a: &ToolPose, b: &ToolPose| (b.tip - a.tip).norm();
+        let mut order = planned.clone();
+        insert_cheapest(&mut order, vec![new.clone()], false, &travel_only);
+        assert_eq!(
+            order[1].poses, new.poses,
+            "by travel, between the near ones"
+        );
+        // A degree of turn as long as 0.5 mm of link: 45° each way is 45 mm.
+        let with_turn = |a: &ToolPose, b: &ToolPose| {
+            (b.tip - a.tip).norm() + 0.5 * angle_between(&a.axis, &b.axis).to_degrees()
+        };
+        let mut order = planned.clone();
+        insert_cheapest(&mut order, vec![new.clone()], false, &with_turn);
+        assert_eq!(
+            order[2].poses, new.poses,
+            "with the turn, beside the tilted ones"
+        );
     }
 }
