@@ -254,8 +254,8 @@ pub fn gaps(
 const SAME_FACE_DEG: f64 = 35.0;
 
 /// The gaps in clusters: joined when within `join` of each other and on one face (normals
-/// within [`SAME_FACE_DEG`]), each cluster's members in the order of `gaps`, clusters in the
-/// order of their first member.
+/// within 35°), each cluster's members in the order of `gaps`, clusters in the order of their
+/// first member.
 pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
     let same_face = SAME_FACE_DEG.to_radians().cos();
     let key = |p: &Point3| [0, 1, 2].map(|k| (p[k] / join).floor() as i64);
@@ -288,7 +288,7 @@ pub fn clusters(gaps: &[Gap], join: f64) -> Vec<Vec<usize>> {
 }
 
 /// Places on one ridge joined: two places whose middles are within `join_along` of each
-/// other, whose passes run the same way (within [`SAME_WAY_DEG`]) and which lie within `join_across` of
+/// other, whose passes run the same way (within 25°) and which lie within `join_across` of
 /// each other's line across it and off it: one pass along both costs less than a link to
 /// each. Given `thin`, a place at most that wide runs its own length's way instead of its
 /// passes' (see [`RestOptions::thin`]), and joins the places along that. Places in the order of their
