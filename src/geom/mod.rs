@@ -68,6 +68,21 @@ pub fn positive_zero(x: f64) -> f64 {
     if x == 0.0 { 0.0 } else { x }
 }
 
+/// Where `holds` starts to hold between `fails` (where it does not) and `holds_at` (where
+/// it does), either the larger, by `steps` halvings of the bracket: the end of the last
+/// bracket where it holds, within |holds_at − fails| / 2^steps of the change.
+pub fn bisect(mut fails: f64, mut holds_at: f64, steps: usize, holds: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..steps {
+        let middle = 0.5 * (fails + holds_at);
+        if holds(middle) {
+            holds_at = middle;
+        } else {
+            fails = middle;
+        }
+    }
+    holds_at
+}
+
 /// The value below which `share` of the total weight of `(value, weight)` pairs lies (the
 /// first value whose running weight, smallest values first, reaches it); `None` when there
 /// are none.

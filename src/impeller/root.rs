@@ -13,7 +13,7 @@ use std::collections::HashSet;
 
 use serde::Serialize;
 
-use crate::geom::{Point3, Vector3};
+use crate::geom::{Point3, Vector3, bisect};
 use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
 use crate::mesh::topology::edges;
@@ -22,7 +22,7 @@ use crate::mesh::topology::edges;
 const SAMPLE_SPACING: f64 = 2.0;
 
 /// Bisection steps for the corner's ball: the largest tried over 2¹² is the resolution.
-const BISECTIONS: u32 = 12;
+const BISECTIONS: usize = 12;
 
 /// A ball counts as clear of the part where nothing comes nearer its centre than its radius
 /// less this share of it. A ball touching a faceted fillet at a vertex dips into the facets
@@ -171,16 +171,7 @@ pub fn corner_ball(
     if fits(max_radius) {
         return max_radius;
     }
-    let (mut lo, mut hi) = (0.0, max_radius);
-    for _ in 0..BISECTIONS {
-        let mid = 0.5 * (lo + hi);
-        if fits(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
+    bisect(max_radius, 0.0, BISECTIONS, fits)
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Placing a ball against the part: from a drive point to a ball centre that is at least the
 //! ball radius from every point of the part (exact f64).
 
-use crate::geom::Point3;
+use crate::geom::{Point3, bisect};
 use crate::mesh::DrivePoint;
 use crate::mesh::SurfaceDistance;
 
@@ -107,16 +107,7 @@ fn slide_into_corner(
     if !clear(farthest) {
         return None;
     }
-    let (mut inside, mut outside) = (0.0, farthest);
-    for _ in 0..SLIDE_STEPS {
-        let middle = 0.5 * (inside + outside);
-        if clear(middle) {
-            outside = middle;
-        } else {
-            inside = middle;
-        }
-    }
-    Some(lifted + along_face * outside)
+    Some(lifted + along_face * bisect(0.0, farthest, SLIDE_STEPS, clear))
 }
 
 #[cfg(test)]
