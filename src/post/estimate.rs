@@ -180,9 +180,22 @@ pub fn inverse_time_minutes(
     (distance / m.feed.max(1e-9)).max(turn / max_rotary_deg_per_min)
 }
 
+/// The inverse-time `F` a block lasting `minutes` is posted with (1/min), as printed: a
+/// block too short to time at the printed resolution gets the fastest F printable rather
+/// than an infinite one, and lasts what that F says.
+pub fn posted_inverse_time_feed(minutes: f64) -> f64 {
+    let f = (1.0 / minutes.max(1e-9)).min(MAX_INVERSE_TIME_FEED);
+    let printed = super::format::fixed(f, super::gcode::INVERSE_TIME_DECIMALS);
+    printed.parse().unwrap_or(f)
+}
+
+/// The fastest inverse-time `F` posted, 1/min.
+const MAX_INVERSE_TIME_FEED: f64 = 1e6;
+
 /// Estimates the machining time of a linearised program as posted in `feed` mode (no dwell):
 /// per minute as [`estimate_time`]; in inverse time every feed block lasts what its `F`
-/// says ([`inverse_time_minutes`]) and rapids as per minute. `max_rotary_deg_per_min` must be
+/// says as printed ([`inverse_time_minutes`], [`posted_inverse_time_feed`]) and rapids as
+/// per minute. `max_rotary_deg_per_min` must be
 /// positive.
 pub fn estimate_time_posted(
     program: &[(Move, Joints)],
@@ -203,13 +216,15 @@ pub fn estimate_time_posted(
         let seconds = if m.kind == MoveKind::Rapid {
             block_seconds(from_joints, m, to, None, max_rotary_deg_per_min).unwrap_or(0.0)
         } else {
-            60.0 * inverse_time_minutes(
+            // What the block's F says, as printed: on the blower 760 blocks shorter than
+            // 1e-6 min last 6e-5 s each at the fastest F printable.
+            60.0 / posted_inverse_time_feed(inverse_time_minutes(
                 (&from.pose, from_joints),
                 m,
                 to,
                 control_point_mm,
                 max_rotary_deg_per_min,
-            )
+            ))
         };
         est.add(m.kind, seconds);
     }

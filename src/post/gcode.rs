@@ -237,9 +237,7 @@ impl GcodeWriter {
             ),
             _ => 0.0,
         };
-        // A block too short to time at the printed resolution is given the fastest F printable
-        // rather than an infinite one.
-        (1.0 / minutes.max(1e-9)).min(1e6)
+        super::estimate::posted_inverse_time_feed(minutes)
     }
 
     /// The slots this machine writes: X, Y, Z and one per rotary axis.
