@@ -7,8 +7,12 @@
 //! surface is measured against the balls as placed ([`crate::path::gaps`], the neighbouring
 //! passages' balls by the symmetry), and a pass is planned along the ridge of each place left
 //! over the target, with the axes of the strategy whose surface it is on, put into that
-//! strategy's order where it adds the least travel and copied to the other passages with it.
-//! A second round measures again with them.
+//! strategy's order where it adds the least to the links (travel and the rotaries' turn) and
+//! copied to the other passages with it. A second round measures again with them.
+//!
+//! The same runs over what the parallel planes finish round the impeller strategies (the rim,
+//! the bore's top, the tips' ends), against every pass, with the planes' axes: a wall the
+//! planes run nearly along gets its passes millimetres apart.
 
 use serde::Serialize;
 
@@ -51,10 +55,10 @@ pub(super) fn passage_views(passage: &HubPassage) -> Vec<nalgebra::Isometry3<f64
         .collect()
 }
 
-/// What the rest passes of the first passage found and planned.
+/// What the rest passes over a region (the first passage, or the planes') found and planned.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct RestSummary {
-    /// Area of the passage measured (its blade, splitters and hub), mm².
+    /// Area measured (the passage's blade, splitters and hub; the planes' region), mm².
     pub measured_mm2: f64,
     pub rounds: Vec<RestRound>,
     /// What the planner's measure still finds over the target after the last round.
