@@ -185,7 +185,7 @@ pub fn inverse_time_minutes(
 /// than an infinite one, and lasts what that F says.
 pub fn posted_inverse_time_feed(minutes: f64) -> f64 {
     let f = (1.0 / minutes.max(1e-9)).min(MAX_INVERSE_TIME_FEED);
-    let printed = super::format::fixed(f, super::gcode::INVERSE_TIME_DECIMALS);
+    let printed = super::format::fixed(f, super::format::INVERSE_TIME_DECIMALS);
     printed.parse().unwrap_or(f)
 }
 

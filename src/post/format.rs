@@ -1,5 +1,8 @@
 //! Number formatting shared by the writers: fixed decimals, never a negative zero.
 
+/// Decimals of an inverse-time `F` (1/min).
+pub const INVERSE_TIME_DECIMALS: usize = 4;
+
 /// Formats `v` with `decimals` fixed decimals; a value that rounds to zero is written without
 /// a sign (`"-0.0000"` never appears). Non-finite values are written as `0` followed by the
 /// decimals (callers validate beforehand; this keeps the output parseable).

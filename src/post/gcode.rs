@@ -62,6 +62,8 @@ use super::kinematics::{Joints, MachineKinematics, RotaryAxis};
 use super::{ArcXY, ProgramHeader, ProgramSink};
 use crate::geom::{Move, MoveKind};
 
+pub use super::format::INVERSE_TIME_DECIMALS;
+
 /// Options of [`GcodeWriter`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GcodeOptions {
@@ -93,9 +95,6 @@ pub struct GcodeOptions {
 fn default_rotary_speed() -> f64 {
     7200.0
 }
-
-/// Decimals of an inverse-time `F` (1/min).
-pub const INVERSE_TIME_DECIMALS: usize = 4;
 
 impl Default for GcodeOptions {
     fn default() -> Self {
