@@ -66,6 +66,8 @@ impl Default for AxisOptions {
 pub struct AxisChooser {
     cones: Vec<(f64, Vector3)>,
     options: AxisOptions,
+    /// A finer search where this one finds no axis ([`Self::with_fine_fallback`]).
+    fallback: Option<Box<AxisChooser>>,
 }
 
 /// Why no axis was found.
@@ -168,7 +170,29 @@ impl AxisChooser {
             }
             angle += step;
         }
-        Self { cones, options }
+        Self {
+            cones,
+            options,
+            fallback: None,
+        }
+    }
+
+    /// This chooser, searching again with cones `step_deg` apart and up to `max_exact_tests`
+    /// exact tests where its own search finds no axis. An axis may stand in a window narrower
+    /// than the cones' spacing, or farther out than the exact tests' cap reaches (the sample
+    /// impeller's leading edge by the hub's nose: 5° cones and 48 tests find nothing, 2°
+    /// cones and 600 tests find it, 200 do not). Where the coarse search succeeds the axis is
+    /// the same, so a strategy's passes keep their axes; only points it gives up on cost more.
+    pub fn with_fine_fallback(self, step_deg: f64, max_exact_tests: usize) -> Self {
+        let fine = AxisChooser::new(AxisOptions {
+            step_deg,
+            max_exact_tests,
+            ..self.options.clone()
+        });
+        Self {
+            fallback: Some(Box::new(fine)),
+            ..self
+        }
     }
 
     pub fn options(&self) -> &AxisOptions {
@@ -286,9 +310,13 @@ impl AxisChooser {
                 }
             }
         }
-        first_valid
-            .map(|(_, axis)| Direction::new_unchecked(axis))
-            .ok_or(why)
+        match (first_valid, &self.fallback) {
+            (Some((_, axis)), _) => Ok(Direction::new_unchecked(axis)),
+            (None, Some(fine)) => {
+                fine.choose_around(part, rays, tool, centre, &preferred, previous, reachable)
+            }
+            (None, None) => Err(why),
+        }
     }
 }
 
@@ -377,6 +405,61 @@ mod tests {
             worst = worst.max(best.to_degrees());
         }
         assert!(worst < 5.0, "worst gap {worst}°");
+    }
+
+    /// A machine that holds the tool only within 2.2° of a direction between the 5° cones:
+    /// the coarse search finds nothing, its finer fallback finds the window.
+    #[test]
+    fn the_fine_fallback_finds_a_window_between_the_coarse_cones() {
+        let part = crate::mesh::fixtures::plate_and_wall(10.0, 90.0);
+        let collider = PartCollider::new(&part).unwrap();
+        let rays = RayScene::new(&part);
+        let tool = crate::collide::tool_bodies::tests::prepared();
+        let centre = Point3::new(30.0, 50.0, 13.0);
+        let coarse = AxisChooser::new(AxisOptions {
+            clearance_deg: 0.0,
+            ..AxisOptions::default()
+        });
+        // Around the vertical the cones' frame is the vertical's; the direction at 7.5° off
+        // it farthest from every cone.
+        let (u, v) = orthonormal_frame(&Vector3::z());
+        let cone_axes: Vec<Vector3> = coarse
+            .cones
+            .iter()
+            .map(|(_, c)| u * c.x + v * c.y + Vector3::z() * c.z)
+            .collect();
+        let gap = |d: &Vector3| {
+            cone_axes
+                .iter()
+                .map(|c| angle_between(c, d).to_degrees())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let window = (0..360)
+            .map(|k| {
+                let (tilt, turn) = (7.5_f64.to_radians(), (k as f64).to_radians());
+                u * (tilt.sin() * turn.cos())
+                    + v * (tilt.sin() * turn.sin())
+                    + Vector3::z() * tilt.cos()
+            })
+            .max_by(|a, b| gap(a).total_cmp(&gap(b)))
+            .unwrap();
+        assert!(gap(&window) > 2.2, "{}", gap(&window));
+        let machine = |a: &Vector3| angle_between(a, &window).to_degrees() < 2.2;
+        let choose = |chooser: &AxisChooser| {
+            chooser.choose_around(
+                &collider,
+                &rays,
+                &tool,
+                &centre,
+                &Vector3::z(),
+                None,
+                &machine,
+            )
+        };
+        assert_eq!(choose(&coarse), Err(NoAxis::MachineLimits));
+        let fine = AxisChooser::new(coarse.options().clone()).with_fine_fallback(2.0, 1000);
+        let axis = choose(&fine).unwrap().into_inner();
+        assert!(machine(&axis));
     }
 
     /// A plate with a tall wall beside the point: the preferred axis (10° lead toward the wall)
