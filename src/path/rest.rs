@@ -195,7 +195,6 @@ pub fn gaps(
     views: &[Isometry3<f64>],
     options: &RestOptions,
 ) -> Vec<Gap> {
-    let quantum = 0.5 * options.sample_spacing * options.sample_spacing;
     let radius = options.ball_radius;
     let target = options.scallop_height;
     (0..part.triangles.len())
@@ -203,21 +202,10 @@ pub fn gaps(
         .collect::<Vec<_>>()
         .par_iter()
         .flat_map_iter(|&t| {
-            let [a, b, c] = part.corners(t);
-            let area = 0.5 * (b - a).cross(&(c - a)).norm();
             let normal = part.face_normal(t);
-            // A barycentric grid of sub-triangles about a quantum each; their centres.
-            let k = (area / quantum).sqrt().ceil().max(1.0) as usize;
-            let share = area / (k * (k + 1) / 2) as f64;
-            let mut points = Vec::with_capacity(k * (k + 1) / 2);
-            for i in 0..k {
-                for j in 0..k - i {
-                    let u = (i as f64 + 1.0 / 3.0) / k as f64;
-                    let v = (j as f64 + 1.0 / 3.0) / k as f64;
-                    points.push(a + (b - a) * u + (c - a) * v);
-                }
-            }
-            points.into_iter().filter_map(move |point| {
+            let mut points = Vec::new();
+            surface_samples(part.corners(t), options.sample_spacing, &mut points);
+            points.into_iter().filter_map(move |(point, share)| {
                 let (height, along) = views
                     .iter()
                     .filter_map(|view| {
@@ -246,6 +234,65 @@ pub fn gaps(
             })
         })
         .collect()
+}
+
+/// Samples of triangle `corners` about `spacing` apart, each with the area it stands for: in
+/// columns across its longest side, a spacing wide or less, and up each column's middle
+/// line a spacing apart or less. (A barycentric grid set by the area runs millimetres apart
+/// along a sliver: the fans round the blower's bore top, 5 mm long and 0.1 mm wide, kept a
+/// 0.035 mm ridge unseen between their samples.)
+pub(crate) fn surface_samples(corners: [Point3; 3], spacing: f64, out: &mut Vec<(Point3, f64)>) {
+    let [a, b, c] = corners;
+    let sides = [(b - a).norm(), (c - b).norm(), (a - c).norm()];
+    let longest = (0..3)
+        .max_by(|&i, &j| sides[i].total_cmp(&sides[j]))
+        .unwrap_or(0);
+    // The longest side runs from p to q, r across it; u along p q, v toward r.
+    let [p, q, r] = [0, 1, 2].map(|i| corners[(longest + i) % 3]);
+    let length = sides[longest];
+    let Some(along) = (q - p).try_normalize(1e-300) else {
+        out.push((p, 0.0));
+        return;
+    };
+    let to_r = r - p;
+    let u_r = to_r.dot(&along).clamp(0.0, length);
+    let up = to_r - along * to_r.dot(&along);
+    let height = up.norm();
+    // The triangle's extent toward r at u: rising to r's foot, falling to q.
+    let extent = |u: f64| {
+        if u <= u_r {
+            if u_r > 0.0 { height * u / u_r } else { height }
+        } else if length > u_r {
+            height * (length - u) / (length - u_r)
+        } else {
+            height
+        }
+    };
+    let foot = |u: f64| p + along * u;
+    let direction_up = up.try_normalize(1e-300).unwrap_or_else(Vector3::zeros);
+    // The extent is linear on either side of r's foot: a strip's area by the trapezoid rule
+    // on each side.
+    let strip_area = |u0: f64, u1: f64| {
+        let trapezoid = |x0: f64, x1: f64| 0.5 * (x1 - x0) * (extent(x0) + extent(x1));
+        if u0 < u_r && u_r < u1 {
+            trapezoid(u0, u_r) + trapezoid(u_r, u1)
+        } else {
+            trapezoid(u0, u1)
+        }
+    };
+    let columns = (length / spacing).ceil().max(1.0) as usize;
+    let width = length / columns as f64;
+    for i in 0..columns {
+        let (u0, u1) = (i as f64 * width, (i + 1) as f64 * width);
+        let u = 0.5 * (u0 + u1);
+        let top = extent(u);
+        let rows = (top / spacing).ceil().max(1.0) as usize;
+        let share = strip_area(u0, u1) / rows as f64;
+        for k in 0..rows {
+            let v = (k as f64 + 0.5) / rows as f64 * top;
+            out.push((foot(u) + direction_up * v, share));
+        }
+    }
 }
 
 /// Neighbouring samples whose normals differ by more than this are on two faces of an edge:
@@ -456,7 +503,59 @@ pub fn rest_curve(
     surface: &SurfaceDistance,
     options: &RestOptions,
 ) -> Option<SectionCurve> {
-    let (middle, _, along) = place_frame(gaps, members, options.thin)?;
+    let (middle, normal, along) = place_frame(gaps, members, options.thin)?;
+    let curve = curve_along(gaps, members, part, surface, options, middle, along);
+    // A curve that leaves the place's face within a stepover (a wall lower than that, the
+    // planes running up it: the blower's rim, 0.25 mm) cuts the place with one pose or
+    // none; across, along the wall, it may stay on the face. The longer stretch on it wins.
+    let on_face =
+        |curve: &Option<SectionCurve>| curve.as_ref().map_or(0.0, |c| face_run(c, &normal));
+    if on_face(&curve) >= 2.0 * options.overlap {
+        return curve;
+    }
+    let across = curve_along(
+        gaps,
+        members,
+        part,
+        surface,
+        options,
+        middle,
+        normal.cross(&along),
+    );
+    if on_face(&across) > on_face(&curve) {
+        across
+    } else {
+        curve
+    }
+}
+
+/// The longest stretch of `curve` on the face whose normal is `normal` (within
+/// [`SAME_FACE_DEG`]), mm.
+fn face_run(curve: &SectionCurve, normal: &Vector3) -> f64 {
+    let same_face = SAME_FACE_DEG.to_radians().cos();
+    let (mut longest, mut run) = (0.0_f64, 0.0);
+    for pair in curve.points.windows(2) {
+        if pair.iter().all(|p| p.normal.dot(normal) >= same_face) {
+            run += (pair[1].point - pair[0].point).norm();
+            longest = longest.max(run);
+        } else {
+            run = 0.0;
+        }
+    }
+    longest
+}
+
+/// The rest curve through `middle` along `along`, following the samples' ridge.
+fn curve_along(
+    gaps: &[Gap],
+    members: &[usize],
+    part: &Mesh,
+    surface: &SurfaceDistance,
+    options: &RestOptions,
+    middle: Point3,
+    along: Vector3,
+) -> Option<SectionCurve> {
+    let same_face = SAME_FACE_DEG.to_radians().cos();
     // Each sample: how far along, its offsets across and off the tangent plane (a place
     // along a curved edge bows off its chord), and its weight, how far over the target.
     let placed: Vec<(f64, Vector3, f64)> = members
@@ -507,7 +606,25 @@ pub fn rest_curve(
                 o0 + (o1 - o0) * ((k - k0) as f64 / (k1 - k0) as f64)
             };
             let guess = middle + along * at(k) + offset;
-            let on = surface.closest(&guess, options.ball_radius)?;
+            // On the face of the place's nearest sample: by an edge the nearest point may be
+            // on the face beside (a blade tip's land by its flank), and a drive point there
+            // puts the ball beside the place, not on it.
+            let face = members
+                .iter()
+                .map(|&i| &gaps[i])
+                .min_by(|x, y| {
+                    (x.point - guess)
+                        .norm_squared()
+                        .total_cmp(&(y.point - guess).norm_squared())
+                })?
+                .normal;
+            let on = surface.closest_where(&guess, options.ball_radius, |t| {
+                part.face_normal(t as usize).dot(&face) >= same_face
+            })?;
+            // Run on past the face's end, the nearest point on it stays at the end.
+            if (on.point - guess).dot(&along).abs() > 0.5 * options.step {
+                return None;
+            }
             Some(DrivePoint {
                 point: on.point,
                 normal: part.face_normal(on.triangle as usize),
@@ -573,6 +690,57 @@ mod tests {
             y += if (y - at).abs() < 1e-9 { wide } else { 0.3 };
         }
         (part, top, swept)
+    }
+
+    /// Every point of a triangle is near a sample, a sliver's too, and the samples' areas
+    /// add up to the triangle's.
+    #[test]
+    fn samples_cover_slivers_and_well_shaped_triangles_alike() {
+        let spacing = 0.2;
+        let triangles = [
+            // A fan sliver round an annulus: 5 mm long, 0.1 mm wide.
+            [
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(5.0, 0.0, 0.0),
+                Point3::new(5.0, 0.1, 0.0),
+            ],
+            [
+                Point3::new(0.0, 0.0, 1.0),
+                Point3::new(2.0, 0.3, 1.0),
+                Point3::new(0.7, 1.9, 1.5),
+            ],
+            // Obtuse and long.
+            [
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(8.0, 0.0, 0.0),
+                Point3::new(4.0, 0.05, 0.2),
+            ],
+        ];
+        for corners in triangles {
+            let mut samples = Vec::new();
+            surface_samples(corners, spacing, &mut samples);
+            let [a, b, c] = corners;
+            let area = 0.5 * (b - a).cross(&(c - a)).norm();
+            let total: f64 = samples.iter().map(|(_, share)| share).sum();
+            assert!(
+                (total - area).abs() < 1e-9 * area.max(1.0),
+                "{total} {area}"
+            );
+            let mut farthest: f64 = 0.0;
+            for i in 0..=200 {
+                for j in 0..=200 - i {
+                    let p = a + (b - a) * (i as f64 / 200.0) + (c - a) * (j as f64 / 200.0);
+                    let nearest = samples
+                        .iter()
+                        .map(|(s, _)| (s - p).norm())
+                        .fold(f64::INFINITY, f64::min);
+                    farthest = farthest.max(nearest);
+                }
+            }
+            assert!(farthest < 1.0 * spacing, "{farthest}");
+            // Not many more than one a spacing squared.
+            assert!(samples.len() as f64 <= 2.0 * area / (spacing * spacing) + 40.0);
+        }
     }
 
     #[test]
@@ -833,6 +1001,56 @@ mod tests {
         (part, wall, swept, options)
     }
 
+    /// A place between two passes running down a wall lower than a stepover: along its
+    /// passes a curve would cross the wall in 0.3 mm, so it runs along the wall, on it.
+    #[test]
+    fn a_place_on_a_wall_lower_than_a_stepover_is_run_along_the_wall() {
+        let (part, wall, mut swept, options) = low_wall_crossed_by_passes();
+        // Not the thin places' rule: the passage's rest runs its places along its passes.
+        let options = RestOptions {
+            thin: None,
+            ..options
+        };
+        let surface = SurfaceDistance::new(&part);
+        let views = [Isometry3::identity()];
+        let found = gaps(&part, &surface, &wall, &swept, &views, &options);
+        let places = ridges(
+            &found,
+            &clusters(&found, 1.5 * options.sample_spacing),
+            4.0,
+            0.2,
+            None,
+        );
+        let place = places
+            .iter()
+            .find(|members| {
+                members
+                    .iter()
+                    .all(|&i| found[i].point.y > 8.0 && found[i].point.y < 10.0)
+            })
+            .expect("the place between the passes at y = 8 and 10");
+        let curve = rest_curve(&found, place, &part, &surface, &options).expect("a curve");
+        let ys: Vec<f64> = curve.points.iter().map(|p| p.point.y).collect();
+        let (lo, hi) = ys
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &y| {
+                (lo.min(y), hi.max(y))
+            });
+        assert!(lo < 8.5 && hi > 9.5, "{ys:?}");
+        assert!(curve.points.iter().all(|p| p.normal.x > 0.999));
+        let centres: Vec<Point3> = curve
+            .points
+            .iter()
+            .map(|p| p.point + p.normal * RADIUS)
+            .collect();
+        swept.insert(&pass_through(&centres, Vector3::y()), 0.0, TARGET);
+        assert!(
+            gaps(&part, &surface, &wall, &swept, &views, &options)
+                .iter()
+                .all(|g| g.point.y < 8.0 || g.point.y > 10.0)
+        );
+    }
+
     #[test]
     fn a_low_wall_the_passes_cross_is_run_along_its_length_in_one_pass() {
         let (part, wall, mut swept, options) = low_wall_crossed_by_passes();
@@ -862,6 +1080,8 @@ mod tests {
         let ys: Vec<f64> = curve.points.iter().map(|p| p.point.y).collect();
         let (lo, hi) = (ys[0].min(ys[ys.len() - 1]), ys[0].max(ys[ys.len() - 1]));
         assert!(lo < 0.5 && hi > 19.5, "{ys:?}");
+        // It keeps to the wall: past its ends it stops rather than turn the corners.
+        assert!(curve.points.iter().all(|p| p.normal.x > 0.999));
         // A ball along it closes the wall.
         let centres: Vec<Point3> = curve
             .points
