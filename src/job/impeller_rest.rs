@@ -21,8 +21,8 @@ use crate::impeller::HubPassage;
 use crate::mesh::{Mesh, SectionCurve};
 use crate::orient::AxisChooser;
 use crate::path::{
-    self, Finishing, FinishingContext, FinishingOptions, RestOptions, SweptTool, clusters, gaps,
-    rest_curve, ridges,
+    self, Finishing, FinishingContext, FinishingOptions, GapSamples, RestOptions, SweptTool,
+    clusters, rest_curve, ridges,
 };
 
 /// Rounds of measuring and mending.
@@ -165,8 +165,9 @@ pub(super) fn rest_passes(
             .sum(),
         ..RestSummary::default()
     };
+    let mut samples = GapSamples::new(part, &sampled, &rest_options);
     for round in 0..=ROUNDS {
-        let found = gaps(part, surface, &sampled, &swept, scope.views, &rest_options);
+        let found = samples.measure(surface, &swept, scope.views, &rest_options);
         let over_target_mm2 = found.iter().map(|g| g.area).sum();
         let max_mm = found.iter().map(|g| g.height).fold(0.0, f64::max);
         if round == ROUNDS || found.is_empty() {

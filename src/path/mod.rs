@@ -23,7 +23,7 @@ pub use contact::{place_ball, place_ball_from};
 pub use covered::{CONTACT_BAND, CoverOptions, Covered, SweptBalls};
 pub use curves::{TurnedCopy, curve_passes, insert_cheapest, nearest_order, turned_copy};
 pub use link::{LinkOptions, LinkReport, can_leave, link, relink, safe_midpoint};
-pub use rest::{Gap, RestOptions, SweptTool, clusters, gaps, rest_curve, ridges};
+pub use rest::{Gap, GapSamples, RestOptions, SweptTool, clusters, gaps, rest_curve, ridges};
 
 use rayon::prelude::*;
 

@@ -161,8 +161,20 @@ impl SweptTool {
     /// face's across a convex edge, or the far side's of a thin wall (a disc 1 mm thick: the
     /// hub's balls 1 mm above its underside), and leave no scallop on this face.
     pub fn gap(&self, p: &Point3, normal: &Vector3) -> Option<(f64, Vector3)> {
+        self.gap_among(p, normal, 0)
+    }
+
+    /// Bodies swept so far: those inserted after this are told apart by [`Self::gap_among`].
+    pub fn count(&self) -> u32 {
+        self.capsules.len() as u32
+    }
+
+    /// [`Self::gap`] among the bodies from the `first`th on.
+    pub fn gap_among(&self, p: &Point3, normal: &Vector3, first: u32) -> Option<(f64, Vector3)> {
         let mut best: Option<(f64, u32)> = None;
-        for &i in self.cells.get(&self.key(p))? {
+        let cell = self.cells.get(&self.key(p))?;
+        // Each cell's bodies are in the order they were inserted.
+        for &i in &cell[cell.partition_point(|&i| i < first)..] {
             let [a, b] = self.capsules[i as usize];
             let nearest = closest_point_on_segment(p, &a, &b) - p;
             if nearest.dot(normal) < 0.5 * self.radius {
@@ -195,18 +207,80 @@ pub fn gaps(
     views: &[Isometry3<f64>],
     options: &RestOptions,
 ) -> Vec<Gap> {
-    let radius = options.ball_radius;
-    let target = options.scallop_height;
-    (0..part.triangles.len())
-        .filter(|&t| sampled.get(t).copied().unwrap_or(false))
-        .collect::<Vec<_>>()
-        .par_iter()
-        .flat_map_iter(|&t| {
-            let normal = part.face_normal(t);
-            let mut points = Vec::new();
-            surface_samples(part.corners(t), options.sample_spacing, &mut points);
-            points.into_iter().filter_map(move |(point, share)| {
-                let (height, along) = views
+    GapSamples::new(part, sampled, options).measure(surface, swept, views, options)
+}
+
+/// The samples of a surface, measured again and again as passes are added ([`gaps`] once).
+/// A pass added only brings a sample's gap down, so a sample once within the target stays
+/// within it and is not measured again, nor one where no ball fits: after the first round
+/// only what was over the target or out of reach is.
+pub struct GapSamples {
+    /// Point, outward normal, triangle and the area it stands for.
+    samples: Vec<(Point3, Vector3, u32, f64)>,
+    /// The samples still to measure, in order, with the count of bodies swept when no body
+    /// was within reach of one (`None`: over the target then).
+    open: Vec<(u32, Option<u32>)>,
+}
+
+/// What measuring a sample found.
+enum Sample {
+    Within,
+    OutOfReach,
+    Over(f64, Vector3),
+    /// Concave more tightly than the ball.
+    Tight,
+}
+
+impl GapSamples {
+    /// Samples of the triangles `sampled` marks, [`RestOptions::sample_spacing`] apart.
+    pub fn new(part: &Mesh, sampled: &[bool], options: &RestOptions) -> Self {
+        let samples: Vec<(Point3, Vector3, u32, f64)> = (0..part.triangles.len())
+            .filter(|&t| sampled.get(t).copied().unwrap_or(false))
+            .collect::<Vec<_>>()
+            .par_iter()
+            .flat_map_iter(|&t| {
+                let normal = part.face_normal(t);
+                let mut points = Vec::new();
+                surface_samples(part.corners(t), options.sample_spacing, &mut points);
+                points
+                    .into_iter()
+                    .map(move |(point, share)| (point, normal, t as u32, share))
+            })
+            .collect();
+        let open = (0..samples.len() as u32).map(|i| (i, Some(0))).collect();
+        Self { samples, open }
+    }
+
+    /// The samples over the target where the ball fits, in order.
+    pub fn measure(
+        &mut self,
+        surface: &SurfaceDistance,
+        swept: &SweptTool,
+        views: &[Isometry3<f64>],
+        options: &RestOptions,
+    ) -> Vec<Gap> {
+        let radius = options.ball_radius;
+        let target = options.scallop_height;
+        let measured: Vec<Sample> = self
+            .open
+            .par_iter()
+            .map(|&(i, out_of_reach_among)| {
+                let (point, normal, _, _) = self.samples[i as usize];
+                // Out of reach of every body before: only a body since can reach it.
+                if let Some(first) = out_of_reach_among
+                    && views.iter().all(|view| {
+                        swept
+                            .gap_among(
+                                &view.transform_point(&point),
+                                &view.transform_vector(&normal),
+                                first,
+                            )
+                            .is_none()
+                    })
+                {
+                    return Sample::OutOfReach;
+                }
+                let Some((height, along)) = views
                     .iter()
                     .filter_map(|view| {
                         let (h, d) = swept.gap(
@@ -215,25 +289,43 @@ pub fn gaps(
                         )?;
                         Some((h, view.inverse_transform_vector(&d)))
                     })
-                    .min_by(|x, y| x.0.total_cmp(&y.0))?;
+                    .min_by(|x, y| x.0.total_cmp(&y.0))
+                else {
+                    return Sample::OutOfReach;
+                };
                 if height <= target {
-                    return None;
+                    Sample::Within
+                } else if surface.any_within(&(point + normal * radius), radius - target) {
+                    Sample::Tight
+                } else {
+                    Sample::Over(height, along)
                 }
-                // Concave more tightly than the ball: no placement of it leaves less.
-                if surface.any_within(&(point + normal * radius), radius - target) {
-                    return None;
-                }
-                Some(Gap {
-                    point,
-                    normal,
-                    height,
-                    triangle: t as u32,
-                    area: share,
-                    along,
-                })
             })
-        })
-        .collect()
+            .collect();
+        let mut found = Vec::new();
+        let mut open = Vec::new();
+        let swept_now = swept.count();
+        for (&(i, _), sample) in self.open.iter().zip(measured) {
+            let (point, normal, triangle, area) = self.samples[i as usize];
+            match sample {
+                Sample::Within | Sample::Tight => {}
+                Sample::OutOfReach => open.push((i, Some(swept_now))),
+                Sample::Over(height, along) => {
+                    open.push((i, None));
+                    found.push(Gap {
+                        point,
+                        normal,
+                        height,
+                        triangle,
+                        area,
+                        along,
+                    });
+                }
+            }
+        }
+        self.open = open;
+        found
+    }
 }
 
 /// Samples of triangle `corners` about `spacing` apart, each with the area it stands for: in
@@ -690,6 +782,37 @@ mod tests {
             y += if (y - at).abs() < 1e-9 { wide } else { 0.3 };
         }
         (part, top, swept)
+    }
+
+    /// Measured again after passes are added, the samples give what a fresh measure does:
+    /// the band closed by a pass along it, and a place where no ball reached before, which a
+    /// pass now reaches without closing.
+    #[test]
+    fn samples_measured_again_find_what_a_fresh_measure_finds() {
+        let (part, top, mut swept) = plate_with_a_wide_gap(8.1, 0.6, 12.0);
+        let surface = SurfaceDistance::new(&part);
+        let views = [Isometry3::identity()];
+        let mut samples = GapSamples::new(&part, &top, &options());
+        let first = samples.measure(&surface, &swept, &views, &options());
+        assert_eq!(
+            first,
+            gaps(&part, &surface, &top, &swept, &views, &options())
+        );
+        // The band, and past the last pass (y ≈ 12.3) where its ball reaches.
+        let band = |g: &Gap| g.point.y > 8.1 && g.point.y < 8.7;
+        assert!(first.iter().any(band));
+        assert!(
+            first
+                .iter()
+                .all(|g| band(g) || (g.point.y > 12.0 && g.point.y < 13.3))
+        );
+        swept.insert(&pass_along_x(8.4), 0.0, TARGET);
+        swept.insert(&pass_along_x(14.0), 0.0, TARGET);
+        let again = samples.measure(&surface, &swept, &views, &options());
+        let fresh = gaps(&part, &surface, &top, &swept, &views, &options());
+        assert_eq!(again, fresh);
+        assert!(again.iter().all(|g| g.point.y > 12.0 && g.point.y < 15.0));
+        assert!(again.iter().any(|g| g.point.y > 14.2));
     }
 
     /// Every point of a triangle is near a sample, a sliver's too, and the samples' areas
