@@ -154,12 +154,17 @@ impl SweptTool {
         }
     }
 
-    /// The distance from `p` (on the part, outward `normal`) to the nearest swept body in
-    /// front of it (0 inside one) and the direction that body runs in, when one is within
-    /// the reach. In front: the body's axis at least half the radius above `p`'s tangent
-    /// plane (a ball touching the face stands a radius above it). Others are a neighbouring
-    /// face's across a convex edge, or the far side's of a thin wall (a disc 1 mm thick: the
-    /// hub's balls 1 mm above its underside), and leave no scallop on this face.
+    /// How far from `p` (on the part, outward `normal`) along the normal the nearest swept
+    /// body in front of it begins (0 inside one), and the direction that body runs in, when
+    /// that is within the reach: the scallop as the verifier and [`super::stepover_for_scallop`]
+    /// measure it, `r − √(r² − s²/4)` between balls `s` apart over a plane. (The distance to
+    /// the body instead, `√(r² + s²/4) − r`, is less wherever the balls stand off the normal:
+    /// by 30 % between passes at the target's stepover, and more in a concave corner, where
+    /// the ball finishing it stands on the wall beside.) In front: the body's axis at least
+    /// half the radius above `p`'s tangent plane (a ball touching the face stands a radius
+    /// above it). Others are a neighbouring face's across a convex edge, or the far side's of
+    /// a thin wall (a disc 1 mm thick: the hub's balls 1 mm above its underside), and leave no
+    /// scallop on this face.
     pub fn gap(&self, p: &Point3, normal: &Vector3) -> Option<(f64, Vector3)> {
         self.gap_among(p, normal, 0)
     }
@@ -180,7 +185,14 @@ impl SweptTool {
             if nearest.dot(normal) < 0.5 * self.radius {
                 continue;
             }
-            let d = nearest.norm() - self.radius;
+            // The ray enters no nearer than the body is.
+            let distance = nearest.norm() - self.radius;
+            if distance > self.reach || best.is_some_and(|(e, _)| distance > e) {
+                continue;
+            }
+            let Some(d) = ray_capsule_entry(p, normal, &a, &b, self.radius) else {
+                continue;
+            };
             if d <= self.reach && best.is_none_or(|(e, j)| d < e || (d == e && i < j)) {
                 best = Some((d, i));
             }
@@ -188,11 +200,64 @@ impl SweptTool {
         best.map(|(d, i)| {
             let [a, b] = self.capsules[i as usize];
             (
-                d.max(0.0),
+                d,
                 (b - a).try_normalize(1e-12).unwrap_or_else(Vector3::zeros),
             )
         })
     }
+}
+
+/// Where the ray from `p` along unit `direction` first meets the capsule of radius `r` round
+/// segment `a b`: 0 when `p` is inside it, `None` when the ray misses it. The capsule is a
+/// cylinder between two balls; the ray enters it through one of the three.
+fn ray_capsule_entry(
+    p: &Point3,
+    direction: &Vector3,
+    a: &Point3,
+    b: &Point3,
+    r: f64,
+) -> Option<f64> {
+    if (closest_point_on_segment(p, a, b) - p).norm_squared() <= r * r {
+        return Some(0.0);
+    }
+    // |m + t·direction| = r for m = p − centre, the smaller root, ahead of p.
+    let ball = |centre: &Point3| {
+        let m = p - centre;
+        let half = m.dot(direction);
+        let discriminant = half * half - (m.norm_squared() - r * r);
+        (discriminant >= 0.0)
+            .then(|| -half - discriminant.sqrt())
+            .filter(|&t| t >= 0.0)
+    };
+    let mut entry = [ball(a), ball(b)]
+        .into_iter()
+        .flatten()
+        .fold(f64::INFINITY, f64::min);
+    let axis = b - a;
+    let length = axis.norm();
+    if length > 0.0 {
+        let axis = axis / length;
+        // Square to the axis, the ray is a line in the plane: |m⊥ + t·d⊥| = r.
+        let m = p - a;
+        let (m_across, d_across) = (
+            m - axis * m.dot(&axis),
+            direction - axis * direction.dot(&axis),
+        );
+        let (aa, bb, cc) = (
+            d_across.norm_squared(),
+            m_across.dot(&d_across),
+            m_across.norm_squared() - r * r,
+        );
+        let discriminant = bb * bb - aa * cc;
+        if aa > 0.0 && discriminant >= 0.0 {
+            let t = (-bb - discriminant.sqrt()) / aa;
+            let along = (m + direction * t).dot(&axis);
+            if t >= 0.0 && (0.0..=length).contains(&along) {
+                entry = entry.min(t);
+            }
+        }
+    }
+    entry.is_finite().then_some(entry)
 }
 
 /// The samples of `part`'s triangles that `sampled` marks where the passes in `swept` leave
@@ -784,6 +849,41 @@ mod tests {
         (part, top, swept)
     }
 
+    /// The ray's entry into a capsule agrees with marching along the ray in small steps.
+    #[test]
+    fn ray_capsule_entry_agrees_with_marching() {
+        let mut state = 12345_u64;
+        let mut random = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..400 {
+            let mut point = || Point3::new(3.0 * random(), 3.0 * random(), 3.0 * random());
+            let (p, a, b) = (point(), point(), point());
+            let direction = Vector3::new(random(), random(), random()).normalize();
+            let r = 0.5 + random().abs();
+            let inside = |t: f64| {
+                (closest_point_on_segment(&(p + direction * t), &a, &b) - (p + direction * t))
+                    .norm()
+                    <= r
+            };
+            let step = 1e-4;
+            let marched = (0..100_000).map(|k| k as f64 * step).find(|&t| inside(t));
+            match (ray_capsule_entry(&p, &direction, &a, &b, r), marched) {
+                (Some(t), Some(m)) => {
+                    assert!((t - m).abs() <= step, "{t} {m}");
+                    hits += 1;
+                }
+                (None, None) => misses += 1,
+                (entry, marched) => panic!("{entry:?} against {marched:?}"),
+            }
+        }
+        assert!(hits > 50 && misses > 50, "{hits} {misses}");
+    }
+
     /// Measured again after passes are added, the samples give what a fresh measure does:
     /// the band closed by a pass along it, and a place where no ball reached before, which a
     /// pass now reaches without closing.
@@ -884,10 +984,11 @@ mod tests {
             assert!(g.along.x.abs() > 0.999);
         }
         // Between balls s apart, at y from the middle the nearest centre is s/2 − |y| across
-        // and r up: the gap is √(r² + (s/2 − |y|)²) − r, at most √(r² + s²/4) − r mid-way.
+        // and r up: the ray up enters its ball at r − √(r² − (s/2 − |y|)²), at most
+        // r − √(r² − s²/4) mid-way.
         for g in &found {
             let across = 0.3 - (g.point.y - 8.4).abs();
-            let expected = (RADIUS * RADIUS + across * across).sqrt() - RADIUS;
+            let expected = RADIUS - (RADIUS * RADIUS - across * across).sqrt();
             assert!(
                 (g.height - expected).abs() < 1e-9,
                 "{} against {expected}",
@@ -895,9 +996,9 @@ mod tests {
             );
             assert!(expected > TARGET);
         }
-        // Every sample of the band over the target is found: the band |y − 8.4| < 0.0997 is
+        // Every sample of the band over the target is found: the band |y − 8.4| < 0.1003 is
         // two sample rows wide on each side of the middle, the whole plate long.
-        let band = 0.3 - ((RADIUS + TARGET).powi(2) - RADIUS * RADIUS).sqrt();
+        let band = 0.3 - (RADIUS * RADIUS - (RADIUS - TARGET).powi(2)).sqrt();
         let rows = found
             .iter()
             .map(|g| (g.point.y * 1e6).round() as i64)
