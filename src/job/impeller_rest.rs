@@ -8,7 +8,8 @@
 //! passages' balls by the symmetry), and a pass is planned along the ridge of each place left
 //! over the target, with the axes of the strategy whose surface it is on, put into that
 //! strategy's order where it adds the least to the links (travel and the rotaries' turn) and
-//! copied to the other passages with it. A second round measures again with them.
+//! copied to the other passages with it. Further rounds measure again with them. Where the
+//! strategy's axis search finds nothing along a rest pass, a finer one searches again.
 //!
 //! The same runs over what the parallel planes finish round the impeller strategies (the rim,
 //! the bore's top, the tips' ends), against every pass, with the planes' axes: a wall the

@@ -8,11 +8,13 @@
 //! at a rim) neighbouring balls leave more than the target between them. Those places are
 //! found by measuring, not by a better model:
 //!
-//! * **Gaps.** The surface is sampled evenly; at each sample the scallop is estimated as the
-//!   distance to the nearest swept body less its radius (the balls swept along the passes'
-//!   centres, and the flutes' side where a pass cuts with it): on a surface between two
-//!   passes s apart this is √(r² + s²/4) − r ≈ s²/8r, the scallop itself. Samples where
-//!   the ball does not fit (concave more tightly) are no pass's to mend.
+//! * **Gaps.** The surface is sampled evenly (slivers too); at each sample the scallop is
+//!   how far along the normal the nearest swept body begins (the balls swept along the
+//!   passes' centres, and the flutes' side where a pass cuts with it): on a surface between
+//!   two passes s apart this is r − √(r² − s²/4) ≈ s²/8r, the scallop itself. Samples where
+//!   the ball does not fit (concave more tightly) are no pass's to mend. Measured again
+//!   after passes are added, only what was over the target or out of reach is measured
+//!   ([`GapSamples`]): a pass added only brings a gap down.
 //! * **Places.** Samples over the target next to each other; places on one ridge a few
 //!   millimetres apart are joined (one pass along both costs less than a link to each).
 //! * **Rest curves.** Each place's ridge: the run of the passes beside it (the swept
@@ -25,7 +27,9 @@
 //!   wall they cross at a slant, each stretch between two passes a place of its own — is
 //!   run along its own length instead, the stretches joined: one ball closes the band.
 //!   Samples on two faces of an edge are two places (a face no tool reaches beside one it
-//!   does).
+//!   does), and a curve keeps to its place's face; where it would stay on it for less than
+//!   a stepover (a wall lower than that, its passes running up it) it runs across instead,
+//!   along the wall.
 //!
 //! The estimate is the planner's own: the report's scallop is measured afterwards on the
 //! posted program by [`crate::verify`], with rays along the normals, by code this does not
