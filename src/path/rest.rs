@@ -402,7 +402,7 @@ impl GapSamples {
 /// line a spacing apart or less. (A barycentric grid set by the area runs millimetres apart
 /// along a sliver: the fans round the blower's bore top, 5 mm long and 0.1 mm wide, kept a
 /// 0.035 mm ridge unseen between their samples.)
-pub(crate) fn surface_samples(corners: [Point3; 3], spacing: f64, out: &mut Vec<(Point3, f64)>) {
+fn surface_samples(corners: [Point3; 3], spacing: f64, out: &mut Vec<(Point3, f64)>) {
     let [a, b, c] = corners;
     let sides = [(b - a).norm(), (c - b).norm(), (a - c).norm()];
     let longest = (0..3)
@@ -411,8 +411,8 @@ pub(crate) fn surface_samples(corners: [Point3; 3], spacing: f64, out: &mut Vec<
     // The longest side runs from p to q, r across it; u along p q, v toward r.
     let [p, q, r] = [0, 1, 2].map(|i| corners[(longest + i) % 3]);
     let length = sides[longest];
-    let Some(along) = (q - p).try_normalize(1e-300) else {
-        out.push((p, 0.0));
+    // A triangle with no extent stands for no area.
+    let Some(along) = (q - p).try_normalize(0.0) else {
         return;
     };
     let to_r = r - p;
@@ -430,7 +430,7 @@ pub(crate) fn surface_samples(corners: [Point3; 3], spacing: f64, out: &mut Vec<
         }
     };
     let foot = |u: f64| p + along * u;
-    let direction_up = up.try_normalize(1e-300).unwrap_or_else(Vector3::zeros);
+    let direction_up = up.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
     // The extent is linear on either side of r's foot: a strip's area by the trapezoid rule
     // on each side.
     let strip_area = |u0: f64, u1: f64| {
