@@ -1145,6 +1145,16 @@ mod tests {
         }
     }
 
+    /// A ball along `curve` (touching it at each point, running along y) into `swept`.
+    fn sweep_along(swept: &mut SweptTool, curve: &SectionCurve) {
+        let centres: Vec<Point3> = curve
+            .points
+            .iter()
+            .map(|p| p.point + p.normal * RADIUS)
+            .collect();
+        swept.insert(&pass_through(&centres, Vector3::y()), 0.0, TARGET);
+    }
+
     #[test]
     fn the_balls_over_a_thin_plate_leave_no_gap_on_its_underside() {
         // A plate 1 mm thick, its top passed 0.3 mm apart; measured out to 2 mm, the underside
@@ -1266,12 +1276,7 @@ mod tests {
             });
         assert!(lo < 8.5 && hi > 9.5, "{ys:?}");
         assert!(curve.points.iter().all(|p| p.normal.x > 0.999));
-        let centres: Vec<Point3> = curve
-            .points
-            .iter()
-            .map(|p| p.point + p.normal * RADIUS)
-            .collect();
-        swept.insert(&pass_through(&centres, Vector3::y()), 0.0, TARGET);
+        sweep_along(&mut swept, &curve);
         assert!(
             gaps(&part, &surface, &wall, &swept, &views, &options)
                 .iter()
@@ -1311,12 +1316,7 @@ mod tests {
         // It keeps to the wall: past its ends it stops rather than turn the corners.
         assert!(curve.points.iter().all(|p| p.normal.x > 0.999));
         // A ball along it closes the wall.
-        let centres: Vec<Point3> = curve
-            .points
-            .iter()
-            .map(|p| p.point + p.normal * RADIUS)
-            .collect();
-        swept.insert(&pass_through(&centres, Vector3::y()), 0.0, TARGET);
+        sweep_along(&mut swept, &curve);
         assert!(gaps(&part, &surface, &wall, &swept, &views, &options).is_empty());
     }
 
