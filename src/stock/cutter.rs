@@ -447,6 +447,37 @@ impl LineInterval for SweptSolid {
 
 #[cfg(test)]
 mod tests {
+    /// A pivot about the ball's centre (the centre stays, the axis turns 0.3°, as a lead's
+    /// first step does): the flutes' sweep is flat, and a line 2.16 mm from every axis
+    /// position misses it (a fan triangle with two equal corners once held it for 4.5 mm).
+    #[test]
+    fn a_pivot_about_the_centre_sweeps_no_farther_than_the_radius() {
+        use crate::geom::{Direction, Vector3};
+        let from = ToolPose {
+            tip: Point3::new(33.05137291670348, 3.2957299786145002, 8.928094217112104),
+            axis: Direction::new_normalize(Vector3::new(
+                0.24368822054209693,
+                0.07535614346610839,
+                0.9669216632235219,
+            )),
+        };
+        let to = ToolPose {
+            tip: Point3::new(33.04547082356141, 3.30598598856676, 8.928818736571714),
+            axis: Direction::new_normalize(Vector3::new(
+                0.24663926711313272,
+                0.07022813848997839,
+                0.9665594034937165,
+            )),
+        };
+        let body = BallEndBody::new(4.0, 10.0);
+        let line = Point3::new(0.0, 5.66, 11.478);
+        for tolerance in [0.001, 0.01, 0.05] {
+            for solid in body.sweep(&from, &to, tolerance) {
+                assert_eq!(solid.line_interval(0, &line), None);
+            }
+        }
+    }
+
     use super::*;
     use crate::geom::{Aabb, Vector3};
     use crate::stock::{DEFAULT_MAX_DEXELS, Stock};

@@ -399,8 +399,13 @@ impl SphereSweptHull {
             let polygon = convex_polygon(points, &normal);
             let m = polygon.len();
             let edges = (0..m).map(|i| (polygon[i], polygon[(i + 1) % m])).collect();
+            // A fan triangle with two corners at one point (a pivot about the ball's centre
+            // leaves the centre where it was) has no inside, and its edge planes would bound
+            // nothing: left out, its corners' and edges' capsules hold what it would.
             let triangles = (1..m - 1)
-                .map(|i| ([polygon[0], polygon[i], polygon[i + 1]], normal))
+                .map(|i| [polygon[0], polygon[i], polygon[i + 1]])
+                .filter(|[a, b, c]| (b - a).cross(&(c - a)).norm() > 1e-12 * scale * scale)
+                .map(|corners| (corners, normal))
                 .collect();
             return SphereSweptHull {
                 points: points.to_vec(),
