@@ -516,6 +516,7 @@ pub fn finish_impeller(
             hub.segments = path::nearest_order(
                 std::mem::take(&mut hub.segments),
                 hub_axes != HubAxes::Walls,
+                &link_cost,
             );
 
             // The blade passage 0 starts at: loops from the tip down.
@@ -620,6 +621,7 @@ pub fn finish_impeller(
                     finishing.segments = path::nearest_order(
                         std::mem::take(&mut finishing.segments),
                         blade_axes != BladeAxes::Lean,
+                        &link_cost,
                     );
                     finishing
                 };
@@ -777,7 +779,7 @@ pub fn finish_impeller(
             let mut keep_needed = |finishing: &mut Finishing, may_reverse: bool| {
                 let (kept, covered) =
                     swept.keep_needed(std::mem::take(&mut finishing.segments), surface);
-                finishing.segments = path::nearest_order(kept, may_reverse);
+                finishing.segments = path::nearest_order(kept, may_reverse, &link_cost);
                 summary.covered.merge(&covered);
             };
             keep_needed(&mut blade, blade_axes != BladeAxes::Lean);
@@ -979,7 +981,7 @@ pub fn finish_impeller(
                         passes.merge(result);
                     }
                     passes.segments =
-                        path::nearest_order(std::mem::take(&mut passes.segments), true);
+                        path::nearest_order(std::mem::take(&mut passes.segments), true, &link_cost);
                     summary.bore = Some(BoreSummary {
                         wall_area_mm2: bore.area_mm2,
                         height_mm: bore.height_mm,
@@ -1040,7 +1042,7 @@ pub fn finish_impeller(
     // whole planes: in plane order, one piece's end is seldom near the next one's start (on
     // the blower on a fixture, 356 of 357 safe-plane retracts were links too long for a short
     // one). Nearest first, either way round (the planes zig-zag already), links them short.
-    planes.segments = path::nearest_order(std::mem::take(&mut planes.segments), true);
+    planes.segments = path::nearest_order(std::mem::take(&mut planes.segments), true, &link_cost);
     summary.plane_points_left_to_impeller = planes.points_left_to_others;
     finishing.merge(planes);
     (finishing, summary)

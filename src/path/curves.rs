@@ -289,36 +289,37 @@ pub fn insert_cheapest(
 }
 
 /// `segments` reordered so that each starts near where the one before ended (greedy nearest
-/// neighbour from the first, ties to the lower index), each run backwards when `may_reverse`
-/// and its end is the nearer. Fewer and shorter links; the passes themselves are unchanged
-/// (a reversed one runs the same poses the other way, its pass directions turned round).
-pub fn nearest_order(segments: Vec<CutSegment>, may_reverse: bool) -> Vec<CutSegment> {
+/// neighbour from the first by `link_cost`, ties to the lower index), each run backwards
+/// when `may_reverse` and its end is the nearer. Fewer and shorter links; the passes
+/// themselves are unchanged (a reversed one runs the same poses the other way, its pass
+/// directions turned round). The cost is the caller's: the travel, and on a five-axis
+/// machine the rotaries' turn (near a rotary's pole a small change of the tool axis is a
+/// large turn of the other, which a link's length does not show).
+pub fn nearest_order(
+    segments: Vec<CutSegment>,
+    may_reverse: bool,
+    link_cost: &dyn Fn(&ToolPose, &ToolPose) -> f64,
+) -> Vec<CutSegment> {
     let n = segments.len();
     let mut slots: Vec<Option<CutSegment>> = segments.into_iter().map(Some).collect();
     let mut out: Vec<CutSegment> = Vec::with_capacity(n);
-    let ends = |s: &CutSegment| {
-        (
-            s.poses.first().map(|p| p.tip),
-            s.poses.last().map(|p| p.tip),
-        )
-    };
-    let mut here: Option<Point3> = None;
+    let mut here: Option<ToolPose> = None;
     for _ in 0..n {
         let mut best: Option<(f64, usize, bool)> = None;
         for (i, slot) in slots.iter().enumerate() {
             let Some(s) = slot else { continue };
-            let (Some(first), Some(last)) = ends(s) else {
+            let (Some(first), Some(last)) = (s.poses.first(), s.poses.last()) else {
                 continue;
             };
-            let Some(at) = here else {
+            let Some(at) = &here else {
                 best = Some((0.0, i, false));
                 break;
             };
-            let forward = (first - at).norm();
+            let forward = link_cost(at, first);
             if best.is_none_or(|b| forward < b.0) {
                 best = Some((forward, i, false));
             }
-            let backward = (last - at).norm();
+            let backward = link_cost(at, last);
             if may_reverse && backward < best.map_or(f64::INFINITY, |b| b.0) {
                 best = Some((backward, i, true));
             }
@@ -332,7 +333,7 @@ pub fn nearest_order(segments: Vec<CutSegment>, may_reverse: bool) -> Vec<CutSeg
                 *d = -*d;
             }
         }
-        here = s.poses.last().map(|p| p.tip);
+        here = s.poses.last().copied();
         out.push(s);
     }
     out
@@ -408,6 +409,42 @@ mod tests {
                 assert!(others.iter().zip(&planned).all(|(a, b)| a.poses == b.poses));
             }
         }
+    }
+
+    /// Nearest first: by travel from an upright pass the near tilted one comes next; with a
+    /// degree of turn costing a millimetre of link, the upright one a little farther does,
+    /// and the tilted ones after, together. Either way every pass is there once.
+    #[test]
+    fn nearest_order_weighs_the_turn_of_the_axis() {
+        let tilted = Direction::new_normalize(Vector3::new(1.0, 0.0, 1.0));
+        let tilt = |mut s: CutSegment| {
+            for p in &mut s.poses {
+                p.axis = tilted;
+            }
+            s
+        };
+        let passes = vec![
+            segment(Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0)),
+            tilt(segment(
+                Point3::new(1.5, 0.0, 0.0),
+                Point3::new(2.5, 0.0, 0.0),
+            )),
+            segment(Point3::new(3.5, 0.0, 0.0), Point3::new(4.5, 0.0, 0.0)),
+            tilt(segment(
+                Point3::new(5.0, 0.0, 0.0),
+                Point3::new(6.0, 0.0, 0.0),
+            )),
+        ];
+        let starts =
+            |order: &[CutSegment]| -> Vec<f64> { order.iter().map(|s| s.poses[0].tip.x).collect() };
+        let travel_only = |a: &ToolPose, b: &ToolPose| (b.tip - a.tip).norm();
+        let order = nearest_order(passes.clone(), false, &travel_only);
+        assert_eq!(starts(&order), [0.0, 1.5, 3.5, 5.0]);
+        let with_turn = |a: &ToolPose, b: &ToolPose| {
+            (b.tip - a.tip).norm() + angle_between(&a.axis, &b.axis).to_degrees()
+        };
+        let order = nearest_order(passes, false, &with_turn);
+        assert_eq!(starts(&order), [0.0, 3.5, 5.0, 1.5]);
     }
 
     /// With a link's cost counting the turn of the axis, a pass tilted like the segments at
