@@ -40,7 +40,7 @@ use std::collections::HashMap;
 use nalgebra::Isometry3;
 use rayon::prelude::*;
 
-use crate::geom::{Point3, Vector3, closest_point_on_segment};
+use crate::geom::{Point3, ToolPose, Vector3, closest_point_on_segment};
 use crate::mesh::{DrivePoint, Mesh, SectionCurve, SurfaceDistance};
 
 use super::CutSegment;
@@ -90,6 +90,8 @@ pub struct SweptTool {
     reach: f64,
     cell: f64,
     capsules: Vec<[Point3; 2]>,
+    /// The direction each capsule's pass runs in (a flute's capsule stands up the axis).
+    along: Vec<Vector3>,
     cells: HashMap<[i64; 3], Vec<u32>>,
 }
 
@@ -101,6 +103,7 @@ impl SweptTool {
             reach,
             cell: (radius + reach).max(1e-3),
             capsules: Vec::new(),
+            along: Vec::new(),
             cells: HashMap::new(),
         }
     }
@@ -111,41 +114,61 @@ impl SweptTool {
 
     /// Adds the ball swept along `segment`'s poses and, with `flutes_above_ball` > 0 (a
     /// swarf run: the flutes' side cuts), the flutes up to that far above the ball's centre,
-    /// as capsules `scallop` apart in height terms (balls √(2r·h) apart leave h/4 between
-    /// them).
+    /// as capsules up the axis of poses interpolated along each move `scallop` apart in
+    /// height terms (balls √(2r·h) apart leave h/4 between them). (Stacked along the moves
+    /// instead, a capsule every such step up the flutes, the swarf runs' bodies filled the
+    /// cells by the thousand and their measure took seconds.)
     pub fn insert(&mut self, segment: &CutSegment, flutes_above_ball: f64, scallop: f64) {
         let step = (2.0 * self.radius * scallop).sqrt().max(1e-3);
-        let levels = if flutes_above_ball > 0.0 {
-            (flutes_above_ball / step).ceil() as usize
-        } else {
-            0
-        };
         let radius = self.radius;
-        let centre = |k: usize, level: usize| {
-            let pose = &segment.poses[k];
-            let up = if levels == 0 {
-                0.0
-            } else {
-                flutes_above_ball * level as f64 / levels as f64
-            };
-            pose.tip + pose.axis.into_inner() * (radius + up)
-        };
-        for level in 0..=levels {
-            match segment.poses.len() {
-                0 => {}
-                1 => self.insert_capsule(centre(0, level), centre(0, level)),
-                n => {
-                    for k in 1..n {
-                        self.insert_capsule(centre(k - 1, level), centre(k, level));
-                    }
+        let poses = &segment.poses;
+        let centre = |pose: &ToolPose| pose.tip + pose.axis.into_inner() * radius;
+        match poses.len() {
+            0 => return,
+            1 => self.insert_capsule(centre(&poses[0]), centre(&poses[0]), Vector3::zeros()),
+            n => {
+                for k in 1..n {
+                    let (a, b) = (centre(&poses[k - 1]), centre(&poses[k]));
+                    self.insert_capsule(a, b, b - a);
                 }
+            }
+        }
+        if flutes_above_ball <= 0.0 {
+            return;
+        }
+        let flutes = |tip: Point3, axis: Vector3, along: Vector3, tool: &mut Self| {
+            let axis = axis.try_normalize(1e-12).unwrap_or_else(Vector3::z);
+            let bottom = tip + axis * radius;
+            tool.insert_capsule(bottom, bottom + axis * flutes_above_ball, along);
+        };
+        if poses.len() == 1 {
+            flutes(
+                poses[0].tip,
+                poses[0].axis.into_inner(),
+                Vector3::zeros(),
+                self,
+            );
+            return;
+        }
+        for k in 1..poses.len() {
+            let (from, to) = (&poses[k - 1], &poses[k]);
+            let along = centre(to) - centre(from);
+            let pieces = (along.norm() / step).ceil().max(1.0) as usize;
+            for j in usize::from(k > 1)..=pieces {
+                let t = j as f64 / pieces as f64;
+                let tip = from.tip + (to.tip - from.tip) * t;
+                let axis = from.axis.into_inner() * (1.0 - t) + to.axis.into_inner() * t;
+                flutes(tip, axis, along, self);
             }
         }
     }
 
-    fn insert_capsule(&mut self, a: Point3, b: Point3) {
+    /// Adds the capsule round `a b`, whose passes run along `along`.
+    fn insert_capsule(&mut self, a: Point3, b: Point3, along: Vector3) {
         let index = self.capsules.len() as u32;
         self.capsules.push([a, b]);
+        self.along
+            .push(along.try_normalize(1e-12).unwrap_or_else(Vector3::zeros));
         let grow = self.radius + self.reach;
         let lo = self.key(&a.inf(&b).map(|v| v - grow));
         let hi = self.key(&a.sup(&b).map(|v| v + grow));
@@ -170,7 +193,46 @@ impl SweptTool {
     /// a thin wall (a disc 1 mm thick: the hub's balls 1 mm above its underside), and leave no
     /// scallop on this face.
     pub fn gap(&self, p: &Point3, normal: &Vector3) -> Option<(f64, Vector3)> {
-        self.gap_among(p, normal, 0)
+        self.nearest_body(p, normal, 0, -1.0)
+            .map(|(d, i)| (d, self.direction(i)))
+    }
+
+    /// [`Self::gap`], or a body no farther than `enough` when there is one (not
+    /// necessarily the nearest: the first found ends the search, most samples being within
+    /// the target), trying the body `hint` names first and naming there the one found (a
+    /// sample's neighbour is most often within the target of the same body).
+    pub fn gap_or_within(
+        &self,
+        p: &Point3,
+        normal: &Vector3,
+        enough: f64,
+        hint: &mut Option<u32>,
+    ) -> Option<(f64, Vector3)> {
+        if let Some(i) = *hint
+            && let Some(d) = self.entry(i, p, normal, enough)
+        {
+            return Some((d, self.direction(i)));
+        }
+        let (d, i) = self.nearest_body(p, normal, 0, enough)?;
+        if d <= enough {
+            *hint = Some(i);
+        }
+        Some((d, self.direction(i)))
+    }
+
+    /// Where the ray from `p` along `normal` enters body `i`, when the body is in front of
+    /// `p` and the entry no farther than `limit`.
+    fn entry(&self, i: u32, p: &Point3, normal: &Vector3, limit: f64) -> Option<f64> {
+        let [a, b] = self.capsules[i as usize];
+        let nearest = closest_point_on_segment(p, &a, &b) - p;
+        if nearest.dot(normal) < 0.5 * self.radius {
+            return None;
+        }
+        // The ray enters no nearer than the body is.
+        if nearest.norm() - self.radius > limit {
+            return None;
+        }
+        ray_capsule_entry(p, normal, &a, &b, self.radius).filter(|&d| d <= limit)
     }
 
     /// Bodies swept so far: those inserted after this are told apart by [`Self::gap_among`].
@@ -180,34 +242,39 @@ impl SweptTool {
 
     /// [`Self::gap`] among the bodies from the `first`th on.
     pub fn gap_among(&self, p: &Point3, normal: &Vector3, first: u32) -> Option<(f64, Vector3)> {
+        self.nearest_body(p, normal, first, -1.0)
+            .map(|(d, i)| (d, self.direction(i)))
+    }
+
+    /// The direction body `i` runs in.
+    fn direction(&self, i: u32) -> Vector3 {
+        self.along[i as usize]
+    }
+
+    /// The body from the `first`th on whose entry along the normal is nearest (the first
+    /// inserted of equals), and that entry; or the first found no farther than `enough`.
+    fn nearest_body(
+        &self,
+        p: &Point3,
+        normal: &Vector3,
+        first: u32,
+        enough: f64,
+    ) -> Option<(f64, u32)> {
         let mut best: Option<(f64, u32)> = None;
         let cell = self.cells.get(&self.key(p))?;
         // Each cell's bodies are in the order they were inserted.
         for &i in &cell[cell.partition_point(|&i| i < first)..] {
-            let [a, b] = self.capsules[i as usize];
-            let nearest = closest_point_on_segment(p, &a, &b) - p;
-            if nearest.dot(normal) < 0.5 * self.radius {
-                continue;
-            }
-            // The ray enters no nearer than the body is.
-            let distance = nearest.norm() - self.radius;
-            if distance > self.reach || best.is_some_and(|(e, _)| distance > e) {
-                continue;
-            }
-            let Some(d) = ray_capsule_entry(p, normal, &a, &b, self.radius) else {
-                continue;
-            };
-            if d <= self.reach && best.is_none_or(|(e, j)| d < e || (d == e && i < j)) {
-                best = Some((d, i));
+            let limit = best.map_or(self.reach, |(e, _)| e);
+            if let Some(d) = self.entry(i, p, normal, limit) {
+                if d <= enough {
+                    return Some((d, i));
+                }
+                if best.is_none_or(|(e, j)| d < e || (d == e && i < j)) {
+                    best = Some((d, i));
+                }
             }
         }
-        best.map(|(d, i)| {
-            let [a, b] = self.capsules[i as usize];
-            (
-                d,
-                (b - a).try_normalize(1e-12).unwrap_or_else(Vector3::zeros),
-            )
-        })
+        best
     }
 }
 
@@ -333,43 +400,58 @@ impl GapSamples {
         let measured: Vec<Sample> = self
             .open
             .par_iter()
-            .map(|&(i, out_of_reach_among)| {
-                let (point, normal, _, _) = self.samples[i as usize];
-                // Out of reach of every body before: only a body since can reach it.
-                if let Some(first) = out_of_reach_among
-                    && views.iter().all(|view| {
-                        swept
-                            .gap_among(
-                                &view.transform_point(&point),
-                                &view.transform_vector(&normal),
-                                first,
-                            )
-                            .is_none()
-                    })
-                {
-                    return Sample::OutOfReach;
-                }
-                let Some((height, along)) = views
-                    .iter()
-                    .filter_map(|view| {
-                        let (h, d) = swept.gap(
+            .map_init(
+                || vec![None; views.len()],
+                |hints, &(i, out_of_reach_among)| {
+                    let (point, normal, _, _) = self.samples[i as usize];
+                    // Out of reach of every body before: only a body since can reach it.
+                    // (Before any measure every sample is "out of reach of none": the search
+                    // below settles it.)
+                    if let Some(first) = out_of_reach_among
+                        && first > 0
+                        && views.iter().all(|view| {
+                            swept
+                                .gap_among(
+                                    &view.transform_point(&point),
+                                    &view.transform_vector(&normal),
+                                    first,
+                                )
+                                .is_none()
+                        })
+                    {
+                        return Sample::OutOfReach;
+                    }
+                    // Most samples are within the target among some view's bodies: the first
+                    // that says so settles it, the nearest is sought only over the target.
+                    let mut nearest: Option<(f64, Vector3)> = None;
+                    for (view, hint) in views.iter().zip(hints.iter_mut()) {
+                        let Some((h, d)) = swept.gap_or_within(
                             &view.transform_point(&point),
                             &view.transform_vector(&normal),
-                        )?;
-                        Some((h, view.inverse_transform_vector(&d)))
-                    })
-                    .min_by(|x, y| x.0.total_cmp(&y.0))
-                else {
-                    return Sample::OutOfReach;
-                };
-                if height <= target {
-                    Sample::Within
-                } else if surface.any_within(&(point + normal * radius), radius - target) {
-                    Sample::Tight
-                } else {
-                    Sample::Over(height, along)
-                }
-            })
+                            target,
+                            hint,
+                        ) else {
+                            continue;
+                        };
+                        if h <= target {
+                            return Sample::Within;
+                        }
+                        if nearest.is_none_or(|(e, _)| h < e) {
+                            nearest = Some((h, view.inverse_transform_vector(&d)));
+                        }
+                    }
+                    let Some((height, along)) = nearest else {
+                        return Sample::OutOfReach;
+                    };
+                    if height <= target {
+                        Sample::Within
+                    } else if surface.any_within(&(point + normal * radius), radius - target) {
+                        Sample::Tight
+                    } else {
+                        Sample::Over(height, along)
+                    }
+                },
+            )
             .collect();
         let mut found = Vec::new();
         let mut open = Vec::new();
@@ -1087,10 +1169,88 @@ mod tests {
         assert!(balls.gap(&at_side, &Vector3::x()).is_none());
         let mut flutes = SweptTool::new(RADIUS, 0.2);
         flutes.insert(&segment, 8.0, TARGET);
-        let (gap, _) = flutes
+        let (gap, along) = flutes
             .gap(&at_side, &Vector3::x())
             .expect("the flutes come near");
         assert!(gap < 1e-9, "{gap}");
+        // The flutes' bodies run the way the pass does, not up the axis.
+        assert!((along - Vector3::y()).norm() < 1e-9, "{along:?}");
+    }
+
+    /// Between two poses a millimetre apart, tilting 10° as the tool moves, the flutes'
+    /// side sweeps the wall beside them everywhere the move passes: the gap the bodies leave
+    /// (interpolated along the move) is within a quarter of the target, and a gap a pose's
+    /// bodies alone would leave (1 mm apart: 0.06 mm) is not there.
+    #[test]
+    fn the_flutes_sweep_between_the_poses() {
+        let upright = Direction::new_normalize(Vector3::z());
+        let leaning = Direction::new_normalize(Vector3::new(-(10f64.to_radians()).tan(), 0.0, 1.0));
+        // The wall x = 20 - the leaning tool's flutes at height h stand off it by less than
+        // the radius by h·sin 10°: take the wall where the upright tool's flutes touch it.
+        let poses = vec![
+            ToolPose {
+                tip: Point3::new(20.0 + RADIUS, 0.0, -1.0),
+                axis: upright,
+            },
+            ToolPose {
+                tip: Point3::new(20.0 + RADIUS, 1.0, -1.0),
+                axis: leaning,
+            },
+        ];
+        let segment = CutSegment {
+            pass_directions: vec![Vector3::y(); 2],
+            poses,
+            leads: false,
+        };
+        let mut flutes = SweptTool::new(RADIUS, 0.2);
+        flutes.insert(&segment, 8.0, TARGET);
+        for k in 0..=20 {
+            let y = 0.05 * k as f64;
+            let (gap, _) = flutes
+                .gap(&Point3::new(20.0, y, 2.0), &Vector3::x())
+                .expect("the flutes come near");
+            assert!(gap <= 0.25 * TARGET + 1e-12, "y {y}: {gap}");
+        }
+    }
+
+    /// The search that stops at the first body within the target agrees with the nearest
+    /// body's: within exactly when the nearest is, and over it, the same gap and direction
+    /// (passes at scattered spacings and heights over a plate, samples all over it).
+    #[test]
+    fn stopping_at_the_first_body_within_agrees_with_the_nearest() {
+        let mut swept = SweptTool::new(RADIUS, 0.2);
+        let mut y = -5.0;
+        let mut k = 0;
+        while y < 25.0 {
+            let mut pass = pass_along_x(y);
+            let lift = 0.003 * (k % 5) as f64;
+            for pose in &mut pass.poses {
+                pose.tip.z += lift;
+            }
+            swept.insert(&pass, 0.0, TARGET);
+            y += 0.25 + 0.05 * (k % 7) as f64;
+            k += 1;
+        }
+        let mut hint = None;
+        let (mut within, mut over) = (0, 0);
+        for i in 0..80 {
+            for j in 0..80 {
+                let p = Point3::new(0.23 * i as f64, -0.4 + 0.31 * j as f64, 5.0);
+                let nearest = swept.gap(&p, &Vector3::z());
+                let quick = swept.gap_or_within(&p, &Vector3::z(), TARGET, &mut hint);
+                match nearest {
+                    Some((h, _)) if h <= TARGET => {
+                        within += 1;
+                        assert!(quick.is_some_and(|(q, _)| q <= TARGET), "{p:?}");
+                    }
+                    _ => {
+                        over += 1;
+                        assert_eq!(quick, nearest, "{p:?}");
+                    }
+                }
+            }
+        }
+        assert!(within > 100 && over > 100, "{within} within, {over} over");
     }
 
     #[test]
