@@ -20,8 +20,9 @@ use serde::Serialize;
 
 use super::config::{BladeAxes, HubAxes};
 use super::impeller_rest::{
-    COPIES_ROUNDS, COPIES_SAMPLE_SPACING, PASSAGE_REACH, PASSAGE_ROUNDS, PASSAGE_SAMPLE_SPACING,
-    PLANES_ROUNDS, RestScope, RestSummary, RestTarget, passage_views, rest_passes,
+    COPIES_REACH, COPIES_ROUNDS, COPIES_SAMPLE_SPACING, LeftPlaces, PASSAGE_REACH, PASSAGE_ROUNDS,
+    PASSAGE_SAMPLE_SPACING, PLANES_ROUNDS, RestScope, RestSummary, RestTarget, passage_views,
+    rest_passes,
 };
 use crate::access::{
     DirectionSet, RayScene, SurfacePoint, VisibilityOptions, region_axis, visibility_hierarchical,
@@ -872,6 +873,7 @@ pub fn finish_impeller(
                     // measure where along the passes left 0.07.
                     run_thin_places_along: false,
                     rounds: PASSAGE_ROUNDS,
+                    skip: None,
                 };
                 summary.rest = Some(rest_passes(part, &mut targets, &scope, options));
             }
@@ -1017,12 +1019,27 @@ pub fn finish_impeller(
                         others.push((swarf, flutes_above_ball));
                     }
                 }
+                // Each passage k is the first turned by k pitches.
+                let turns: Vec<_> = (0..order)
+                    .map(|k| {
+                        let turn = nalgebra::UnitQuaternion::from_rotation_matrix(
+                            &passage.frame.turn(k as f64 * pitch),
+                        );
+                        nalgebra::Isometry3::rotation_wrt_point(turn, passage.frame.centre)
+                    })
+                    .collect();
+                let left = LeftPlaces::new(
+                    summary.rest.as_ref().map_or(&[], |r| r.left.as_slice()),
+                    &turns,
+                );
+                let left_in_first = |p: &Point3| left.near(p);
                 let scope = RestScope {
                     target_of: &target_of,
                     link_cost: &link_cost,
                     views: &[nalgebra::Isometry3::identity()],
                     others: &others,
-                    reach: PASSAGE_REACH,
+                    reach: COPIES_REACH,
+                    skip: Some(&left_in_first),
                     sample_spacing: COPIES_SAMPLE_SPACING,
                     run_thin_places_along: false,
                     rounds: COPIES_ROUNDS,
@@ -1156,6 +1173,7 @@ pub fn finish_impeller(
             sample_spacing: PLANES_REST_SAMPLE_SPACING,
             run_thin_places_along: true,
             rounds: PLANES_ROUNDS,
+            skip: None,
         };
         let mut targets = [RestTarget {
             ctx: &planes_ctx,

@@ -387,6 +387,12 @@ impl GapSamples {
         Self { samples, open }
     }
 
+    /// Leaves out of the measure the samples whose point `keep` refuses.
+    pub fn retain(&mut self, keep: impl Fn(&Point3) -> bool) {
+        let samples = &self.samples;
+        self.open.retain(|&(i, _)| keep(&samples[i as usize].0));
+    }
+
     /// The samples over the target where the ball fits, in order.
     pub fn measure(
         &mut self,

@@ -214,8 +214,14 @@ fn sample_impeller_plan_is_gouge_free_collision_free_and_deterministic() {
     );
     // The copies are measured among the passes as copied: every passage's blade and hub,
     // the first passage's area once per passage (the part is symmetric to 0.01 mm).
-    let first = impeller.rest.as_ref().expect("rest passes over the first passage");
-    let copies = impeller.copies_rest.as_ref().expect("rest passes over the copies");
+    let first = impeller
+        .rest
+        .as_ref()
+        .expect("rest passes over the first passage");
+    let copies = impeller
+        .copies_rest
+        .as_ref()
+        .expect("rest passes over the copies");
     let every = first.measured_mm2 * impeller.passages as f64;
     assert!(
         (copies.measured_mm2 - every).abs() < 0.01 * every,
