@@ -446,13 +446,8 @@ mod tests {
     #[test]
     fn nearest_lookup_matches_brute_force() {
         let set = DirectionSet::new(4);
-        let mut seed = 12345u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut random = crate::geom::SeededRandom::new(12345);
+        let mut next = || random.range(-1.0, 1.0);
         for _ in 0..500 {
             let d = Vector3::new(next(), next(), next());
             if d.norm() < 1e-3 {

@@ -216,13 +216,8 @@ mod tests {
 
     #[test]
     fn nearest_matches_brute_force() {
-        let mut state = 7u64;
-        let mut rnd = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0
-        };
+        let mut random = crate::geom::SeededRandom::new(7);
+        let mut rnd = move || random.range(-10.0, 10.0);
         let mut segs = Vec::new();
         for i in 0..300 {
             let a = Point2::new(rnd(), rnd());

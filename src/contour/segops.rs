@@ -495,25 +495,12 @@ mod tests {
     use crate::contour::geometry::Vertex;
     use std::f64::consts::PI;
 
-    /// Deterministic pseudo-random numbers in [0, 1) (64-bit LCG, high bits).
-    pub(crate) struct Lcg(pub u64);
-    impl Lcg {
-        pub fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.next()
-        }
-    }
+    use crate::geom::SeededRandom;
 
-    fn random_segment(rng: &mut Lcg) -> Segment {
+    fn random_segment(rng: &mut SeededRandom) -> Segment {
         let a = Point2::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0));
         let b = Point2::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0));
-        let bulge = if rng.next() < 0.3 {
+        let bulge = if rng.unit() < 0.3 {
             0.0
         } else {
             rng.range(-3.0, 3.0)
@@ -550,7 +537,7 @@ mod tests {
 
     #[test]
     fn exact_distance_matches_dense_sampling() {
-        let mut rng = Lcg(0x5eed);
+        let mut rng = SeededRandom::new(0x5eed);
         let n = 600;
         for case in 0..300 {
             let (a, b) = (random_segment(&mut rng), random_segment(&mut rng));
@@ -621,7 +608,7 @@ mod tests {
 
     #[test]
     fn intersections_lie_on_both_segments() {
-        let mut rng = Lcg(42);
+        let mut rng = SeededRandom::new(42);
         let mut found = 0;
         for _ in 0..500 {
             let (a, b) = (random_segment(&mut rng), random_segment(&mut rng));

@@ -772,13 +772,8 @@ mod tests {
 
     #[test]
     fn row_sections_match_brute_force_membership() {
-        let mut state = 99u64;
-        let mut rnd = move |lo: f64, hi: f64| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
-        };
+        let mut random = crate::geom::SeededRandom::new(99);
+        let mut rnd = move |lo: f64, hi: f64| random.range(lo, hi);
         for case in 0..200 {
             let a = Point2::new(rnd(-3.0, 3.0), rnd(-3.0, 3.0));
             let b = Point2::new(rnd(-3.0, 3.0), rnd(-3.0, 3.0));

@@ -7,11 +7,15 @@
 
 mod aabb;
 mod runs;
+#[cfg(test)]
+mod seeded_random;
 mod toolpath;
 mod triangle;
 
 pub use aabb::{Aabb, Aabb2};
 pub use runs::{arc_lengths, run_on, runs_of_set};
+#[cfg(test)]
+pub(crate) use seeded_random::SeededRandom;
 pub use toolpath::{Move, MoveKind, ToolPose, Toolpath};
 pub use triangle::{
     ClosestFeature, closest_point_on_segment, closest_point_on_triangle,

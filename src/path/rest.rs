@@ -944,13 +944,8 @@ mod tests {
     /// The ray's entry into a capsule agrees with marching along the ray in small steps.
     #[test]
     fn ray_capsule_entry_agrees_with_marching() {
-        let mut state = 12345_u64;
-        let mut random = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut seeded = crate::geom::SeededRandom::new(12345);
+        let mut random = || seeded.range(-1.0, 1.0);
         let (mut hits, mut misses) = (0, 0);
         for _ in 0..400 {
             let mut point = || Point3::new(3.0 * random(), 3.0 * random(), 3.0 * random());

@@ -573,13 +573,8 @@ mod tests {
     #[test]
     fn segment_rectangle_distance_matches_brute_force() {
         let bx = patch_box([1.0, 2.0, 0.0], [4.0, 3.0, 1.0]);
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 10.0 - 2.5
-        };
+        let mut random = crate::geom::SeededRandom::new(7);
+        let mut next = || random.range(-2.5, 7.5);
         for _ in 0..200 {
             let (a, b) = (Point2::new(next(), next()), Point2::new(next(), next()));
             let exact = segment_rectangle_distance(a, b, &bx);

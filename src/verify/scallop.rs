@@ -888,13 +888,8 @@ mod tests {
         let r = 0.7;
         let (step, length) = (1e-3, 12.0);
         let mut hits = 0;
-        let mut state = 12345u64;
-        let mut unit = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::geom::SeededRandom::new(12345);
+        let mut unit = || random.unit();
         for corners in &triangles {
             let [a, b, c] = corners;
             for _ in 0..300 {
