@@ -21,8 +21,8 @@ use serde::Serialize;
 use super::config::{BladeAxes, HubAxes};
 use super::impeller_rest::{
     COPIES_REACH, COPIES_ROUNDS, COPIES_SAMPLE_SPACING, LeftPlaces, PASSAGE_REACH, PASSAGE_ROUNDS,
-    PASSAGE_SAMPLE_SPACING, PLANES_ROUNDS, RestScope, RestSummary, RestTarget, passage_views,
-    rest_passes,
+    PASSAGE_SAMPLE_SPACING, PLANES_ROUNDS, RestScope, RestSummary, RestTarget,
+    angle_past_first_blade, passage_turn, passage_views, rest_passes,
 };
 use crate::access::{
     DirectionSet, RayScene, SurfacePoint, VisibilityOptions, region_axis, visibility_hierarchical,
@@ -822,13 +822,8 @@ pub fn finish_impeller(
             }
             // Where the passes as planned leave more than the target between them.
             if impeller_options.rest && corner_band.is_none() {
-                let blade_angle = impeller.pieces[passage.first_blade].angle_deg.to_radians();
-                let in_first_passage = |t: usize| {
-                    let [a, b, c] = part.corners(t);
-                    let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-                    let (_, angle, _) = passage.frame.cylindrical(&centroid);
-                    (angle - blade_angle).rem_euclid(std::f64::consts::TAU) < passage.pitch
-                };
+                let in_first_passage =
+                    |t: usize| angle_past_first_blade(part, impeller, &passage, t) < passage.pitch;
                 let target_of = |t: usize| match impeller.regions[t] {
                     Region::Blade(b) if b as usize == passage.first_blade => Some(1),
                     Region::Splitter(p) => splitter_pieces
@@ -937,7 +932,6 @@ pub fn finish_impeller(
             // 7 of its 9 passages). Every passage is measured among the passes as copied, and
             // mended where it needs it.
             if impeller_options.rest && corner_band.is_none() && !copies.is_empty() {
-                let blade_angle = impeller.pieces[passage.first_blade].angle_deg.to_radians();
                 let order = impeller.order;
                 let pitch = passage.pitch;
                 // Pitches from the piece `from` to the piece `to`, when `to` stands there
@@ -960,11 +954,8 @@ pub fn finish_impeller(
                         })
                     }
                     _ if passage.flow[t] => {
-                        let [a, b, c] = part.corners(t);
-                        let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-                        let (_, angle, _) = passage.frame.cylindrical(&centroid);
-                        let k = ((angle - blade_angle).rem_euclid(std::f64::consts::TAU) / pitch)
-                            as usize;
+                        let k =
+                            (angle_past_first_blade(part, impeller, &passage, t) / pitch) as usize;
                         Some(k.min(order - 1) * slots)
                     }
                     _ => None,
@@ -1020,13 +1011,8 @@ pub fn finish_impeller(
                     }
                 }
                 // Each passage k is the first turned by k pitches.
-                let turns: Vec<_> = (0..order)
-                    .map(|k| {
-                        let turn = nalgebra::UnitQuaternion::from_rotation_matrix(
-                            &passage.frame.turn(k as f64 * pitch),
-                        );
-                        nalgebra::Isometry3::rotation_wrt_point(turn, passage.frame.centre)
-                    })
+                let turns: Vec<_> = (0..order as i32)
+                    .map(|k| passage_turn(&passage, k))
                     .collect();
                 let left = LeftPlaces::new(
                     summary.rest.as_ref().map_or(&[], |r| r.left.as_slice()),

@@ -18,7 +18,7 @@
 use serde::Serialize;
 
 use crate::geom::{Point3, ToolPose};
-use crate::impeller::HubPassage;
+use crate::impeller::{HubPassage, Impeller};
 use crate::mesh::{Mesh, SectionCurve};
 use crate::orient::AxisChooser;
 use crate::path::{
@@ -121,13 +121,31 @@ pub(super) const PASSAGE_REACH: f64 = 0.2;
 /// pitches among passage 0's.
 pub(super) fn passage_views(passage: &HubPassage) -> Vec<nalgebra::Isometry3<f64>> {
     (-NEIGHBOURS..=NEIGHBOURS)
-        .map(|k| {
-            let turn = nalgebra::UnitQuaternion::from_rotation_matrix(
-                &passage.frame.turn(k as f64 * passage.pitch),
-            );
-            nalgebra::Isometry3::rotation_wrt_point(turn, passage.frame.centre)
-        })
+        .map(|k| passage_turn(passage, k))
         .collect()
+}
+
+/// The turn by `k` pitches about the impeller's axis: passage 0 to passage k.
+pub(super) fn passage_turn(passage: &HubPassage, k: i32) -> nalgebra::Isometry3<f64> {
+    let turn = nalgebra::UnitQuaternion::from_rotation_matrix(
+        &passage.frame.turn(k as f64 * passage.pitch),
+    );
+    nalgebra::Isometry3::rotation_wrt_point(turn, passage.frame.centre)
+}
+
+/// How far round the axis from the first blade's angle triangle `t`'s centroid stands,
+/// radians in [0, 2π): passage k spans k to k + 1 pitches.
+pub(super) fn angle_past_first_blade(
+    part: &Mesh,
+    impeller: &Impeller,
+    passage: &HubPassage,
+    t: usize,
+) -> f64 {
+    let blade_angle = impeller.pieces[passage.first_blade].angle_deg.to_radians();
+    let [a, b, c] = part.corners(t);
+    let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+    let (_, angle, _) = passage.frame.cylindrical(&centroid);
+    (angle - blade_angle).rem_euclid(std::f64::consts::TAU)
 }
 
 /// What the rest passes over a region (the first passage, or the planes') found and planned.

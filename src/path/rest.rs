@@ -123,42 +123,30 @@ impl SweptTool {
         let radius = self.radius;
         let poses = &segment.poses;
         let centre = |pose: &ToolPose| pose.tip + pose.axis.into_inner() * radius;
-        match poses.len() {
-            0 => return,
-            1 => self.insert_capsule(centre(&poses[0]), centre(&poses[0]), Vector3::zeros()),
-            n => {
-                for k in 1..n {
-                    let (a, b) = (centre(&poses[k - 1]), centre(&poses[k]));
-                    self.insert_capsule(a, b, b - a);
-                }
-            }
+        // Each move from pose to pose; a lone pose, a move that stays.
+        let moves: Vec<(&ToolPose, &ToolPose)> = match poses.len() {
+            1 => vec![(&poses[0], &poses[0])],
+            _ => poses.windows(2).map(|w| (&w[0], &w[1])).collect(),
+        };
+        for &(from, to) in &moves {
+            let (a, b) = (centre(from), centre(to));
+            self.insert_capsule(a, b, b - a);
         }
         if flutes_above_ball <= 0.0 {
             return;
         }
-        let flutes = |tip: Point3, axis: Vector3, along: Vector3, tool: &mut Self| {
-            let axis = axis.try_normalize(1e-12).unwrap_or_else(Vector3::z);
-            let bottom = tip + axis * radius;
-            tool.insert_capsule(bottom, bottom + axis * flutes_above_ball, along);
-        };
-        if poses.len() == 1 {
-            flutes(
-                poses[0].tip,
-                poses[0].axis.into_inner(),
-                Vector3::zeros(),
-                self,
-            );
-            return;
-        }
-        for k in 1..poses.len() {
-            let (from, to) = (&poses[k - 1], &poses[k]);
+        for (m, &(from, to)) in moves.iter().enumerate() {
             let along = centre(to) - centre(from);
             let pieces = (along.norm() / step).ceil().max(1.0) as usize;
-            for j in usize::from(k > 1)..=pieces {
+            // The move's first pose is the one before's last.
+            for j in usize::from(m > 0)..=pieces {
                 let t = j as f64 / pieces as f64;
                 let tip = from.tip + (to.tip - from.tip) * t;
-                let axis = from.axis.into_inner() * (1.0 - t) + to.axis.into_inner() * t;
-                flutes(tip, axis, along, self);
+                let axis = (from.axis.into_inner() * (1.0 - t) + to.axis.into_inner() * t)
+                    .try_normalize(1e-12)
+                    .unwrap_or_else(Vector3::z);
+                let bottom = tip + axis * radius;
+                self.insert_capsule(bottom, bottom + axis * flutes_above_ball, along);
             }
         }
     }
@@ -449,9 +437,7 @@ impl GapSamples {
                     let Some((height, along)) = nearest else {
                         return Sample::OutOfReach;
                     };
-                    if height <= target {
-                        Sample::Within
-                    } else if surface.any_within(&(point + normal * radius), radius - target) {
+                    if surface.any_within(&(point + normal * radius), radius - target) {
                         Sample::Tight
                     } else {
                         Sample::Over(height, along)
