@@ -12,7 +12,8 @@
 //! one, a touch or a cut within the tolerance). A point whose ray meets nothing within
 //! `reach` is not reached: the strategy left it (unreachable, or a region no pass covers).
 //! The face the part stands on is left out of both (no tool gets there). The bodies are
-//! found through a uniform grid and a bounding sphere each; entries are exact.
+//! found through a bounding-box tree, nearest along the ray first, and a bounding sphere
+//! each; entries are exact.
 //!
 //! Where the part is concave more tightly than the ball (a blade's root without a fillet as
 //! large as the ball, a channel narrower than it), no placement of the ball touches the
@@ -203,7 +204,7 @@ pub fn measure_scallop_map_of(
     labels: Option<&[&str]>,
     tool_reach: Option<&ToolReach>,
 ) -> (ScallopReport, Vec<ScallopPatch>) {
-    let ScallopOptions { target, reach, .. } = *options;
+    let target = options.target;
     let distance = SurfaceDistance::new(part);
     // No passes: nothing is reached, and narrow is `options.radius`'s.
     let smallest = passes
@@ -211,10 +212,6 @@ pub fn measure_scallop_map_of(
         .map(|(_, ball)| ball.radius)
         .reduce(f64::min)
         .unwrap_or(options.radius);
-    let largest = passes
-        .iter()
-        .map(|(_, ball)| ball.radius)
-        .fold(smallest, f64::max);
     let mut swept: Vec<Swept> = Vec::new();
     let mut radii: Vec<f64> = Vec::new();
     for (toolpath, ball) in passes {
@@ -222,14 +219,14 @@ pub fn measure_scallop_map_of(
         radii.extend(std::iter::repeat_n(ball.radius, bodies.len()));
         swept.extend(bodies);
     }
-    let grid = Grid::new(&swept, largest, (2.0 * largest).max(reach));
+    let tree = BodyTree::new(&swept, &radii);
     let spheres: Vec<(Point3, f64)> = swept
         .iter()
         .zip(&radii)
         .map(|(s, r)| s.bounding_sphere(*r))
         .collect();
     scallop_of_samples(
-        part, &distance, &swept, &radii, &grid, &spheres, smallest, options, labels, tool_reach,
+        part, &distance, &swept, &radii, &tree, &spheres, smallest, options, labels, tool_reach,
     )
 }
 
@@ -322,14 +319,14 @@ fn swept_bodies(
 }
 
 /// The measure itself, on the swept bodies (each with its ball's radius in `radii`, listed in
-/// `grid`, held by `spheres`); narrow where the ball of radius `narrow_radius` does not fit.
+/// `tree`, held by `spheres`); narrow where the ball of radius `narrow_radius` does not fit.
 #[allow(clippy::too_many_arguments)]
 fn scallop_of_samples(
     part: &Mesh,
     distance: &SurfaceDistance,
     swept: &[Swept],
     radii: &[f64],
-    grid: &Grid,
+    tree: &BodyTree,
     spheres: &[(Point3, f64)],
     narrow_radius: f64,
     options: &ScallopOptions,
@@ -404,32 +401,43 @@ fn scallop_of_samples(
         .collect();
     let heights: Vec<Option<f64>> = samples
         .par_iter()
-        .map(|(p, n, _, _)| {
-            if n.z < -0.99 && (p.z - table_z).abs() < 1e-6 {
-                return Some(f64::NAN);
-            }
-            let end = p + n * reach;
-            let mut best: Option<f64> = None;
-            grid.for_each_near(p, &end, |i| {
-                // Most bodies a cell lists pass far from the ray: their bounding sphere
-                // says so for a few products.
-                let (centre, bound) = spheres[i];
-                let along = (centre - p).dot(n).clamp(0.0, reach);
-                let off = centre - (p + n * along);
-                if off.norm_squared() > bound * bound
-                    || best.is_some_and(|h| (centre - p).dot(n) - bound >= h)
-                {
-                    return;
+        // The body that held the previous sample's least entry, tried first: neighbouring
+        // samples are usually held by the same body, and a small entry found first lets
+        // the sphere test below pass over almost every other body.
+        .map_init(
+            || None::<usize>,
+            |hint, (p, n, _, _)| {
+                if n.z < -0.99 && (p.z - table_z).abs() < 1e-6 {
+                    return Some(f64::NAN);
                 }
-                if let Some(t) = swept[i].entry(p, n, radii[i])
-                    && t <= reach
-                    && best.is_none_or(|h| t < h)
-                {
-                    best = Some(t);
-                }
-            });
-            best
-        })
+                let mut best: Option<(f64, usize)> = None;
+                let mut try_body = |i: usize| {
+                    // A body can hold the least entry only if its bounding sphere meets the
+                    // ray short of the best entry so far: a few products for most of them.
+                    let (centre, bound) = spheres[i];
+                    let length = best.map_or(reach, |(h, _)| h.min(reach));
+                    let along = (centre - p).dot(n).clamp(0.0, length);
+                    let off = centre - (p + n * along);
+                    if off.norm_squared() > bound * bound {
+                        return length;
+                    }
+                    if let Some(t) = swept[i].entry(p, n, radii[i])
+                        && t <= reach
+                        && best.is_none_or(|(h, _)| t < h)
+                    {
+                        best = Some((t, i));
+                    }
+                    best.map_or(reach, |(h, _)| h.min(reach))
+                };
+                let length = match *hint {
+                    Some(i) => try_body(i),
+                    None => reach,
+                };
+                tree.visit_along(p, n, length, &mut try_body);
+                *hint = best.map(|(_, i)| i);
+                best.map(|(h, _)| h)
+            },
+        )
         .collect();
     // Of the open samples over the target, those no axis of the tool reaches.
     let blocked: Vec<bool> = samples
@@ -739,90 +747,158 @@ pub fn ray_rounded_triangle_entry(
     entry
 }
 
-/// A uniform grid of the swept bodies by their bounding boxes.
-struct Grid {
-    cell: f64,
-    origin: Point3,
-    dims: [usize; 3],
-    starts: Vec<u32>,
-    items: Vec<u32>,
+/// A bounding-box tree of the swept bodies (each box grown by its ball's radius), for the
+/// rays up the samples' normals: a ray meets a few dozen boxes where a uniform grid coarse
+/// enough to hold the bodies listed thousands.
+struct BodyTree {
+    nodes: Vec<BodyNode>,
+    /// The bodies in leaf order.
+    order: Vec<u32>,
 }
 
-impl Grid {
-    fn new(swept: &[Swept], radius: f64, cell: f64) -> Grid {
-        let mut lo = Point3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
-        let mut hi = Point3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for item in swept {
-            let (l, h) = item.bounds();
-            lo = lo.inf(&l);
-            hi = hi.sup(&h);
-        }
-        if swept.is_empty() {
-            lo = Point3::origin();
-            hi = Point3::origin();
-        }
-        let origin = lo - Vector3::repeat(radius + cell);
-        let extent = hi - origin + Vector3::repeat(radius + cell);
-        let dims = [0, 1, 2].map(|k| ((extent[k] / cell).ceil() as usize).clamp(1, 1024));
-        let cell_of = |p: &Point3, k: usize| {
-            (((p[k] - origin[k]) / cell).floor().max(0.0) as usize).min(dims[k] - 1)
+#[derive(Clone, Copy, Debug)]
+struct BodyNode {
+    lo: Point3,
+    hi: Point3,
+    /// Inner node: index of the first child (the second follows it). Leaf: first body in
+    /// `order`.
+    first: u32,
+    /// Bodies in the leaf; 0 for an inner node.
+    count: u32,
+}
+
+/// Bodies per leaf of the tree.
+const BODIES_PER_LEAF: usize = 4;
+
+impl BodyTree {
+    fn new(swept: &[Swept], radii: &[f64]) -> BodyTree {
+        let boxes: Vec<(Point3, Point3)> = swept
+            .iter()
+            .zip(radii)
+            .map(|(body, r)| {
+                let (lo, hi) = body.bounds();
+                (lo - Vector3::repeat(*r), hi + Vector3::repeat(*r))
+            })
+            .collect();
+        let mut tree = BodyTree {
+            nodes: Vec::with_capacity(2 * boxes.len() / BODIES_PER_LEAF + 1),
+            order: (0..boxes.len() as u32).collect(),
         };
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
-        for (i, item) in swept.iter().enumerate() {
-            let (l, h) = item.bounds();
-            let (l, h) = (l - Vector3::repeat(radius), h + Vector3::repeat(radius));
-            for x in cell_of(&l, 0)..=cell_of(&h, 0) {
-                for y in cell_of(&l, 1)..=cell_of(&h, 1) {
-                    for z in cell_of(&l, 2)..=cell_of(&h, 2) {
-                        lists[(x * dims[1] + y) * dims[2] + z].push(i as u32);
-                    }
-                }
-            }
+        if !boxes.is_empty() {
+            tree.nodes.push(BodyNode {
+                lo: Point3::origin(),
+                hi: Point3::origin(),
+                first: 0,
+                count: 0,
+            });
+            tree.build(&boxes, 0, 0, boxes.len());
         }
-        let mut starts = Vec::with_capacity(lists.len() + 1);
-        let mut items = Vec::new();
-        for list in lists {
-            starts.push(items.len() as u32);
-            items.extend(list);
-        }
-        starts.push(items.len() as u32);
-        Grid {
-            cell,
-            origin,
-            dims,
-            starts,
-            items,
-        }
+        tree
     }
 
-    /// Calls `visit` with every capsule whose box meets the box of segment `pq` (a capsule
-    /// may come more than once).
-    fn for_each_near(&self, p: &Point3, q: &Point3, mut visit: impl FnMut(usize)) {
-        let cell_of = |v: f64, k: usize| -> Option<usize> {
-            let c = ((v - self.origin[k]) / self.cell).floor();
-            (c >= 0.0 && (c as usize) < self.dims[k]).then_some(c as usize)
+    /// Median split of `order[start..end]` along the longest side of its boxes' centres.
+    fn build(&mut self, boxes: &[(Point3, Point3)], node: usize, start: usize, end: usize) {
+        let (mut lo, mut hi) = boxes[self.order[start] as usize];
+        let (mut centre_lo, mut centre_hi) =
+            (nalgebra::center(&lo, &hi), nalgebra::center(&lo, &hi));
+        for &i in &self.order[start..end] {
+            let (l, h) = boxes[i as usize];
+            lo = lo.inf(&l);
+            hi = hi.sup(&h);
+            let c = nalgebra::center(&l, &h);
+            centre_lo = centre_lo.inf(&c);
+            centre_hi = centre_hi.sup(&c);
+        }
+        self.nodes[node].lo = lo;
+        self.nodes[node].hi = hi;
+        if end - start <= BODIES_PER_LEAF {
+            self.nodes[node].first = start as u32;
+            self.nodes[node].count = (end - start) as u32;
+            return;
+        }
+        let spread = centre_hi - centre_lo;
+        let axis = (0..3)
+            .max_by(|&a, &b| spread[a].total_cmp(&spread[b]))
+            .unwrap_or(0);
+        let mid = (start + end) / 2;
+        // The lower corner plus the upper orders by centre; ties by index keep the tree the
+        // same on every run.
+        let key = |i: &u32| {
+            let (l, h) = boxes[*i as usize];
+            l[axis] + h[axis]
         };
-        let (l, h) = (p.inf(q), p.sup(q));
-        let range = |k: usize| {
-            let lo = cell_of(l[k], k).unwrap_or(if l[k] < self.origin[k] {
-                0
-            } else {
-                self.dims[k]
-            });
-            let hi = cell_of(h[k], k).unwrap_or(if h[k] < self.origin[k] {
-                0
-            } else {
-                self.dims[k] - 1
-            });
-            lo..=hi.min(self.dims[k] - 1)
+        self.order[start..end]
+            .select_nth_unstable_by(mid - start, |x, y| key(x).total_cmp(&key(y)).then(x.cmp(y)));
+        let first = self.nodes.len();
+        let empty = BodyNode {
+            lo: Point3::origin(),
+            hi: Point3::origin(),
+            first: 0,
+            count: 0,
         };
-        for x in range(0) {
-            for y in range(1) {
-                for z in range(2) {
-                    let c = (x * self.dims[1] + y) * self.dims[2] + z;
-                    for &i in &self.items[self.starts[c] as usize..self.starts[c + 1] as usize] {
-                        visit(i as usize);
+        self.nodes.push(empty);
+        self.nodes.push(empty);
+        self.nodes[node].first = first as u32;
+        self.nodes[node].count = 0;
+        self.build(boxes, first, start, mid);
+        self.build(boxes, first + 1, mid, end);
+    }
+
+    /// Calls `visit` with every body whose box meets the ray `p + t·d`, 0 ≤ t ≤ `length`,
+    /// nearer boxes first; `visit` returns the length still wanted (the best entry so far),
+    /// and boxes the ray meets only beyond it are passed over.
+    fn visit_along(
+        &self,
+        p: &Point3,
+        d: &Vector3,
+        mut length: f64,
+        mut visit: impl FnMut(usize) -> f64,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        // Where the ray is within a node's box: the slabs' overlap, or none.
+        let inverse = d.map(|x| 1.0 / x);
+        let enters = |n: &BodyNode, length: f64| -> Option<f64> {
+            let (mut near, mut far) = (0.0_f64, length);
+            for k in 0..3 {
+                if d[k] == 0.0 {
+                    if p[k] < n.lo[k] || p[k] > n.hi[k] {
+                        return None;
                     }
+                    continue;
+                }
+                let (a, b) = ((n.lo[k] - p[k]) * inverse[k], (n.hi[k] - p[k]) * inverse[k]);
+                near = near.max(a.min(b));
+                far = far.min(a.max(b));
+            }
+            (near <= far).then_some(near)
+        };
+        let mut stack: Vec<(f64, u32)> = Vec::with_capacity(64);
+        if let Some(t) = enters(&self.nodes[0], length) {
+            stack.push((t, 0));
+        }
+        while let Some((t, index)) = stack.pop() {
+            if t > length {
+                continue;
+            }
+            let node = self.nodes[index as usize];
+            if node.count > 0 {
+                let start = node.first as usize;
+                for &i in &self.order[start..start + node.count as usize] {
+                    length = visit(i as usize);
+                }
+            } else {
+                let (l, r) = (node.first, node.first + 1);
+                let near_l = enters(&self.nodes[l as usize], length);
+                let near_r = enters(&self.nodes[r as usize], length);
+                // The nearer child is popped first.
+                match (near_l, near_r) {
+                    (Some(a), Some(b)) if a <= b => stack.extend([(b, r), (a, l)]),
+                    (Some(a), Some(b)) => stack.extend([(a, l), (b, r)]),
+                    (Some(a), None) => stack.push((a, l)),
+                    (None, Some(b)) => stack.push((b, r)),
+                    (None, None) => {}
                 }
             }
         }
@@ -833,6 +909,57 @@ impl Grid {
 mod tests {
     use super::*;
     use crate::geom::{Direction, Move, ToolPose, closest_point_on_triangle};
+
+    /// The tree's walk, narrowed by the best entry as it goes, finds the least entry of
+    /// every body along rays through a tangle of capsules and sheets: the brute-force least.
+    #[test]
+    fn the_body_tree_finds_the_least_entry_of_every_body() {
+        let mut random = crate::geom::SeededRandom::new(2026);
+        let point = |random: &mut crate::geom::SeededRandom, spread: f64| {
+            Point3::new(
+                random.range(-spread, spread),
+                random.range(-spread, spread),
+                random.range(-spread, spread),
+            )
+        };
+        let swept: Vec<Swept> = (0..400)
+            .map(|i| {
+                let a = point(&mut random, 10.0);
+                let b = a + point(&mut random, 1.5).coords;
+                if i % 3 == 0 {
+                    Swept::Sheet([a, b, a + point(&mut random, 1.5).coords])
+                } else {
+                    Swept::Capsule(a, b)
+                }
+            })
+            .collect();
+        let radii: Vec<f64> = (0..swept.len())
+            .map(|i| 0.5 + 0.25 * (i % 4) as f64)
+            .collect();
+        let tree = BodyTree::new(&swept, &radii);
+        let reach = 6.0;
+        let mut hits = 0;
+        for _ in 0..500 {
+            let p = point(&mut random, 12.0);
+            let d = point(&mut random, 1.0)
+                .coords
+                .try_normalize(1e-9)
+                .unwrap_or_else(Vector3::z);
+            let least = |i: usize| swept[i].entry(&p, &d, radii[i]).filter(|t| *t <= reach);
+            let brute = (0..swept.len()).filter_map(least).reduce(f64::min);
+            let mut best: Option<f64> = None;
+            tree.visit_along(&p, &d, reach, |i| {
+                if let Some(t) = least(i) {
+                    best = Some(best.map_or(t, |b| b.min(t)));
+                }
+                best.unwrap_or(reach)
+            });
+            assert_eq!(best, brute);
+            hits += usize::from(brute.is_some());
+        }
+        // Both kinds of answer were asked for.
+        assert!(hits > 50 && hits < 450, "{hits} of 500 rays hit");
+    }
 
     #[test]
     fn the_ray_enters_a_capsule_where_the_closed_form_says() {
