@@ -8,7 +8,7 @@ use super::config::{Job, unit_direction};
 use crate::access::RayScene;
 use crate::collide::{Margins, PartCollider, PreparedTool, Table};
 use crate::error::{Error, JobError, Result};
-use crate::geom::{Direction, Point3, ToolPose, Vector3, positive_zero};
+use crate::geom::{Point3, Vector3, positive_zero};
 use crate::mesh::io::RawMesh;
 use crate::mesh::{Mesh, MeshReport, Piece, PrepareOptions, prepare_without_stray_pieces};
 use crate::orient::{AxisChooser, AxisOptions, AxisTurn, SmoothingOptions};
@@ -271,11 +271,7 @@ impl PlanSetup {
     /// Whether the machine can point the tool along `axis` (the inverse kinematics has a
     /// solution within the axis limits).
     pub fn reachable(&self, axis: &Vector3) -> bool {
-        let pose = ToolPose {
-            tip: self.pivot,
-            axis: Direction::new_normalize(*axis),
-        };
-        self.kinematics.inverse(&pose, None).is_ok()
+        self.kinematics.reaches_axis(&self.pivot, axis)
     }
 
     /// The tool axis, in the part frame, at which the machine's rotary axes are singular: the

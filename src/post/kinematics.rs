@@ -230,6 +230,16 @@ pub trait MachineKinematics {
     /// Forward kinematics: the part-frame pose the joints produce.
     fn forward(&self, joints: &Joints) -> ToolPose;
 
+    /// Whether some joints inside the limits hold the tool tip at `tip` along `axis` (part
+    /// frame): what the planners ask of every candidate axis. The default solves the inverse.
+    fn reaches_axis(&self, tip: &Point3<f64>, axis: &Vector3<f64>) -> bool {
+        let pose = ToolPose {
+            tip: *tip,
+            axis: Unit::new_normalize(*axis),
+        };
+        self.inverse(&pose, None).is_ok()
+    }
+
     /// Singularity-relaxed inverse used by linearisation: like [`Self::inverse`] with
     /// `preferred` as the previous joints, but near the singularity the machine may keep the
     /// rotary axes close to `preferred` at the cost of an axis error of at most
@@ -509,6 +519,28 @@ impl TableTableAC {
         turns_within(c, self.c_limits_deg, reference)
     }
 
+    /// The two joint branches for unit axis `k` (before C wrapping): tilt A one way or the
+    /// other, C turned half a turn between them.
+    fn branches(k: &Vector3<f64>, previous: Option<&Joints>) -> [Candidate; 2] {
+        let h = k.x.hypot(k.y);
+        let tilt = h.atan2(k.z).to_degrees(); // in [0, 180]
+        if h <= SINGULAR_AXIS_EPS {
+            // Singular: C is free; keep the previous C (the axis does not depend on it). Both
+            // tilt signs give the same axis; a = ±0 or ±180 with unchanged C.
+            let c = previous.map_or(0.0, |p| p.c);
+            [Candidate { a: tilt, c }, Candidate { a: -tilt, c }]
+        } else {
+            let c = atan2_deg(k.x, k.y);
+            [
+                Candidate { a: tilt, c },
+                Candidate {
+                    a: -tilt,
+                    c: c + 180.0,
+                },
+            ]
+        }
+    }
+
     /// Picks the best candidate among `branches` (values before C wrapping).
     fn choose(
         &self,
@@ -616,6 +648,18 @@ pub(super) fn turns_within(v: f64, limits: Option<(f64, f64)>, reference: Option
     }
 }
 
+/// Whether angle `v` (degrees) has a 360° turn within `limits` ([`turns_within`] not empty).
+pub(super) fn has_turn_within(v: f64, limits: Option<(f64, f64)>) -> bool {
+    match limits {
+        None => true,
+        Some((lo, hi)) => {
+            let k0 = ((lo - LIMIT_SLACK_DEG - v) / 360.0).ceil() as i64;
+            let k1 = ((hi + LIMIT_SLACK_DEG - v) / 360.0).floor() as i64;
+            (k0..=k1).any(|k| within_limits(v + 360.0 * k as f64, limits).is_some())
+        }
+    }
+}
+
 /// An angle (degrees) wrapped into `(−180°, 180°]`, without negative zero.
 pub(super) fn normalize_deg(d: f64) -> f64 {
     let w = d - 360.0 * (d / 360.0).round(); // in [−180, 180]
@@ -638,29 +682,23 @@ impl MachineKinematics for TableTableAC {
         if previous.is_some_and(|p| !p.is_finite()) {
             return Err(KinematicsError::NonFinite);
         }
-        let h = k.x.hypot(k.y);
-        let tilt = h.atan2(k.z).to_degrees(); // in [0, 180]
-        let c0 = if h <= SINGULAR_AXIS_EPS {
-            // Singular: C is free; keep the previous C (the axis does not depend on it).
-            previous.map_or(0.0, |p| p.c)
-        } else {
-            atan2_deg(k.x, k.y)
-        };
-        let branches = if h <= SINGULAR_AXIS_EPS {
-            // Both tilt signs give the same axis; a = ±0 or ±180 with unchanged C.
-            [Candidate { a: tilt, c: c0 }, Candidate { a: -tilt, c: c0 }]
-        } else {
-            [
-                Candidate { a: tilt, c: c0 },
-                Candidate {
-                    a: -tilt,
-                    c: c0 + 180.0,
-                },
-            ]
-        };
-        let best = self.choose(&branches, previous)?;
+        let best = self.choose(&Self::branches(&k, previous), previous)?;
         // `+ 0.0` turns a −0.0 into +0.0.
         Ok(self.joints_for(pose, best.a + 0.0, best.c + 0.0))
+    }
+
+    /// Either branch's A inside the limits with a turn of its C inside C's: what
+    /// [`Self::inverse`] asks before it builds the joints (the linear axes have no limits).
+    fn reaches_axis(&self, tip: &Point3<f64>, axis: &Vector3<f64>) -> bool {
+        if self.validate().is_err() || !axis.iter().chain(tip.coords.iter()).all(|v| v.is_finite())
+        {
+            return false;
+        }
+        let k = axis.normalize();
+        Self::branches(&k, None).iter().any(|b| {
+            Self::within(b.a, self.a_limits_deg).is_some()
+                && has_turn_within(b.c, self.c_limits_deg)
+        })
     }
 
     fn forward(&self, j: &Joints) -> ToolPose {

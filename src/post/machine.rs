@@ -81,6 +81,10 @@ impl MachineKinematics for Machine {
         self.kinematics().forward(joints)
     }
 
+    fn reaches_axis(&self, tip: &nalgebra::Point3<f64>, axis: &nalgebra::Vector3<f64>) -> bool {
+        self.kinematics().reaches_axis(tip, axis)
+    }
+
     fn inverse_relaxed(
         &self,
         pose: &ToolPose,

@@ -402,3 +402,26 @@ proptest! {
         prop_assert!(err <= budget.min(0.1) + 1e-12);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// The quick reach test says yes exactly when the inverse finds joints, with limited and
+    /// continuous C, narrow and wide A.
+    #[test]
+    fn reaching_an_axis_agrees_with_the_inverse(
+        axis in axis_strategy(),
+        tip in prop::array::uniform3(-200.0f64..200.0),
+        a_limits in (-150.0f64..0.0, 0.0f64..150.0),
+        c_limits in prop::option::of((-400.0f64..0.0, 0.0f64..400.0)),
+    ) {
+        let kin = machine()
+            .with_a_limits(a_limits.0, a_limits.1)
+            .with_c_limits(c_limits);
+        let p = pose(tip, axis);
+        prop_assert_eq!(
+            kin.reaches_axis(&p.tip, &p.axis.into_inner()),
+            kin.inverse(&p, None).is_ok()
+        );
+    }
+}
