@@ -87,6 +87,13 @@ pub fn bisect(mut fails: f64, mut holds_at: f64, steps: usize, holds: impl Fn(f6
     holds_at
 }
 
+/// The distance between passes of a ball of radius `r` that leaves cusps `h` high on a flat
+/// surface: 2·√(h(2r − h)).
+pub fn stepover_for_scallop(radius: f64, scallop: f64) -> f64 {
+    let h = scallop.clamp(0.0, radius);
+    2.0 * (h * (2.0 * radius - h)).sqrt()
+}
+
 /// The value below which `share` of the total weight of `(value, weight)` pairs lies (the
 /// first value whose running weight, smallest values first, reaches it); `None` when there
 /// are none.

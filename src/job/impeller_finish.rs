@@ -375,6 +375,9 @@ pub struct BoreSummary {
     pub wall_area_mm2: f64,
     pub height_mm: f64,
     pub level_step_mm: f64,
+    /// How far the ball stands off the deepest crease between the wall's facets (the step
+    /// leaves the rest of the scallop target between the loops), mm.
+    pub crease_standoff_mm: f64,
     /// Curves at the levels, the segments planned along them, and their drive points no
     /// tool axis reached.
     pub loops: usize,
@@ -1091,7 +1094,13 @@ pub fn finish_impeller(
             // The bore: loops round its wall with the tool along the axis, leaning off the
             // machine's pole toward the middle of the bore (away from the wall it cuts).
             if corner_band.is_none() {
-                let bore = bore_loops(part, impeller, &passage.frame, stepover);
+                let bore = bore_loops(
+                    part,
+                    impeller,
+                    &passage.frame,
+                    radius,
+                    options.scallop_height,
+                );
                 if !bore.curves.is_empty() {
                     let frame = &passage.frame;
                     let bore_field = |_: &Point3, normal: &Vector3, _: &Vector3| {
@@ -1114,6 +1123,7 @@ pub fn finish_impeller(
                         wall_area_mm2: bore.area_mm2,
                         height_mm: bore.height_mm,
                         level_step_mm: bore.level_step,
+                        crease_standoff_mm: bore.crease_standoff_mm,
                         loops: bore.curves.len(),
                         segments: passes.segments.len(),
                         unreachable_points: passes.unreachable.len(),

@@ -68,12 +68,7 @@ impl Default for FinishingOptions {
     }
 }
 
-/// The distance between passes of a ball of radius `r` that leaves cusps `h` high on a flat
-/// surface: 2·√(h(2r − h)).
-pub fn stepover_for_scallop(radius: f64, scallop: f64) -> f64 {
-    let h = scallop.clamp(0.0, radius);
-    2.0 * (h * (2.0 * radius - h)).sqrt()
-}
+pub use crate::geom::stepover_for_scallop;
 
 /// A run of consecutive cut poses the tool can follow without lifting.
 #[derive(Clone, Debug, PartialEq)]
