@@ -1039,33 +1039,43 @@ mod tests {
     }
 
     /// A block 30 mm long (along y) with a round trough of radius 8 in its top, its axis at
-    /// z = 12 and its walls rising to ±60° (z = 8), facetted every half degree.
+    /// z = 12 and its walls rising to ±60° (z = 8), facetted every degree. The ends are
+    /// strips down from the top to the bottom at z = −30 (slivers a fan would make pile up in
+    /// the ray tree).
     fn trough() -> Mesh {
-        let (radius, axis_z, length) = (8.0, 12.0, 30.0);
-        // The profile in (x, z), counter-clockwise: bottom, right side, the trough from its
-        // right lip to its left, left side.
-        let mut profile = vec![(-10.0, -30.0), (10.0, -30.0), (10.0, 8.0)];
-        for k in 0..=240 {
-            let angle = (60.0 - 0.5 * f64::from(k)).to_radians();
-            profile.push((radius * angle.sin(), axis_z - radius * angle.cos()));
+        let (radius, axis_z, length, bottom) = (8.0, 12.0, 30.0, -30.0);
+        // The top from its right edge to its left, over the trough.
+        let mut top = vec![(10.0, 8.0)];
+        for k in 0..=120 {
+            let angle = (60.0 - f64::from(k)).to_radians();
+            top.push((radius * angle.sin(), axis_z - radius * angle.cos()));
         }
-        profile.push((-10.0, 8.0));
-        let n = profile.len() as u32;
-        let mut positions: Vec<Point3> = [0.0, length]
-            .iter()
-            .flat_map(|&y| profile.iter().map(move |&(x, z)| Point3::new(x, y, z)))
-            .collect();
-        // The caps are fans from far below the trough, which sees every profile point.
-        positions.push(Point3::new(0.0, 0.0, -30.0));
-        positions.push(Point3::new(0.0, length, -30.0));
+        top.push((-10.0, 8.0));
+        let n = top.len() as u32;
+        let mut positions = Vec::new();
+        for y in [0.0, length] {
+            positions.extend(top.iter().map(|&(x, z)| Point3::new(x, y, z)));
+            positions.extend(top.iter().map(|&(x, _)| Point3::new(x, y, bottom)));
+        }
+        // Top and bottom of the profile at each end.
+        let (top0, bottom0, top1, bottom1) = (|i| i, |i| n + i, |i| 2 * n + i, |i| 3 * n + i);
         let mut triangles = Vec::new();
-        for k in 0..n {
-            let next = (k + 1) % n;
-            triangles.push([k, n + next, next]);
-            triangles.push([k, n + k, n + next]);
-            triangles.push([2 * n, k, next]);
-            triangles.push([2 * n + 1, n + next, n + k]);
+        for i in 0..n - 1 {
+            let j = i + 1;
+            triangles.push([top0(i), top1(j), top0(j)]);
+            triangles.push([top0(i), top1(i), top1(j)]);
+            triangles.push([bottom0(i), bottom0(j), bottom1(j)]);
+            triangles.push([bottom0(i), bottom1(j), bottom1(i)]);
+            triangles.push([top0(i), top0(j), bottom0(j)]);
+            triangles.push([top0(i), bottom0(j), bottom0(i)]);
+            triangles.push([top1(i), bottom1(j), top1(j)]);
+            triangles.push([top1(i), bottom1(i), bottom1(j)]);
         }
+        let last = n - 1;
+        triangles.push([bottom0(0), top1(0), top0(0)]);
+        triangles.push([bottom0(0), bottom1(0), top1(0)]);
+        triangles.push([bottom0(last), top0(last), top1(last)]);
+        triangles.push([bottom0(last), top1(last), bottom1(last)]);
         Mesh {
             positions,
             triangles,
