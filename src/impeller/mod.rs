@@ -5,9 +5,9 @@
 //! mesh is not an impeller; [`impeller_glb`] pictures what it found.
 
 pub mod blade;
-pub mod bore;
 pub mod edges;
 pub mod frame;
+pub mod hub_wall;
 pub mod passage;
 pub mod picture;
 pub mod recognise;

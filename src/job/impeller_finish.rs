@@ -30,7 +30,7 @@ use crate::access::{
 use crate::geom::{Direction, ToolPose};
 use crate::geom::{Point3, Vector3};
 use crate::impeller::blade::needed_stretches;
-use crate::impeller::bore::bore_loops;
+use crate::impeller::hub_wall::{HubWall, wall_loops};
 use crate::impeller::{
     HubPassage, Impeller, NotSwarf, PassageOptions, Region, Ruling, SwarfOptions, SwarfPlan,
     blade_loop_at, blade_loops, blade_section_at, blade_tip_passes, swarf_runs,
@@ -364,14 +364,15 @@ pub struct ImpellerFinishSummary {
     /// Passes along the places the planes left over the scallop target (the part outside
     /// the impeller strategies' surface, measured against every pass).
     pub plane_rest: Option<RestSummary>,
-    /// Loops round the bore, when the hub has one.
-    pub bore: Option<BoreSummary>,
+    /// Loops round the bore and the rim, when the hub has them.
+    pub bore: Option<HubWallSummary>,
+    pub rim: Option<HubWallSummary>,
 }
 
-/// What the loops round the bore planned.
+/// What the loops round a hub wall (the bore, the rim) planned.
 #[derive(Clone, Debug, Serialize)]
-pub struct BoreSummary {
-    /// Area of the bore's wall, mm², its height along the axis and the step between loops, mm.
+pub struct HubWallSummary {
+    /// Area of the wall, mm², its height along the axis and the step between loops, mm.
     pub wall_area_mm2: f64,
     pub height_mm: f64,
     pub level_step_mm: f64,
@@ -427,6 +428,7 @@ pub fn finish_impeller(
         copies_rest: None,
         plane_rest: None,
         bore: None,
+        rim: None,
     };
     let mut handled = vec![false; part.triangles.len()];
     let mut summary_visibility = None;
@@ -1091,45 +1093,53 @@ pub fn finish_impeller(
                 not_swarfed,
             });
 
-            // The bore: loops round its wall with the tool along the axis, leaning off the
-            // machine's pole toward the middle of the bore (away from the wall it cuts).
+            // The bore and the rim: loops round each wall with the tool along the axis,
+            // leaning off the machine's pole away from the wall it cuts.
             if corner_band.is_none() {
-                let bore = bore_loops(
-                    part,
-                    impeller,
-                    &passage.frame,
-                    radius,
-                    options.scallop_height,
-                );
-                if !bore.curves.is_empty() {
+                for hub_wall in [HubWall::Bore, HubWall::Rim] {
+                    let loops = wall_loops(
+                        part,
+                        impeller,
+                        &passage.frame,
+                        hub_wall,
+                        radius,
+                        options.scallop_height,
+                    );
+                    if loops.curves.is_empty() {
+                        continue;
+                    }
                     let frame = &passage.frame;
-                    let bore_field = |_: &Point3, normal: &Vector3, _: &Vector3| {
-                        let inward = (normal - frame.axis * normal.dot(&frame.axis))
+                    let wall_field = |_: &Point3, normal: &Vector3, _: &Vector3| {
+                        let off_wall = (normal - frame.axis * normal.dot(&frame.axis))
                             .try_normalize(1e-9)
                             .unwrap_or(*normal);
-                        away_from_pole(&frame.axis, &pole, &inward, MIN_TILT_FROM_POLE_DEG)
+                        away_from_pole(&frame.axis, &pole, &off_wall, MIN_TILT_FROM_POLE_DEG)
                     };
-                    let bore_ctx = FinishingContext {
-                        axis_field: Some(&bore_field),
+                    let wall_ctx = FinishingContext {
+                        axis_field: Some(&wall_field),
                         ..*ctx
                     };
                     let mut passes = Finishing::default();
-                    for result in path::curve_passes(&bore.curves, &bore_ctx, options, advance) {
+                    for result in path::curve_passes(&loops.curves, &wall_ctx, options, advance) {
                         passes.merge(result);
                     }
                     passes.segments =
                         path::nearest_order(std::mem::take(&mut passes.segments), true, &link_cost);
-                    summary.bore = Some(BoreSummary {
-                        wall_area_mm2: bore.area_mm2,
-                        height_mm: bore.height_mm,
-                        level_step_mm: bore.level_step,
-                        crease_standoff_mm: bore.crease_standoff_mm,
-                        loops: bore.curves.len(),
+                    let wall_summary = Some(HubWallSummary {
+                        wall_area_mm2: loops.area_mm2,
+                        height_mm: loops.height_mm,
+                        level_step_mm: loops.level_step,
+                        crease_standoff_mm: loops.crease_standoff_mm,
+                        loops: loops.curves.len(),
                         segments: passes.segments.len(),
                         unreachable_points: passes.unreachable.len(),
                     });
+                    match hub_wall {
+                        HubWall::Bore => summary.bore = wall_summary,
+                        HubWall::Rim => summary.rim = wall_summary,
+                    }
                     finishing.merge(passes);
-                    for (h, on_wall) in handled.iter_mut().zip(&bore.wall) {
+                    for (h, on_wall) in handled.iter_mut().zip(&loops.wall) {
                         *h |= *on_wall;
                     }
                 }

@@ -1,10 +1,13 @@
-//! Loops round an impeller's bore: the hub's inner wall, facing the rotation axis. The
-//! parallel planes cannot finish it (their axes lean at most so far from the surface's normal,
-//! and in a bore any such lean runs the tool into the far wall); a tool standing along the
-//! axis, its ball's side against the wall, can. The wall is a surface of revolution about the
-//! axis: its curves of constant height are circles round it (broken where a keyway cuts the
-//! wall), a stepover apart along the wall where it stands square to the hub (height steps of
-//! the stepover times the wall's steepness there, its low percentile, as round a blade).
+//! Loops round an impeller's hub walls: the bore, facing the rotation axis, and the rim,
+//! facing away from it. The parallel planes cannot finish a bore (their axes lean at most so
+//! far from the surface's normal, and in a bore any such lean runs the tool into the far
+//! wall), and they cross a rim at a slant, their passes on it a stepover apart only where
+//! the wall faces across them (elsewhere millimetres); a tool standing along the axis, its
+//! ball's side against the wall, finishes either. The wall is a surface of revolution about
+//! the axis: its curves of constant height are circles round it (broken where a keyway cuts
+//! the wall), a stepover apart along the wall where it stands square to the hub (height
+//! steps of the stepover times the wall's steepness there, its low percentile, as round a
+//! blade).
 //!
 //! A bore read from a mesh is a prism of facets, and the ball cannot follow it into the
 //! creases between them: touching two facets that turn by θ, it stands r·(1/cos(θ/2) − 1) off
@@ -18,11 +21,21 @@ use crate::mesh::{Mesh, SectionCurve, level_section};
 use super::frame::AxisFrame;
 use super::recognise::{Impeller, Region};
 
-/// A bore triangle faces the axis: its normal's component toward the axis at least this.
+/// Which of the hub's walls round the axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HubWall {
+    /// The inner wall, facing the axis.
+    Bore,
+    /// The outer wall, facing away from it.
+    Rim,
+}
+
+/// A wall triangle faces the axis (or away from it): its normal's component that way at
+/// least this.
 const FACING_AXIS: f64 = 0.8;
 
-/// ... and stands within this of the hub's smallest radius, mm.
-const NEAR_INNER_RADIUS: f64 = 2.0;
+/// ... and stands within this of the hub's smallest (largest) radius, mm.
+const NEAR_WALL_RADIUS: f64 = 2.0;
 
 /// Facets of the wall that turn by less than this are the tessellation of one round wall;
 /// more, and the crease is a feature (a keyway's corner), where the ball does not fit anyway.
@@ -32,11 +45,12 @@ const FACETTING_TURN_DEG: f64 = 20.0;
 /// tessellation would need loops closer than any finish is worth.
 const MAX_STANDOFF_SHARE: f64 = 0.75;
 
-/// The loops round the bore, from the top down, and which triangles of the part are its wall.
+/// The loops round a hub wall, from the top down, and which triangles of the part are the
+/// wall.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct BoreLoops {
+pub struct WallLoops {
     pub curves: Vec<SectionCurve>,
-    /// Per triangle of the part: on the bore's wall.
+    /// Per triangle of the part: on the wall.
     pub wall: Vec<bool>,
     /// Area of the wall, mm², and its height along the axis, mm.
     pub area_mm2: f64,
@@ -46,17 +60,18 @@ pub struct BoreLoops {
     pub crease_standoff_mm: f64,
 }
 
-/// The loops round `impeller`'s bore in `mesh` for a ball of `radius`, levels apart along the
-/// wall by the stepover that leaves `scallop` between them, in the wall's creases too; empty
-/// when the hub has no wall facing the axis.
-pub fn bore_loops(
+/// The loops round `impeller`'s hub `wall` in `mesh` for a ball of `radius`, levels apart
+/// along the wall by the stepover that leaves `scallop` between them, in the wall's creases
+/// too; empty when the hub has no such wall.
+pub fn wall_loops(
     mesh: &Mesh,
     impeller: &Impeller,
     frame: &AxisFrame,
+    hub_wall: HubWall,
     radius: f64,
     scallop: f64,
-) -> BoreLoops {
-    let inner = impeller.hub_radius_mm[0];
+) -> WallLoops {
+    let [inner, outer] = impeller.hub_radius_mm;
     let wall: Vec<bool> = (0..mesh.triangles.len())
         .map(|t| {
             if impeller.regions[t] != Region::Hub {
@@ -64,12 +79,15 @@ pub fn bore_loops(
             }
             let [a, b, c] = mesh.corners(t);
             let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-            let (radius, angle, _) = frame.cylindrical(&centroid);
-            let inward = -frame.radial(angle);
-            radius <= inner + NEAR_INNER_RADIUS && mesh.face_normal(t).dot(&inward) >= FACING_AXIS
+            let (r, angle, _) = frame.cylindrical(&centroid);
+            let outward = mesh.face_normal(t).dot(&frame.radial(angle));
+            match hub_wall {
+                HubWall::Bore => r <= inner + NEAR_WALL_RADIUS && -outward >= FACING_AXIS,
+                HubWall::Rim => r >= outer - NEAR_WALL_RADIUS && outward >= FACING_AXIS,
+            }
         })
         .collect();
-    let bore = Mesh::compacted(
+    let wall_mesh = Mesh::compacted(
         &mesh.positions,
         mesh.triangles
             .iter()
@@ -77,13 +95,13 @@ pub fn bore_loops(
             .filter(|(_, w)| **w)
             .map(|(t, _)| *t),
     );
-    if bore.triangles.is_empty() {
-        return BoreLoops::default();
+    if wall_mesh.triangles.is_empty() {
+        return WallLoops::default();
     }
-    let normals: Vec<Vector3> = (0..bore.triangles.len())
-        .map(|t| bore.face_normal(t))
+    let normals: Vec<Vector3> = (0..wall_mesh.triangles.len())
+        .map(|t| wall_mesh.face_normal(t))
         .collect();
-    let height: Vec<f64> = bore
+    let height: Vec<f64> = wall_mesh
         .positions
         .iter()
         .map(|p| frame.cylindrical(p).2)
@@ -100,13 +118,13 @@ pub fn bore_loops(
         .map(|(t, n)| {
             let along_axis = n.dot(&frame.axis);
             ((1.0 - along_axis * along_axis).max(0.0).sqrt(), {
-                let [a, b, c] = bore.corners(t);
+                let [a, b, c] = wall_mesh.corners(t);
                 0.5 * (b - a).cross(&(c - a)).norm()
             })
         })
         .collect();
     let least = weighted_quantile(steepness, 0.1).unwrap_or(1.0);
-    let standoff = crease_standoff(&bore, &normals, radius).min(MAX_STANDOFF_SHARE * scallop);
+    let standoff = crease_standoff(&wall_mesh, &normals, radius).min(MAX_STANDOFF_SHARE * scallop);
     let stepover = stepover_for_scallop(radius, scallop - standoff);
     let level_step = (stepover * least).max(1e-3);
     // Levels from half a step below the top to half a step above the bottom, evenly.
@@ -117,11 +135,11 @@ pub fn bore_loops(
     for k in 0..levels {
         let level = high - (k as f64 + 0.5) * step;
         let shifted: Vec<f64> = height.iter().map(|h| h - level).collect();
-        curves.extend(level_section(&bore, &normals, &shifted));
+        curves.extend(level_section(&wall_mesh, &normals, &shifted));
     }
-    BoreLoops {
+    WallLoops {
         curves,
-        area_mm2: bore.surface_area(),
+        area_mm2: wall_mesh.surface_area(),
         wall,
         height_mm: span,
         level_step: step,
@@ -159,60 +177,80 @@ mod tests {
     use super::*;
     use crate::impeller::{RecogniseOptions, recognise};
 
-    /// The sample's bore (radius 8, the hub 12 mm tall there): every loop runs round the wall
-    /// at its level, on the circle of the bore's radius, the levels no more than a stepover
-    /// apart and covering the wall from top to bottom within half a step; the wall's triangles
-    /// face the axis.
-    #[test]
-    fn the_sample_bore_gets_circles_a_stepover_apart_from_top_to_bottom() {
+    /// The sample's `hub_wall`: every loop runs round the wall at its level, on a circle
+    /// about the axis whose radius is within `radii` (whole from the last on), the levels no
+    /// more than a stepover apart and covering the wall from top to bottom within half a step.
+    fn sample_wall_gets_circles_a_stepover_apart(
+        hub_wall: HubWall,
+        radii: fn(&Impeller) -> (f64, f64, f64),
+    ) {
         let mesh = crate::sample::impeller(&Default::default()).expect("sample impeller");
         let impeller = recognise(&mesh, &RecogniseOptions::default()).expect("an impeller");
         let frame = AxisFrame::new(impeller.centre.into(), &Vector3::from(impeller.axis));
+        let (least, full_circles_from, most) = radii(&impeller);
         let (radius, scallop) = (2.0, 0.01);
-        let bore = bore_loops(&mesh, &impeller, &frame, radius, scallop);
-        assert!(!bore.curves.is_empty());
-        let stepover = stepover_for_scallop(radius, scallop - bore.crease_standoff_mm);
-        assert!(bore.level_step <= stepover + 1e-12 && bore.level_step > 0.75 * stepover);
+        let loops = wall_loops(&mesh, &impeller, &frame, hub_wall, radius, scallop);
+        assert!(!loops.curves.is_empty());
+        let stepover = stepover_for_scallop(radius, scallop - loops.crease_standoff_mm);
+        assert!(loops.level_step <= stepover + 1e-12 && loops.level_step > 0.75 * stepover);
         let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
-        for (t, on) in bore.wall.iter().enumerate() {
+        for (t, on) in loops.wall.iter().enumerate() {
             if !on {
                 continue;
             }
-            let [a, b, c] = mesh.corners(t);
-            for p in [a, b, c] {
-                let (radius, _, height) = frame.cylindrical(&p);
-                assert!((radius - 8.0).abs() < 0.05, "{radius}");
+            for p in mesh.corners(t) {
+                let (_, _, height) = frame.cylindrical(&p);
                 (low, high) = (low.min(height), high.max(height));
             }
         }
         let mut levels: Vec<f64> = Vec::new();
-        for curve in &bore.curves {
-            let (_, _, level) = frame.cylindrical(&curve.points[0].point);
+        for curve in &loops.curves {
+            let (circle, _, level) = frame.cylindrical(&curve.points[0].point);
+            assert!((least..=most).contains(&circle), "{circle}");
             for p in &curve.points {
-                let (radius, _, height) = frame.cylindrical(&p.point);
-                assert!((radius - 8.0).abs() < 0.05 && (height - level).abs() < 1e-6);
-                assert!(p.normal.dot(&frame.axis).abs() < 0.2);
+                let (r, _, height) = frame.cylindrical(&p.point);
+                assert!((r - circle).abs() < 0.05, "{r} on a circle of {circle}");
+                assert!((height - level).abs() < 1e-6);
+                assert!(p.normal.dot(&frame.axis).abs() < 0.6);
             }
             levels.push(level);
-        }
-        levels.sort_by(f64::total_cmp);
-        levels.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
-        assert!(levels.windows(2).all(|w| w[1] - w[0] <= stepover + 1e-9));
-        assert!(levels[0] - low <= 0.5 * bore.level_step + 1e-9);
-        assert!(high - levels[levels.len() - 1] <= 0.5 * bore.level_step + 1e-9);
-        // A full circle each: the sample's bore has no keyway.
-        let round = 2.0 * std::f64::consts::PI * 8.0;
-        for curve in &bore.curves {
+            // A full circle on the wall itself (the sample's walls have no keyway); where the
+            // hub's top falls to the rim steeply, the blades' roots break it.
+            if circle < full_circles_from {
+                continue;
+            }
             let length: f64 = curve
                 .points
                 .windows(2)
                 .map(|w| (w[1].point - w[0].point).norm())
                 .sum();
+            let round = 2.0 * std::f64::consts::PI * circle;
             assert!(
                 curve.closed && (length - round).abs() < 0.05 * round,
                 "{length}"
             );
         }
+        levels.sort_by(f64::total_cmp);
+        levels.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+        assert!(levels.windows(2).all(|w| w[1] - w[0] <= stepover + 1e-9));
+        assert!(levels[0] - low <= 0.5 * loops.level_step + 1e-9);
+        assert!(high - levels[levels.len() - 1] <= 0.5 * loops.level_step + 1e-9);
+    }
+
+    /// The sample's bore: radius 8, the hub 12 mm tall there.
+    #[test]
+    fn the_sample_bore_gets_circles_a_stepover_apart_from_top_to_bottom() {
+        sample_wall_gets_circles_a_stepover_apart(HubWall::Bore, |_| (7.95, 7.95, 8.05));
+    }
+
+    /// The sample's rim: the hub's outer wall, at the radius recognised, and where the hub's
+    /// top falls to it steeply.
+    #[test]
+    fn the_sample_rim_gets_circles_a_stepover_apart_from_top_to_bottom() {
+        sample_wall_gets_circles_a_stepover_apart(HubWall::Rim, |impeller| {
+            let outer = impeller.hub_radius_mm[1];
+            (outer - NEAR_WALL_RADIUS, outer - 0.05, outer + 0.05)
+        });
     }
 
     /// The inside of an n-sided prism: the ball stands r·(1/cos(π/n) − 1) off its creases,
