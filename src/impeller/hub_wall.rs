@@ -11,8 +11,8 @@
 //!
 //! A bore read from a mesh is a prism of facets, and the ball cannot follow it into the
 //! creases between them: touching two facets that turn by θ, it stands r·(1/cos(θ/2) − 1) off
-//! the crease (0.0056 mm for a 2 mm ball in the blower's 42-gon). The stepover is the one that
-//! leaves the rest of the target between the loops there.
+//! the crease (0.002 mm for a 2 mm ball in the blower's bore, its facets turning by 5.3°).
+//! The stepover is the one that leaves the rest of the target between the loops there.
 
 use crate::geom::{Point3, Vector3, stepover_for_scallop, weighted_quantile};
 use crate::mesh::topology::edges;

@@ -786,8 +786,9 @@ mod tests {
         assert!((stepover_for_scallop(3.0, 3.0) - 6.0).abs() < 1e-12);
     }
 
-    /// The box [0,40]×[0,30]×[0,10] with what finishing passes over it need: the ball D6 of
-    /// the collision tests and the default axis choice.
+    /// A part with what finishing passes over it need (the box [0,40]×[0,30]×[0,10] unless
+    /// made [`Block::of`] another): the ball D6 of the collision tests and the default axis
+    /// choice.
     struct Block {
         part: Mesh,
         collider: PartCollider,
@@ -802,6 +803,17 @@ mod tests {
     }
 
     impl Block {
+        /// `part` with the ball D6 of the collision tests and the default axis choice.
+        fn of(part: Mesh) -> Block {
+            Block {
+                collider: PartCollider::new(&part).unwrap(),
+                rays: RayScene::new(&part),
+                tool: crate::collide::tool_bodies::tests::prepared(),
+                chooser: AxisChooser::new(crate::orient::AxisOptions::default()),
+                part,
+            }
+        }
+
         /// The block's finishing context, the ball held `allowance` off the part (and lifted
         /// as much), every axis reachable, no material filter, axis field or region.
         fn context(&self, allowance: f64) -> FinishingContext<'_> {
@@ -821,14 +833,7 @@ mod tests {
     }
 
     fn block() -> Block {
-        let part = crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0);
-        Block {
-            collider: PartCollider::new(&part).unwrap(),
-            rays: RayScene::new(&part),
-            tool: crate::collide::tool_bodies::tests::prepared(),
-            chooser: AxisChooser::new(crate::orient::AxisOptions::default()),
-            part,
-        }
+        Block::of(crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0))
     }
 
     /// The flutes between two poses whose ends are clear: the axis turns a right angle about
@@ -1088,24 +1093,13 @@ mod tests {
     /// pass.
     #[test]
     fn chords_round_a_concave_wall_are_mended_where_they_sag() {
-        let part = trough();
-        assert!(part.signed_volume() > 0.0, "the trough is wound outward");
-        let collider = PartCollider::new(&part).unwrap();
-        let rays = RayScene::new(&part);
-        let tool = crate::collide::tool_bodies::tests::prepared();
-        let chooser = AxisChooser::new(crate::orient::AxisOptions::default());
-        let ctx = FinishingContext {
-            part: &collider,
-            rays: &rays,
-            tool: &tool,
-            chooser: &chooser,
-            reachable: &anywhere,
-            allowance: 0.0,
-            lift: 0.0,
-            material_filter: None,
-            axis_field: None,
-            region: None,
-        };
+        let trough = Block::of(trough());
+        assert!(
+            trough.part.signed_volume() > 0.0,
+            "the trough is wound outward"
+        );
+        let ctx = trough.context(0.0);
+        let tool = &trough.tool;
         let options = FinishingOptions {
             tolerance: 0.005,
             ..FinishingOptions::default()
