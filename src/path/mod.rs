@@ -649,12 +649,12 @@ fn refine(
         && flutes_clear_along(ctx, options, (&a.centre, &a.axis), (&b.centre, &b.axis));
     let middle = nalgebra::center(&a.centre, &b.centre);
     let drive_on_part = (ctx.lift - ctx.allowance).abs() < 1e-12;
-    // Off both drive points' tangent planes by more than the radius and the tolerance: a
-    // ball there would stand off the part under it, unless something beside holds it up
-    // (the part's nearest surface within reach says nothing of that: at the foot of a
-    // rise, the ball on the face stood 0.02 mm off it while the rise touched it).
-    let off_plane = |p: &Placed| (middle - p.drive.point).dot(&p.drive.normal) - held;
-    let sags = clear && drive_on_part && off_plane(a).min(off_plane(b)) > options.tolerance;
+    let sags = clear
+        && drive_on_part
+        && !ctx
+            .part
+            .surface()
+            .any_within(&middle, held + options.tolerance);
     if clear && !sags {
         return Some(Vec::new());
     }
@@ -686,10 +686,6 @@ fn refine(
     ) else {
         return give_up();
     };
-    // Held up there as well: the chord is where the ball can be.
-    if sags && (m.centre - middle).norm() <= options.tolerance {
-        return Some(Vec::new());
-    }
     let halves = refine(ctx, options, a, &m, feed, depth + 1).zip(refine(
         ctx,
         options,
