@@ -686,15 +686,11 @@ fn refine(
     ) else {
         return give_up();
     };
-    let halves = refine(ctx, options, a, &m, feed, depth + 1).zip(refine(
-        ctx,
-        options,
-        &m,
-        b,
-        feed,
-        depth + 1,
-    ));
-    let Some((mut left, right)) = halves else {
+    // The right half is not refined when the left fails: the chord is given up either way.
+    let Some(mut left) = refine(ctx, options, a, &m, feed, depth + 1) else {
+        return give_up();
+    };
+    let Some(right) = refine(ctx, options, &m, b, feed, depth + 1) else {
         return give_up();
     };
     left.push(m);
