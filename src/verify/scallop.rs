@@ -13,7 +13,10 @@
 //! `reach` is not reached: the strategy left it (unreachable, or a region no pass covers).
 //! The face the part stands on is left out of both (no tool gets there). The bodies are
 //! found through a bounding-box tree, nearest along the ray first, and a bounding sphere
-//! each; entries are exact.
+//! each; entries are exact. A cusp is sharper than any sample spacing resolves: between
+//! neighbouring samples held by different moves, the ridge is found where the two moves'
+//! entries are equal and measured there ([`ridges`]), and the highest is the report's
+//! maximum.
 //!
 //! Where the part is concave more tightly than the ball (a blade's root without a fillet as
 //! large as the ball, a channel narrower than it), no placement of the ball touches the
@@ -36,6 +39,8 @@ use crate::mesh::Mesh;
 use crate::mesh::distance::SurfaceDistance;
 
 use super::reach::ToolReach;
+
+mod ridges;
 
 /// What the measure found.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -66,6 +71,15 @@ pub struct ScallopReport {
     /// Area over the target where the ball fits but no tool axis the machine allows reaches
     /// (measured only when the tool is given), mm: left out of the open figures.
     pub blocked_area_mm2: f64,
+    /// Pairs of neighbouring samples where the ball fits, held by different moves, searched
+    /// for the ridge between them (samples a spacing apart read a fraction of a cusp's
+    /// height); the highest open ridge found above the target, or above the highest sample
+    /// where that is lower (0: none), mm; and the open ridges over the target (each counts the
+    /// sample nearer to it as over, or blocked where the ridge is). `open_max_mm` is the
+    /// higher of the open samples' and the ridges'.
+    pub ridge_pairs: usize,
+    pub ridge_max_mm: f64,
+    pub ridges_over_target: usize,
     pub target_mm: f64,
     /// The same split by the labels given per triangle (the impeller's regions).
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
@@ -399,48 +413,32 @@ fn scallop_of_samples(
         .par_iter()
         .map(|(p, n, _, _)| distance.any_within(&(p + n * narrow_radius), narrow_radius - target))
         .collect();
-    let heights: Vec<Option<f64>> = samples
+    let bodies = Bodies {
+        swept,
+        radii,
+        tree,
+        spheres,
+        reach,
+    };
+    let holders: Vec<Option<(f64, usize)>> = samples
         .par_iter()
         // The body that held the previous sample's least entry, tried first: neighbouring
-        // samples are usually held by the same body, and a small entry found first lets
-        // the sphere test below pass over almost every other body.
+        // samples are usually held by the same body.
         .map_init(
             || None::<usize>,
             |hint, (p, n, _, _)| {
                 if n.z < -0.99 && (p.z - table_z).abs() < 1e-6 {
-                    return Some(f64::NAN);
+                    return Some((f64::NAN, usize::MAX));
                 }
-                let mut best: Option<(f64, usize)> = None;
-                let mut try_body = |i: usize| {
-                    // A body can hold the least entry only if its bounding sphere meets the
-                    // ray short of the best entry so far: a few products for most of them.
-                    let (centre, bound) = spheres[i];
-                    let length = best.map_or(reach, |(h, _)| h.min(reach));
-                    let along = (centre - p).dot(n).clamp(0.0, length);
-                    let off = centre - (p + n * along);
-                    if off.norm_squared() > bound * bound {
-                        return length;
-                    }
-                    if let Some(t) = swept[i].entry(p, n, radii[i])
-                        && t <= reach
-                        && best.is_none_or(|(h, _)| t < h)
-                    {
-                        best = Some((t, i));
-                    }
-                    best.map_or(reach, |(h, _)| h.min(reach))
-                };
-                let length = match *hint {
-                    Some(i) => try_body(i),
-                    None => reach,
-                };
-                tree.visit_along(p, n, length, &mut try_body);
+                let best = bodies.least_entry(p, n, *hint);
                 *hint = best.map(|(_, i)| i);
-                best.map(|(h, _)| h)
+                best
             },
         )
         .collect();
+    let mut heights: Vec<Option<f64>> = holders.iter().map(|h| h.map(|(h, _)| h)).collect();
     // Of the open samples over the target, those no axis of the tool reaches.
-    let blocked: Vec<bool> = samples
+    let mut blocked: Vec<bool> = samples
         .par_iter()
         .zip(&heights)
         .zip(&narrow)
@@ -452,6 +450,68 @@ fn scallop_of_samples(
             })
         })
         .collect();
+    // The ridges between the samples (see `ridges`): their crossings above the target, or
+    // above the highest sample where the ball fits when that is lower, are the report's
+    // maximum; a crossing over the target counts the sample nearer to it as over.
+    let is_open = |i: usize| !narrow[i] && !blocked[i] && heights[i].is_some_and(|h| !h.is_nan());
+    let is_open_over: Vec<bool> = (0..samples.len())
+        .map(|i| is_open(i) && heights[i].is_some_and(|h| h > target))
+        .collect();
+    // Blocked samples take part too: whether a ridge is blocked is asked where it is.
+    let fits = |i: usize| !narrow[i] && heights[i].is_some_and(|h| !h.is_nan());
+    let sample_max = (0..samples.len())
+        .filter(|&i| fits(i))
+        .filter_map(|i| heights[i])
+        .fold(0.0, f64::max);
+    let points: Vec<(Point3, Vector3)> = samples.iter().map(|(p, n, _, _)| (*p, *n)).collect();
+    let ridge_holders: Vec<Option<usize>> = (0..samples.len())
+        .map(|i| holders[i].filter(|_| fits(i)).map(|(_, body)| body))
+        .collect();
+    let (ridge_pairs, peaks) = ridges::ridge_peaks(
+        &points,
+        &ridge_holders,
+        ridges::NEIGHBOUR_SPACINGS * spacing,
+        target.min(sample_max),
+        &bodies,
+        distance,
+    );
+    // Only where the ball fits; over the target, told apart where no axis reaches.
+    let peaks: Vec<(ridges::RidgePeak, bool)> = peaks
+        .into_par_iter()
+        .filter(|peak| {
+            !distance.any_within(
+                &(peak.point + peak.normal * narrow_radius),
+                narrow_radius - target,
+            )
+        })
+        .map(|peak| {
+            let blocked = peak.height > target
+                && tool_reach.is_some_and(|tool| {
+                    tool.blocked(distance, &peak.point, &peak.normal, narrow_radius, target)
+                });
+            (peak, blocked)
+        })
+        .collect();
+    let ridge_max = peaks
+        .iter()
+        .filter(|(_, blocked)| !blocked)
+        .map(|(p, _)| p.height)
+        .fold(0.0, f64::max);
+    // The sample nearer a ridge over the target is over: open where any such ridge beside it
+    // is, else blocked where one is and it was not open over by itself.
+    let mut ridges_over_target = 0;
+    let mut beside_open = vec![false; samples.len()];
+    for (peak, peak_blocked) in peaks.iter().filter(|(p, _)| p.height > target) {
+        let i = peak.nearer;
+        ridges_over_target += usize::from(!peak_blocked);
+        heights[i] = heights[i].map(|h| h.max(peak.height));
+        if !peak_blocked {
+            beside_open[i] = true;
+            blocked[i] = false;
+        } else if !beside_open[i] && !is_open_over[i] {
+            blocked[i] = true;
+        }
+    }
     let mut reached = Vec::new();
     let mut open = Vec::new();
     let (mut reached_area, mut unreached_area, mut table_area, mut over) = (0.0, 0.0, 0.0, 0.0);
@@ -545,10 +605,13 @@ fn scallop_of_samples(
         over_target_area_mm2: over,
         unreached_facing_down_mm2: facing_down,
         narrow_area_mm2: narrow_area,
-        open_max_mm: open.last().copied().unwrap_or(0.0),
+        open_max_mm: open.last().copied().unwrap_or(0.0).max(ridge_max),
         open_p99_mm: p99(&open),
         open_over_target_mm2: open_over,
         blocked_area_mm2: blocked_area,
+        ridge_pairs,
+        ridge_max_mm: ridge_max,
+        ridges_over_target,
         target_mm: target,
         by_region: by_label,
     };
@@ -905,6 +968,60 @@ impl BodyTree {
     }
 }
 
+/// The swept bodies as the rays up the samples' normals meet them.
+struct Bodies<'a> {
+    swept: &'a [Swept],
+    /// Each body's ball radius.
+    radii: &'a [f64],
+    tree: &'a BodyTree,
+    /// A sphere holding each body.
+    spheres: &'a [(Point3, f64)],
+    /// Entries farther up the ray than this do not count.
+    reach: f64,
+}
+
+impl Bodies<'_> {
+    /// Where the ray `p + t·n` enters body `i`, if within the reach.
+    fn entry(&self, i: usize, p: &Point3, n: &Vector3) -> Option<f64> {
+        self.swept[i]
+            .entry(p, n, self.radii[i])
+            .filter(|t| *t <= self.reach)
+    }
+
+    /// The least entry of the ray `p + t·n` into any body, and the body; `hint` is tried
+    /// first (a neighbour's body: a small entry found first lets the sphere test pass over
+    /// almost every other body).
+    fn least_entry(&self, p: &Point3, n: &Vector3, hint: Option<usize>) -> Option<(f64, usize)> {
+        let reach = self.reach;
+        let mut best: Option<(f64, usize)> = None;
+        let mut try_body = |i: usize| {
+            // A body can hold the least entry only if its bounding sphere meets the ray
+            // short of the best entry so far: a few products for most of them.
+            let (centre, bound) = self.spheres[i];
+            let length = best.map_or(reach, |(h, _)| h.min(reach));
+            let along = (centre - p).dot(n).clamp(0.0, length);
+            let off = centre - (p + n * along);
+            if off.norm_squared() > bound * bound {
+                return length;
+            }
+            // Ties (two moves' shared end ball) go to the lower index, whatever the order
+            // of the walk: the ridges below pair samples by their bodies.
+            if let Some(t) = self.entry(i, p, n)
+                && best.is_none_or(|(h, j)| t < h || (t == h && i < j))
+            {
+                best = Some((t, i));
+            }
+            best.map_or(reach, |(h, _)| h.min(reach))
+        };
+        let length = match hint {
+            Some(i) => try_body(i),
+            None => reach,
+        };
+        self.tree.visit_along(p, n, length, &mut try_body);
+        best
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1185,6 +1302,73 @@ mod tests {
         assert!(
             (half.unreached_area_mm2 - 80.0 - 20.0 * (20.0 - last)).abs() < 0.5,
             "{half:?}"
+        );
+    }
+
+    /// Samples a spacing apart read a fraction of the cusps between passes closer than
+    /// that; the ridges between neighbouring samples held by different passes find the
+    /// closed-form cusp exactly, also where the passes are several to a spacing (the search
+    /// splits at each pass lower between two). Each pass is cut in 1 mm moves: samples held
+    /// by two moves of one pass are searched too, and find nothing higher.
+    #[test]
+    fn the_ridges_between_samples_hold_the_closed_form_cusp() {
+        let plate = crate::mesh::fixtures::cuboid(20.0, 20.0, 1.0);
+        let r = 2.0;
+        let axis = Direction::new_normalize(Vector3::z());
+        let path = |w: f64| {
+            let mut moves = Vec::new();
+            for k in 0..(24.0 / w) as usize {
+                let y = -2.0 + k as f64 * w;
+                moves.push(Move {
+                    pose: ToolPose {
+                        tip: Point3::new(-3.0, y, 1.0),
+                        axis,
+                    },
+                    kind: MoveKind::Approach,
+                    feed: 1000.0,
+                });
+                for x in -2..=23 {
+                    moves.push(Move {
+                        pose: ToolPose {
+                            tip: Point3::new(f64::from(x), y, 1.0),
+                            axis,
+                        },
+                        kind: MoveKind::Cut,
+                        feed: 1000.0,
+                    });
+                }
+            }
+            Toolpath { tool_id: 1, moves }
+        };
+        let options = |spacing, target| ScallopOptions {
+            radius: r,
+            target,
+            spacing,
+            reach: 2.0 * r,
+            table_z: 0.0,
+            flutes_above_ball: 0.0,
+        };
+        for (w, spacing) in [(0.7, 0.5), (0.1, 1.0)] {
+            let cusp = r - (r * r - (w / 2.0) * (w / 2.0)).sqrt();
+            let report = measure_scallop(&plate, &path(w), &options(spacing, 1.0), None);
+            assert!(report.max_mm < cusp - 1e-4, "{report:?} vs {cusp}");
+            assert!(report.ridge_pairs > 1000, "{report:?}");
+            assert!(
+                (report.open_max_mm - cusp).abs() < 1e-6
+                    && report.ridge_max_mm == report.open_max_mm,
+                "{report:?} vs {cusp}"
+            );
+            assert_eq!(report.ridges_over_target, 0);
+        }
+        // Over the target, each ridge counts the sample nearer to it as over: with passes
+        // 0.7 mm apart under samples 0.5 mm apart, every other sample or so.
+        let w = 0.7;
+        let cusp = r - (r * r - (w / 2.0) * (w / 2.0)).sqrt();
+        let report = measure_scallop(&plate, &path(w), &options(0.5, 0.5 * cusp), None);
+        assert!(report.ridges_over_target > 500, "{report:?}");
+        assert!(
+            report.open_over_target_mm2 > 100.0 && report.open_over_target_mm2 < 400.0,
+            "{report:?}"
         );
     }
 
