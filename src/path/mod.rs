@@ -593,7 +593,24 @@ fn push_forward_runs(
                 (&centre(last), &last.axis),
                 (&centre(&pose), &pose.axis),
             );
-            if !(chord_ok && turn_ok && flutes_ok) {
+            if chord_ok && flutes_ok && !turn_ok {
+                // Round a concave corner the dropped poses took the axis's turn with them
+                // (round a facetted bore, the wall's normal turns by the facets' angle at
+                // each crease): the chord is clear, so the axis turns along it instead.
+                match turn_along_chord(ctx, options, last, &pose) {
+                    Some(between) => {
+                        out.inserted_poses += between.len();
+                        for p in between {
+                            run.poses.push(p);
+                            run.pass_directions.push(direction);
+                        }
+                    }
+                    None => {
+                        out.splits_at_refinement += 1;
+                        emit(std::mem::replace(&mut run, empty()), out);
+                    }
+                }
+            } else if !(chord_ok && turn_ok && flutes_ok) {
                 out.splits_at_refinement += 1;
                 emit(std::mem::replace(&mut run, empty()), out);
             }
@@ -603,6 +620,90 @@ fn push_forward_runs(
     }
     emit(run, out);
 }
+
+/// Poses between `a` and `b` along the straight line of their ball centres (each pushed off
+/// the part to touch it where the line comes nearer: the line may cut a concave corner by the
+/// tolerance, a pose may not), the axis turning evenly between theirs, each move turning it
+/// at most the allowed angle: `None` where an axis between is not valid at its centre, a move
+/// comes nearer the part than the tolerance allows, or the flutes do not clear it.
+fn turn_along_chord(
+    ctx: &FinishingContext,
+    options: &FinishingOptions,
+    a: &ToolPose,
+    b: &ToolPose,
+) -> Option<Vec<ToolPose>> {
+    let r = ctx.tool.ball_radius;
+    let turn = angle_between(&a.axis, &b.axis).to_degrees();
+    let pieces = (turn / options.max_axis_turn_deg.max(1e-3)).ceil() as usize;
+    if pieces > MAX_TURN_PIECES {
+        return None;
+    }
+    let (from, to) = (
+        a.tip + a.axis.into_inner() * r,
+        b.tip + b.axis.into_inner() * r,
+    );
+    let mut poses = Vec::with_capacity(pieces);
+    let mut previous = (from, a.axis);
+    for k in 1..=pieces {
+        let t = k as f64 / pieces as f64;
+        let (centre, axis) = if k == pieces {
+            (to, b.axis)
+        } else {
+            let centre = touching(ctx, from + (to - from) * t)?;
+            let axis = Direction::new_normalize(slerp(&a.axis, &b.axis, t));
+            axis_is_valid(
+                ctx.part,
+                ctx.rays,
+                ctx.tool,
+                &centre,
+                &axis.into_inner(),
+                ctx.reachable,
+            )
+            .ok()?;
+            (centre, axis)
+        };
+        let held = r + ctx.allowance;
+        if ctx
+            .part
+            .surface()
+            .segment_within(&previous.0, &centre, held - options.tolerance)
+            || !flutes_clear_along(ctx, options, (&previous.0, &previous.1), (&centre, &axis))
+        {
+            return None;
+        }
+        if k < pieces {
+            poses.push(ToolPose {
+                tip: centre - axis.into_inner() * r,
+                axis,
+            });
+        }
+        previous = (centre, axis);
+    }
+    Some(poses)
+}
+
+/// `centre`, or where it comes nearer the part than the ball's radius (and the allowance),
+/// moved straight off the nearest point until the ball touches; `None` where a few such moves
+/// do not clear it (a corner pushes it back).
+fn touching(ctx: &FinishingContext, mut centre: Point3) -> Option<Point3> {
+    let held = ctx.tool.ball_radius + ctx.allowance;
+    let surface = ctx.part.surface();
+    for _ in 0..4 {
+        let Some(nearest) = surface.closest(&centre, held) else {
+            return Some(centre);
+        };
+        if nearest.distance >= held - 1e-9 {
+            return Some(centre);
+        }
+        let away = (centre - nearest.point).try_normalize(1e-12)?;
+        centre = nearest.point + away * held;
+    }
+    (!surface.any_within(&centre, held - 1e-9)).then_some(centre)
+}
+
+/// Most moves an axis's turn along a chord is spread over ([`turn_along_chord`]): 60° at the
+/// 5° default.
+const MAX_TURN_PIECES: usize = 12;
 
 fn pose_of(p: &Placed, r: f64) -> ToolPose {
     ToolPose {
@@ -861,6 +962,59 @@ mod tests {
 
     fn block() -> Block {
         Block::of(crate::mesh::fixtures::cuboid(40.0, 30.0, 10.0))
+    }
+
+    /// Round the block's top edge (x = 40, z = 10) the ball centres circle it; a move between
+    /// two of them 24° apart round it cuts the corner, and its axes turn by 24°. The axis turns
+    /// along the move in steps within the allowed turn, each pose between pushed off the
+    /// corner to touch it; where the machine refuses the axes between, nothing is inserted.
+    #[test]
+    fn an_axis_turns_along_a_chord_with_every_pose_between_touching() {
+        let block = block();
+        let ctx = block.context(0.0);
+        let r = block.tool.ball_radius;
+        let options = FinishingOptions {
+            tolerance: 0.5,
+            ..FinishingOptions::default()
+        };
+        let edge = |angle: f64| {
+            let (sin, cos) = angle.to_radians().sin_cos();
+            let axis = Direction::new_normalize(Vector3::new(sin, 0.0, cos));
+            let centre = Point3::new(40.0, 15.0, 10.0) + axis.into_inner() * r;
+            ToolPose {
+                tip: centre - axis.into_inner() * r,
+                axis,
+            }
+        };
+        let (a, b) = (edge(30.0), edge(54.0));
+        let between = turn_along_chord(&ctx, &options, &a, &b).expect("poses between");
+        assert_eq!(between.len(), 4, "24° in five moves of at most 5°");
+        let surface = block.collider.surface();
+        let mut previous = a;
+        for pose in between.iter().chain(std::iter::once(&b)) {
+            assert!(angle_between(&previous.axis, &pose.axis).to_degrees() <= 5.0 + 1e-9);
+            let centre = pose.tip + pose.axis.into_inner() * r;
+            let nearest = surface.closest(&centre, 2.0 * r).expect("near the corner");
+            assert!(
+                (nearest.distance - r).abs() < 1e-9,
+                "{centre:?} is {} off the part",
+                nearest.distance
+            );
+            previous = *pose;
+        }
+        // The middle of the chord itself stands nearer than the radius: the poses were moved.
+        let middle = nalgebra::center(
+            &(a.tip + a.axis.into_inner() * r),
+            &(b.tip + b.axis.into_inner() * r),
+        );
+        assert!(surface.closest(&middle, 2.0 * r).expect("near").distance < r - 0.01);
+
+        let upright_only = |axis: &Vector3| axis.x < 0.6 || axis.x > 0.75;
+        let refused = FinishingContext {
+            reachable: &upright_only,
+            ..ctx
+        };
+        assert_eq!(turn_along_chord(&refused, &options, &a, &b), None);
     }
 
     /// The flutes between two poses whose ends are clear: the axis turns a right angle about
