@@ -33,7 +33,7 @@ use super::semi_finish::{SemiFinishSummary, semi_finish_operation};
 use super::setup::{PlanSetup, PreparedPart, prepare_part};
 use crate::collide::PreparedTool;
 use crate::error::{Error, JobError, Result};
-use crate::geom::{Move, MoveKind, Point3, Toolpath, Vector3};
+use crate::geom::{Direction, Move, MoveKind, Point3, ToolPose, Toolpath, Vector3, slerp};
 use crate::impeller::Impeller;
 use crate::impeller::Region;
 use crate::mesh::io::{RawMesh, Units, read_mesh};
@@ -1558,6 +1558,9 @@ pub type IntoRest<'a> = dyn Fn(&Move, &mut Vec<Move>, &PreparedTool) + 'a;
 /// leave along its axis (each a swept-body check).
 const UNWIND_SEARCH_POSES: usize = 400;
 
+/// A first cut shorter than this (between ball centres, mm) is not halved for an unwind.
+const MIN_UNWIND_SPLIT_MM: f64 = 0.01;
+
 /// The post's first half: `toolpath` linearised for `setup`'s machine, each section between
 /// tool changes on its own with its tool's gauge length, in the output mode's kinematics.
 /// In the sections `unwind[k]` names a ball for (the job's, or a corner finish's: its centre
@@ -1664,11 +1667,53 @@ pub fn linearise_program(
                     },
                 )
             };
-            (start + 1..stop)
+            let unwound = (start + 1..stop)
                 .rev()
                 .filter(|&at| moves[at].kind == MoveKind::Cut)
                 .take(UNWIND_SEARCH_POSES)
-                .find_map(splice)
+                .find_map(splice);
+            if unwound.is_some() {
+                return unwound;
+            }
+            // The pass stopped in its first cut (near the pole a move turning the axis a few
+            // degrees can turn a rotary by tens, from a start where no other branch is
+            // within the limits): an unwind half-way along it, where the rotaries may have
+            // come within reach of another branch. The pose there is on the move, as the
+            // control would pass it; the linearisation asks again, halving, while it stops.
+            let (from, to) = (moves.get(stop.checked_sub(1)?)?, &moves[stop]);
+            let centre = |m: &Move| m.pose.tip + m.pose.axis.into_inner() * ball.ball_radius;
+            if to.kind != MoveKind::Cut
+                || !matches!(from.kind, MoveKind::Cut | MoveKind::Approach)
+                || (centre(to) - centre(from)).norm() < MIN_UNWIND_SPLIT_MM
+            {
+                return None;
+            }
+            let axis = Direction::new_normalize(slerp(&from.pose.axis, &to.pose.axis, 0.5));
+            let middle = Move {
+                pose: ToolPose {
+                    tip: nalgebra::center(&centre(from), &centre(to))
+                        - axis.into_inner() * ball.ball_radius,
+                    axis,
+                },
+                kind: MoveKind::Cut,
+                feed: to.feed,
+            };
+            let mut unwind = path::relink(
+                &setup.collider,
+                ball,
+                &setup.link,
+                &middle.pose,
+                &middle.pose,
+            )?;
+            if let Some(into_rest) = into_rest {
+                into_rest(&middle, &mut unwind, ball);
+            }
+            unwind.insert(0, middle);
+            Some(post::Splice {
+                after: stop - 1,
+                replacing: 0,
+                moves: unwind,
+            })
         };
         let unwound = if tcp {
             post::linearise_unwinding(
