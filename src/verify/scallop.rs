@@ -409,9 +409,13 @@ fn scallop_of_samples(
         samples.push((centroid, normal, pooled, t));
         members.append(&mut pool);
     }
+    // The ball touching p from outside would cut the part elsewhere by more than the target.
+    let narrow_at = |p: &Point3, n: &Vector3| {
+        distance.any_within(&(p + n * narrow_radius), narrow_radius - target)
+    };
     let narrow: Vec<bool> = samples
         .par_iter()
-        .map(|(p, n, _, _)| distance.any_within(&(p + n * narrow_radius), narrow_radius - target))
+        .map(|(p, n, _, _)| narrow_at(p, n))
         .collect();
     let bodies = Bodies {
         swept,
@@ -453,12 +457,11 @@ fn scallop_of_samples(
     // The ridges between the samples (see `ridges`): their crossings above the target, or
     // above the highest sample where the ball fits when that is lower, are the report's
     // maximum; a crossing over the target counts the sample nearer to it as over.
-    let is_open = |i: usize| !narrow[i] && !blocked[i] && heights[i].is_some_and(|h| !h.is_nan());
-    let is_open_over: Vec<bool> = (0..samples.len())
-        .map(|i| is_open(i) && heights[i].is_some_and(|h| h > target))
-        .collect();
     // Blocked samples take part too: whether a ridge is blocked is asked where it is.
     let fits = |i: usize| !narrow[i] && heights[i].is_some_and(|h| !h.is_nan());
+    let is_open_over: Vec<bool> = (0..samples.len())
+        .map(|i| fits(i) && !blocked[i] && heights[i].is_some_and(|h| h > target))
+        .collect();
     let sample_max = (0..samples.len())
         .filter(|&i| fits(i))
         .filter_map(|i| heights[i])
@@ -478,12 +481,7 @@ fn scallop_of_samples(
     // Only where the ball fits; over the target, told apart where no axis reaches.
     let peaks: Vec<(ridges::RidgePeak, bool)> = peaks
         .into_par_iter()
-        .filter(|peak| {
-            !distance.any_within(
-                &(peak.point + peak.normal * narrow_radius),
-                narrow_radius - target,
-            )
-        })
+        .filter(|peak| !narrow_at(&peak.point, &peak.normal))
         .map(|peak| {
             let blocked = peak.height > target
                 && tool_reach.is_some_and(|tool| {
