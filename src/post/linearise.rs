@@ -78,7 +78,12 @@ pub struct LineariseOptions {
     /// its height). Default 0: the control point alone, with the angle tolerance.
     #[serde(default)]
     pub flutes_above_control_mm: f64,
-    /// Largest subdivision depth per move (at most `2^max_depth` blocks per move). Default 16.
+    /// Largest subdivision depth per move (the shortest step is `2^-max_depth` of the move).
+    /// Default 24: where the axis passes the pole just beyond the relaxed cone, C turns half
+    /// a turn while the axis moves by a few hundredths of a degree, and a move turning the
+    /// axis by 50° needs steps of about 2⁻¹⁷ of it there (the bundled job's lifted links
+    /// between blade passes); the walk doubles its step after each accepted one, so the
+    /// depth costs only where it is needed.
     pub max_depth: u32,
 }
 
@@ -89,7 +94,7 @@ impl Default for LineariseOptions {
             control_point_mm: 0.0,
             angle_tolerance_deg: 0.1,
             flutes_above_control_mm: 0.0,
-            max_depth: 16,
+            max_depth: 24,
         }
     }
 }

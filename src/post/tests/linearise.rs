@@ -175,6 +175,49 @@ fn near_singular_pass_keeps_c_calm() {
     check(&exact, &tp, &out2, 0.01, 0.1, 1.5);
 }
 
+/// A move in the air whose axis passes the pole a little beyond where the relaxed inverse
+/// lets C lag (1.35 × its budget), the bundled job's lifted link between two blade passes:
+/// the exact C turns half a turn while the axis moves by hundredths of a degree, the tip
+/// 29 mm off the C axis. The walk needs steps of ~2⁻¹⁷ of the move there; it follows them,
+/// and the table turns without the tip leaving its tolerance.
+#[test]
+fn an_axis_passing_just_beyond_the_relaxed_cone_turns_c_half_a_turn_within_tolerance() {
+    let kin = machine().with_singular_tolerance(0.05);
+    let (tolerance, angle_tolerance): (f64, f64) = (0.0046, 0.033);
+    let budget = 0.5 * angle_tolerance;
+    // The great circle's point nearest the pole, `miss` from it, and its tangent there.
+    let miss = (1.35 * budget).to_radians();
+    let nearest = Vector3::new(0.0, miss.sin(), miss.cos());
+    let on_circle = |deg: f64| {
+        let a = nearest * deg.to_radians().cos() + Vector3::x() * deg.to_radians().sin();
+        [a.x, a.y, a.z]
+    };
+    let tp = toolpath(&[
+        (Rapid, 5000.0, [29.7, -25.0, 60.0], on_circle(-12.0)),
+        (Retract, 6000.0, [29.7, -25.0, 36.3], on_circle(-12.0)),
+        (Retract, 6000.0, [-2.1, -4.9, 35.0], on_circle(41.0)),
+    ]);
+    let options = LineariseOptions::default()
+        .with_tolerance_mm(tolerance)
+        .with_angle_tolerance_deg(angle_tolerance);
+    let out = linearise_opt(&kin, &tp, &options).unwrap();
+    check(&kin, &tp, &out, tolerance, angle_tolerance, 1.5);
+    let cs: Vec<f64> = out.iter().map(|(_, j)| j.c).collect();
+    let span =
+        cs.iter().cloned().fold(f64::MIN, f64::max) - cs.iter().cloned().fold(f64::MAX, f64::min);
+    assert!(span > 150.0, "C span {span}");
+    // The walk's old bound, 2¹⁶ steps a move, stopped it at the pole.
+    let Err(LineariseError::NoStart { source, .. }) =
+        linearise_opt(&kin, &tp, &options.with_max_depth(16))
+    else {
+        panic!("the pass was followed in 2^16 steps a move");
+    };
+    assert!(matches!(
+        *source,
+        LineariseError::DepthLimit { move_index: 2, .. }
+    ));
+}
+
 #[test]
 fn c_is_unwrapped_across_the_program() {
     let kin = machine();
