@@ -228,6 +228,7 @@ pub fn channel_rough(
         let options = FinishingOptions {
             scallop_height: operation.scallop_height,
             tolerance,
+            sag_tolerance: tolerance,
             drive_normal: layer_drive.drive_normal,
             ..setup.finishing.clone()
         };

@@ -40,7 +40,7 @@ use crate::mesh::io::{RawMesh, Units, read_mesh};
 use crate::mesh::{Mesh, set_aside_warning};
 use crate::multires::Hierarchy;
 use crate::offset::OffsetShape;
-use crate::path::{self, Finishing, FinishingOptions, LinkReport};
+use crate::path::{self, Finishing, LinkReport};
 use crate::post::{self, Joints, LineariseOptions, MachineKinematics, ProgramHeader};
 use crate::stock::clearance::MaterialClearance;
 use crate::verify::{Ball, ScallopOptions, ToolReach, measure_scallop_map_of};
@@ -349,10 +349,9 @@ pub fn plan_operation(
             let with_material = material.map(|m| setup.collider.with_material(m));
             let collider = with_material.as_ref().unwrap_or(&setup.collider);
             let ctx = setup.finishing_context(collider, &setup.rays, &reachable);
-            let options = FinishingOptions {
-                scallop_height: operation.scallop_height,
-                ..setup.finishing.clone()
-            };
+            // What is verified is the whole target: the passes keep a share of it for
+            // their moves' sag.
+            let options = setup.finishing.leaving_at_most(operation.scallop_height);
             // Sections follow the drive surface; every pose is placed and checked against
             // the part (and the material).
             let (passes, impeller) = match target {
@@ -1231,7 +1230,7 @@ pub fn plan_with_surfaces(
                 impeller: Some(impeller),
             } if p.operation.kind == OperationKind::CornerFinish => {
                 let radius = p.operation.tool.diameter / 2.0;
-                let stepover = path::stepover_for_scallop(radius, p.operation.scallop_height);
+                let stepover = path::planned_stepover(radius, p.operation.scallop_height);
                 let cutting_length_mm = p
                     .toolpath
                     .moves
@@ -1303,7 +1302,7 @@ pub fn plan_with_surfaces(
                 "a job needs a finishing operation".into(),
             ))
         })?;
-    let stepover = path::stepover_for_scallop(finish.tool.diameter / 2.0, finish.scallop_height);
+    let stepover = path::planned_stepover(finish.tool.diameter / 2.0, finish.scallop_height);
     let report = PlanReport {
         wavemill_version: env!("CARGO_PKG_VERSION"),
         part: PartSummary {
@@ -1819,7 +1818,7 @@ fn corner_refusal(
 /// corner.
 fn corner_band(job: &Job, corner: &Operation) -> f64 {
     job.tool.diameter / 2.0
-        + path::stepover_for_scallop(corner.tool.diameter / 2.0, corner.scallop_height)
+        + path::planned_stepover(corner.tool.diameter / 2.0, corner.scallop_height)
 }
 
 /// The program header: what was planned (`impeller`: the finishing ran the impeller's own

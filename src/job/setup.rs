@@ -199,6 +199,7 @@ impl PlanSetup {
             drive_normal: Vector3::from(job.strategy.drive_normal),
             scallop_height: job.strategy.scallop_height,
             tolerance: budget.chord_mm,
+            sag_tolerance: budget.chord_mm,
             max_step: job.strategy.max_step,
             max_axis_turn_deg: job.strategy.max_axis_turn_deg,
             axis_smoothing: (job.strategy.max_axis_change_deg_per_mm > 0.0).then_some(
@@ -327,7 +328,7 @@ fn smoothing_turn(machine: &Machine) -> AxisTurn {
 /// edges come on top (measured: 2.8× the estimate on the sample impeller, 4.4× on the real
 /// blower), so the estimate is a lower one and the limit is set with that in mind.
 fn check_drive_points(mesh: &MeshReport, job: &Job) -> Result<()> {
-    let stepover = path::stepover_for_scallop(job.tool.diameter / 2.0, job.strategy.scallop_height);
+    let stepover = path::planned_stepover(job.tool.diameter / 2.0, job.strategy.scallop_height);
     let estimate = mesh.surface_area / (stepover * job.strategy.max_step);
     let limit = job.limits.max_drive_points;
     if estimate > limit as f64 {
