@@ -79,11 +79,11 @@ pub struct LineariseOptions {
     #[serde(default)]
     pub flutes_above_control_mm: f64,
     /// Largest subdivision depth per move (the shortest step is `2^-max_depth` of the move).
-    /// Default 24: where the axis passes the pole just beyond the relaxed cone, C turns half
-    /// a turn while the axis moves by a few hundredths of a degree, and a move turning the
-    /// axis by 50° needs steps of about 2⁻¹⁷ of it there (the bundled job's lifted links
-    /// between blade passes); the walk doubles its step after each accepted one, so the
-    /// depth costs only where it is needed.
+    /// Default 24: where the axis passes the pole just where the relaxed inverse stops
+    /// letting C stray, C turns half a turn while the axis moves by a few hundredths of a
+    /// degree, and a move turning the axis by 50° needs steps of about 2⁻¹⁷ of it there (the
+    /// bundled job's lifted links between blade passes); the walk doubles its step after each
+    /// accepted one, so the depth costs only where it is needed.
     pub max_depth: u32,
 }
 
