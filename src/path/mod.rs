@@ -80,13 +80,18 @@ impl Default for FinishingOptions {
 /// for a tenth of the sag, to 0.012 mm).
 pub const SAG_SHARE: f64 = 0.1;
 
+/// The scallop passes are spaced for, to leave at most `scallop` with their moves' sag.
+fn spaced_for(scallop: f64) -> f64 {
+    (1.0 - SAG_SHARE) * scallop
+}
+
 impl FinishingOptions {
     /// These options for passes that are to leave at most `scallop` anywhere they reach:
     /// spaced for all but [`SAG_SHARE`] of it, moves sagging off the part by no more than
     /// that share (nor than the chord tolerance).
     pub fn leaving_at_most(&self, scallop: f64) -> FinishingOptions {
         FinishingOptions {
-            scallop_height: (1.0 - SAG_SHARE) * scallop,
+            scallop_height: spaced_for(scallop),
             sag_tolerance: (SAG_SHARE * scallop).min(self.tolerance),
             ..self.clone()
         }
@@ -96,7 +101,7 @@ impl FinishingOptions {
 /// The stepover a ball of `radius` is planned at to leave at most `scallop`: spaced for all
 /// but [`SAG_SHARE`] of it.
 pub fn planned_stepover(radius: f64, scallop: f64) -> f64 {
-    stepover_for_scallop(radius, (1.0 - SAG_SHARE) * scallop)
+    stepover_for_scallop(radius, spaced_for(scallop))
 }
 
 pub use crate::geom::stepover_for_scallop;
