@@ -136,6 +136,24 @@ impl SwarfPlan {
             let pairs = if run.closed { n } else { n.saturating_sub(1) };
             (0..pairs).any(|i| {
                 let (a, b) = (&run.rulings[i], &run.rulings[(i + 1) % n]);
+                // The interpolated axes stay within the box of the two rulings' ends, grown by
+                // how far a renormalised axis can stray from the chord of theirs.
+                let reach = below.max(a.flank_length).max(b.flank_length);
+                let grow = radius + reach * (a.axis - b.axis).norm();
+                let ends = [
+                    a.centre - a.axis * below,
+                    a.centre + a.axis * a.flank_length,
+                    b.centre - b.axis * below,
+                    b.centre + b.axis * b.flank_length,
+                ];
+                let outside = (0..3).any(|k| {
+                    let lo = ends.iter().map(|e| e[k]).fold(f64::INFINITY, f64::min);
+                    let hi = ends.iter().map(|e| e[k]).fold(f64::NEG_INFINITY, f64::max);
+                    p[k] < lo - grow || p[k] > hi + grow
+                });
+                if outside {
+                    return false;
+                }
                 (0..=SUBDIVISIONS).any(|k| {
                     let t = k as f64 / SUBDIVISIONS as f64;
                     let centre = a.centre + (b.centre - a.centre) * t;
@@ -913,6 +931,53 @@ mod tests {
             "no ruling on the leaning end: {:?}",
             plan.refused
         );
+    }
+
+    /// `SwarfPlan::sweeps` without its box test: every interpolated axis measured.
+    fn sweeps_by_every_axis(plan: &SwarfPlan, p: &Point3, radius: f64, below: f64) -> bool {
+        plan.runs.iter().any(|run| {
+            let n = run.rulings.len();
+            let pairs = if run.closed { n } else { n - 1 };
+            (0..pairs).any(|i| {
+                let (a, b) = (&run.rulings[i], &run.rulings[(i + 1) % n]);
+                (0..=8).any(|k| {
+                    let t = k as f64 / 8.0;
+                    let centre = a.centre + (b.centre - a.centre) * t;
+                    let axis = (a.axis * (1.0 - t) + b.axis * t).normalize();
+                    let length = a.flank_length + (b.flank_length - a.flank_length) * t;
+                    let (from, to) = (centre - axis * below, centre + axis * length);
+                    (p - closest_point_on_segment(p, &from, &to)).norm() <= radius
+                })
+            })
+        })
+    }
+
+    #[test]
+    fn the_box_test_of_sweeps_leaves_out_only_axes_too_far_to_sweep() {
+        // Leaning ends: the rulings' axes turn between neighbours there.
+        let mesh = plate_and_blade(20f64.to_radians());
+        let plan = run(&mesh, &options());
+        assert!(!plan.runs.is_empty(), "refused: {:?}", plan.refused);
+        let mut random = crate::geom::SeededRandom::new(7);
+        let (mut swept, mut not) = (0, 0);
+        for _ in 0..4000 {
+            let p = Point3::new(
+                random.range(-16.0, 16.0),
+                random.range(-5.0, 5.0),
+                random.range(-1.0, 10.0),
+            );
+            let radius = random.range(0.5, 2.5);
+            let below = random.range(0.0, 2.5);
+            let expected = sweeps_by_every_axis(&plan, &p, radius, below);
+            assert_eq!(
+                plan.sweeps(&p, radius, below),
+                expected,
+                "{p:?} r {radius} below {below}"
+            );
+            if expected { swept += 1 } else { not += 1 }
+        }
+        // Both answers came up often enough to mean something.
+        assert!(swept > 400 && not > 400, "swept {swept}, not {not}");
     }
 
     #[test]
