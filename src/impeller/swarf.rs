@@ -28,7 +28,7 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::geom::{Point3, Vector3, angle_between, closest_point_on_segment};
+use crate::geom::{Aabb, Point3, Vector3, angle_between, closest_point_on_segment};
 use crate::mesh::distance::SurfaceDistance;
 use crate::mesh::{DrivePoint, SectionCurve};
 
@@ -137,7 +137,8 @@ impl SwarfPlan {
             (0..pairs).any(|i| {
                 let (a, b) = (&run.rulings[i], &run.rulings[(i + 1) % n]);
                 // The interpolated axes stay within the box of the two rulings' ends, grown by
-                // how far a renormalised axis can stray from the chord of theirs.
+                // how far a renormalised axis can stray from the chord of theirs: a point
+                // farther from that box than the stray and the radius is not swept by them.
                 let reach = below.max(a.flank_length).max(b.flank_length);
                 let grow = radius + reach * (a.axis - b.axis).norm();
                 let ends = [
@@ -146,11 +147,7 @@ impl SwarfPlan {
                     b.centre - b.axis * below,
                     b.centre + b.axis * b.flank_length,
                 ];
-                let outside = (0..3).any(|k| {
-                    let lo = ends.iter().map(|e| e[k]).fold(f64::INFINITY, f64::min);
-                    let hi = ends.iter().map(|e| e[k]).fold(f64::NEG_INFINITY, f64::max);
-                    p[k] < lo - grow || p[k] > hi + grow
-                });
+                let outside = Aabb::from_points(&ends).distance_squared(p) > grow * grow;
                 if outside {
                     return false;
                 }
